@@ -1,0 +1,50 @@
+/* emm — common definitions: export macro, status codes, error messages.
+ *
+ * Every function that can fail on bad data from outside (mesh files, traces,
+ * tables, configuration, environment) returns an emm_status and, when the
+ * caller passes an emm_error, fills it with one line naming the input and the
+ * problem. A programmer's misuse (NULL where the contract forbids it, an id
+ * out of range in a query) is an assert, not a status. The library never
+ * prints and never exits. */
+#ifndef EMM_COMMON_H
+#define EMM_COMMON_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define EMM_API __attribute__((visibility("default")))
+
+typedef enum emm_status {
+    EMM_OK = 0,
+    EMM_ERR_IO,          /* a file is missing, unreadable or unwritable */
+    EMM_ERR_FORMAT,      /* a file's content is malformed or truncated */
+    EMM_ERR_CORRUPT,     /* a checksum does not match */
+    EMM_ERR_MESH,        /* the mesh is not a valid manifold triangle mesh */
+    EMM_ERR_INVALID,     /* a value (option, key, strategy string) is not accepted */
+    EMM_ERR_RANGE,       /* a value is outside its accepted range */
+    EMM_ERR_NOMEM,       /* an allocation failed */
+    EMM_ERR_UNSUPPORTED, /* valid, but not something this build can do */
+    EMM_STATUS_COUNT
+} emm_status;
+
+/* The message buffer of a failed call: "<input>: <problem>", one line,
+ * no trailing newline. */
+typedef struct emm_error {
+    emm_status status;
+    char message[512];
+} emm_error;
+
+/* A short, static description of a status ("malformed file", ...). */
+EMM_API const char *emm_strerror(emm_status status);
+
+/* The library's version as "MAJOR.MINOR.PATCH". */
+EMM_API const char *emm_version(void);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

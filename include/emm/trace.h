@@ -1,0 +1,94 @@
+/* emm — trace files (DESIGN.md "Traces").
+ *
+ * A trace is self-contained: a versioned header, the tagged arrays'
+ * descriptions, a snapshot of the geometry the layouts need (vertex
+ * positions, triangle vertex indices), then the access records in
+ * checksummed, compactly encoded blocks (optionally zstd-compressed).
+ * The writer and the reader stream: neither holds the access records of the
+ * whole trace in memory. A truncated or corrupted file gets an error naming
+ * the byte offset and what was wrong. */
+#ifndef EMM_TRACE_H
+#define EMM_TRACE_H
+
+#include "emm/common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum emm_array_kind {
+    EMM_ARRAY_VERTICES = 0,  /* records hold a vertex's coordinates */
+    EMM_ARRAY_TRIANGLES = 1, /* records hold a triangle's vertex indices */
+    EMM_ARRAY_RAW = 2        /* plain memory: element = byte address (din import) */
+} emm_array_kind;
+
+/* One tagged array. The original address of byte `offset` of element `e` is
+ * base + e * record_size + offset. */
+typedef struct emm_trace_array {
+    emm_array_kind kind;
+    uint32_t record_size; /* bytes per record (1 for EMM_ARRAY_RAW) */
+    uint64_t count;       /* records */
+    uint64_t base;        /* original address of record 0 */
+} emm_trace_array;
+
+/* One access. `work` is the compute (in cycles, or instrumented basic blocks
+ * where the capture counts them) since the previous record. */
+typedef struct emm_trace_record {
+    uint64_t element;
+    uint32_t array;   /* index into the trace's arrays */
+    uint32_t offset;  /* byte offset inside the record */
+    uint32_t bytes;   /* bytes accessed, >= 1 */
+    uint32_t work;
+    uint8_t write;    /* 0 read, 1 write */
+} emm_trace_record;
+
+/* The geometry snapshot: may be empty (nv == nt == 0) for an address-only
+ * trace, in which case only the `direct` and `cache` strategies apply. */
+typedef struct emm_trace_geometry {
+    uint64_t nv;
+    uint64_t nt;
+    const double *xyz;   /* 3 * nv */
+    const int32_t *tri;  /* 3 * nt */
+} emm_trace_geometry;
+
+typedef struct emm_trace_info {
+    uint32_t version;
+    uint32_t narrays;
+    const emm_trace_array *arrays;
+    emm_trace_geometry geometry;
+    uint64_t accesses;   /* records in the file (known once the writer closed) */
+    int compressed;      /* blocks are zstd-compressed */
+} emm_trace_info;
+
+typedef struct emm_trace_writer emm_trace_writer;
+typedef struct emm_trace_reader emm_trace_reader;
+
+/* Starts a trace at `path` (written to a temporary file beside it and renamed
+ * into place by emm_trace_writer_close). The arrays and geometry are copied.
+ * `compress` asks for zstd blocks. */
+EMM_API emm_status emm_trace_writer_open(const char *path, const emm_trace_array *arrays,
+                                         uint32_t narrays, const emm_trace_geometry *geometry,
+                                         int compress, emm_trace_writer **out, emm_error *err);
+/* Appends n records. */
+EMM_API emm_status emm_trace_write(emm_trace_writer *w, const emm_trace_record *recs,
+                                   size_t n, emm_error *err);
+/* Flushes, finishes the header and renames the file into place. Frees w. */
+EMM_API emm_status emm_trace_writer_close(emm_trace_writer *w, emm_error *err);
+/* Drops an unfinished trace: removes the temporary file, frees w. */
+EMM_API void emm_trace_writer_abort(emm_trace_writer *w);
+
+/* Opens a trace and reads its header, arrays and geometry. */
+EMM_API emm_status emm_trace_reader_open(const char *path, emm_trace_reader **out, emm_error *err);
+EMM_API const emm_trace_info *emm_trace_reader_info(const emm_trace_reader *r);
+/* Reads up to `cap` records into `buf`; *n is the number read, 0 at the end.
+ * A damaged block is an error naming its byte offset. */
+EMM_API emm_status emm_trace_read(emm_trace_reader *r, emm_trace_record *buf, size_t cap,
+                                  size_t *n, emm_error *err);
+/* Starts reading the records again from the first. */
+EMM_API emm_status emm_trace_rewind(emm_trace_reader *r, emm_error *err);
+EMM_API void emm_trace_reader_close(emm_trace_reader *r);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

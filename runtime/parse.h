@@ -1,0 +1,19 @@
+/* Internal: strict parsing of numbers and sizes from text (command-line
+ * arguments, machine files, tables, environment variables). Every function
+ * rejects empty strings, trailing garbage, signs where none belong and
+ * overflow, and returns false without touching *out on failure. */
+#ifndef EMM_INTERNAL_PARSE_H
+#define EMM_INTERNAL_PARSE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+/* A non-negative decimal integer. */
+bool emm_parse_u64(const char *s, uint64_t *out);
+/* A non-negative decimal integer with an optional K, M or G suffix (powers
+ * of 1024; a trailing "i" or "B" is accepted: 64K, 64KiB, 1M). */
+bool emm_parse_size(const char *s, uint64_t *out);
+/* A finite floating-point number. */
+bool emm_parse_double(const char *s, double *out);
+
+#endif

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Installs the Debian packages emm needs to build, test and plot, when they
+# are missing. As root it runs apt-get; otherwise it prints the exact
+# apt-get line to run and fails.
+set -euo pipefail
+
+packages=(
+  cmake make gcc g++ clang pkg-config   # the build (gcc and clang both supported)
+  libopenmesh-dev                       # mesh file IO (OFF, OBJ, PLY, STL)
+  libqhull-dev                          # Delaunay triangulation for the mesh generator
+  libunwind-dev                         # call-site names for the shim's tag rules
+  libzstd-dev                           # optional zstd compression of trace blocks
+  gnuplot-nox                           # emm plot
+  glmark2-data                          # a real mesh (bunny.obj) for tests and benchmarks
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+if [ "$(id -u)" -eq 0 ]; then
+  echo "deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+else
+  echo "deps: missing Debian packages; run:" >&2
+  echo "  sudo apt-get install -y ${missing[*]}" >&2
+  exit 1
+fi

@@ -1,0 +1,40 @@
+/* Internal to the emm command: the subcommands and small shared helpers. */
+#ifndef EMM_TOOLS_CLI_H
+#define EMM_TOOLS_CLI_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "emm/common.h"
+
+/* Each subcommand gets argv starting at its own name (argv[0] == "mesh") and
+ * returns the process exit status: 0 success, 1 failure on bad data, 2 bad
+ * usage. */
+int emm_cmd_mesh(int argc, char **argv);
+int emm_cmd_machine(int argc, char **argv);
+int emm_cmd_trace(int argc, char **argv);
+int emm_cmd_replay(int argc, char **argv);
+
+/* Exit statuses. */
+enum { EMM_EXIT_OK = 0, EMM_EXIT_FAIL = 1, EMM_EXIT_USAGE = 2 };
+
+/* Prints "emm: <message>" on stderr, one line. */
+void cli_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+/* Prints "emm: <err->message>" and returns EMM_EXIT_FAIL. */
+int cli_fail(const emm_error *err);
+/* Prints "emm <cmd>: <message>\nTry 'emm <cmd> --help'." and returns EMM_EXIT_USAGE. */
+int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* True when `arg` is -h or --help. */
+bool cli_is_help(const char *arg);
+
+/* Parses the value of option `opt` for command `cmd`; on failure prints a
+ * usage error naming the option and the value and returns false. */
+bool cli_u64(const char *cmd, const char *opt, const char *value, uint64_t *out);
+bool cli_size(const char *cmd, const char *opt, const char *value, uint64_t *out);
+
+/* For an option that takes a value: returns argv[*i + 1] and advances *i, or
+ * prints a usage error and returns NULL when the value is missing. */
+const char *cli_value(const char *cmd, int argc, char **argv, int *i);
+
+#endif
