@@ -16,6 +16,7 @@ static const struct command commands[] = {
     {"machine", emm_cmd_machine, "show the simulated machine and DMA costs"},
     {"trace", emm_cmd_trace, "describe, export and import access traces"},
     {"replay", emm_cmd_replay, "simulate a trace under a strategy"},
+    {"layout", emm_cmd_layout, "build a layout and draw or describe its cells"},
 };
 
 static void usage(FILE *out)

@@ -1,0 +1,160 @@
+/* Strategy strings (DESIGN.md "Strategies"; thesis Table 4.1: a strategy is a
+ * layout, a fetch scheme and a transfer size). One parser for the
+ * environment, the command line, the tables and the reports. */
+#include "emm/strategy.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#include "error.h"
+#include "parse.h"
+
+static const char *const layout_names[] = {"original", "grid", "tiles", "quadtree"};
+static const char *const fetch_names[] = {"none", "naive", "convolution", "extrapolated"};
+
+#define ACCEPTED "direct, cache, cache@LAYOUT or LAYOUT+FETCH[@CELL]"
+#define LAYOUTS "grid, tiles, quadtree"
+#define FETCHES "naive, convolution, extrapolated"
+
+const char *emm_layout_name(emm_layout_kind k)
+{
+    return (unsigned)k < sizeof layout_names / sizeof *layout_names ? layout_names[k] : "?";
+}
+
+const char *emm_fetch_name(emm_fetch_kind k)
+{
+    return (unsigned)k < sizeof fetch_names / sizeof *fetch_names ? fetch_names[k] : "?";
+}
+
+/* Matches [s, s+n) against the three EMM layouts. */
+static int match_layout(const char *s, size_t n, emm_layout_kind *out)
+{
+    for (int k = EMM_LAYOUT_GRID; k <= EMM_LAYOUT_QUADTREE; k++)
+        if (strlen(layout_names[k]) == n && memcmp(s, layout_names[k], n) == 0) {
+            *out = (emm_layout_kind)k;
+            return 1;
+        }
+    return 0;
+}
+
+static int match_fetch(const char *s, size_t n, emm_fetch_kind *out)
+{
+    for (int k = EMM_FETCH_NAIVE; k <= EMM_FETCH_EXTRAPOLATED; k++)
+        if (strlen(fetch_names[k]) == n && memcmp(s, fetch_names[k], n) == 0) {
+            *out = (emm_fetch_kind)k;
+            return 1;
+        }
+    return 0;
+}
+
+static emm_status parse_cell(const char *text, const char *s, uint32_t *cell, emm_error *err)
+{
+    uint64_t v;
+    if (!emm_parse_u64(s, &v) || v == 0 || v > EMM_MAX_CELL)
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "strategy '%s': cell size '%s' is not an integer from 1 to %u "
+                        "(triangles per cell)",
+                        text, s, EMM_MAX_CELL);
+    *cell = (uint32_t)v;
+    return EMM_OK;
+}
+
+emm_status emm_strategy_parse(const char *text, emm_strategy *out, emm_error *err)
+{
+    emm_strategy s = {EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
+
+    if (!text || !*text)
+        return emm_fail(err, EMM_ERR_INVALID, "strategy is empty; accepted: " ACCEPTED);
+    if (strcmp(text, "direct") == 0) {
+        *out = s;
+        return EMM_OK;
+    }
+    if (strncmp(text, "cache", 5) == 0 && (text[5] == '\0' || text[5] == '@')) {
+        s.kind = EMM_STRATEGY_CACHE;
+        if (text[5] == '@') {
+            const char *l = text + 6;
+            if (!match_layout(l, strlen(l), &s.layout))
+                return emm_fail(err, EMM_ERR_INVALID,
+                                "strategy '%s': unknown layout '%s'; accepted: " LAYOUTS,
+                                text, l);
+            s.cell = EMM_DEFAULT_CELL;
+        }
+        *out = s;
+        return EMM_OK;
+    }
+
+    const char *plus = strchr(text, '+');
+    if (!plus) {
+        size_t n = strcspn(text, "@");
+        if (match_layout(text, n, &s.layout))
+            return emm_fail(err, EMM_ERR_INVALID,
+                            "strategy '%s': layout '%.*s' needs a fetch scheme, "
+                            "e.g. '%.*s+naive'; fetch schemes: " FETCHES,
+                            text, (int)n, text, (int)n, text);
+        return emm_fail(err, EMM_ERR_INVALID, "strategy '%s' is unknown; accepted: " ACCEPTED,
+                        text);
+    }
+    if (!match_layout(text, (size_t)(plus - text), &s.layout))
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "strategy '%s': unknown layout '%.*s'; accepted: " LAYOUTS, text,
+                        (int)(plus - text), text);
+    const char *f = plus + 1;
+    const char *at = strchr(f, '@');
+    size_t fn = at ? (size_t)(at - f) : strlen(f);
+    if (!match_fetch(f, fn, &s.fetch))
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "strategy '%s': unknown fetch scheme '%.*s'; accepted: " FETCHES, text,
+                        (int)fn, f);
+    s.kind = EMM_STRATEGY_EMM;
+    s.cell = EMM_DEFAULT_CELL;
+    if (at) {
+        emm_status st = parse_cell(text, at + 1, &s.cell, err);
+        if (st != EMM_OK)
+            return st;
+    }
+    *out = s;
+    return EMM_OK;
+}
+
+size_t emm_strategy_format(const emm_strategy *s, char *buf, size_t cap)
+{
+    int n;
+    switch (s->kind) {
+    case EMM_STRATEGY_DIRECT:
+        n = snprintf(buf, cap, "direct");
+        break;
+    case EMM_STRATEGY_CACHE:
+        if (s->layout == EMM_LAYOUT_ORIGINAL)
+            n = snprintf(buf, cap, "cache");
+        else
+            n = snprintf(buf, cap, "cache@%s", emm_layout_name(s->layout));
+        break;
+    default:
+        n = snprintf(buf, cap, "%s+%s@%u", emm_layout_name(s->layout), emm_fetch_name(s->fetch),
+                     s->cell);
+        break;
+    }
+    return n < 0 ? 0 : (size_t)n;
+}
+
+size_t emm_strategy_sweep(emm_strategy *out, size_t cap)
+{
+    static const uint32_t cells[] = {16, 32, 64, 128, 256};
+    size_t n = 0;
+#define PUT(...)                                                                               \
+    do {                                                                                       \
+        if (n < cap)                                                                           \
+            out[n] = (emm_strategy){__VA_ARGS__};                                              \
+        n++;                                                                                   \
+    } while (0)
+    for (int l = EMM_LAYOUT_GRID; l <= EMM_LAYOUT_QUADTREE; l++)
+        for (int f = EMM_FETCH_NAIVE; f <= EMM_FETCH_EXTRAPOLATED; f++)
+            for (size_t c = 0; c < sizeof cells / sizeof *cells; c++)
+                PUT(EMM_STRATEGY_EMM, (emm_layout_kind)l, (emm_fetch_kind)f, cells[c]);
+    PUT(EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0);
+    PUT(EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0);
+    for (int l = EMM_LAYOUT_GRID; l <= EMM_LAYOUT_QUADTREE; l++)
+        PUT(EMM_STRATEGY_CACHE, (emm_layout_kind)l, EMM_FETCH_NONE, EMM_DEFAULT_CELL);
+#undef PUT
+    return n;
+}

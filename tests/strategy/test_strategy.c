@@ -1,0 +1,70 @@
+/* The strategy grammar of DESIGN.md "Strategies": every accepted form parses
+ * to the right fields and formats back to itself; every bad form is refused
+ * with a message naming the bad part. */
+#include <string.h>
+
+#include "check.h"
+#include "emm/strategy.h"
+
+static void round_trip(const char *text, emm_strategy_kind kind, emm_layout_kind layout,
+                       emm_fetch_kind fetch, uint32_t cell, const char *canonical)
+{
+    emm_strategy s;
+    emm_error err;
+    char buf[64];
+    CHECKF(emm_strategy_parse(text, &s, &err) == EMM_OK, "%s", text);
+    CHECKF(s.kind == kind && s.layout == layout && s.fetch == fetch && s.cell == cell, "%s", text);
+    emm_strategy_format(&s, buf, sizeof buf);
+    CHECKF(strcmp(buf, canonical) == 0, "%s formats as %s", text, buf);
+}
+
+static void refused(const char *text, const char *must_mention)
+{
+    emm_strategy s;
+    emm_error err = {0};
+    CHECKF(emm_strategy_parse(text, &s, &err) == EMM_ERR_INVALID, "'%s' accepted", text);
+    CHECKF(strstr(err.message, must_mention) != NULL, "'%s': message '%s' lacks '%s'", text,
+           err.message, must_mention);
+}
+
+int main(void)
+{
+    round_trip("direct", EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0, "direct");
+    round_trip("cache", EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0, "cache");
+    round_trip("cache@tiles", EMM_STRATEGY_CACHE, EMM_LAYOUT_TILES, EMM_FETCH_NONE, 64,
+               "cache@tiles");
+    round_trip("tiles+convolution@64", EMM_STRATEGY_EMM, EMM_LAYOUT_TILES,
+               EMM_FETCH_CONVOLUTION, 64, "tiles+convolution@64");
+    round_trip("grid+naive@16", EMM_STRATEGY_EMM, EMM_LAYOUT_GRID, EMM_FETCH_NAIVE, 16,
+               "grid+naive@16");
+    round_trip("quadtree+extrapolated", EMM_STRATEGY_EMM, EMM_LAYOUT_QUADTREE,
+               EMM_FETCH_EXTRAPOLATED, EMM_DEFAULT_CELL, "quadtree+extrapolated@64");
+
+    refused("", "empty");
+    refused("cahce", "cahce");
+    refused("cache@hex", "'hex'");
+    refused("grid", "needs a fetch scheme");
+    refused("grid+magic@16", "'magic'");
+    refused("hexes+naive", "'hexes'");
+    refused("grid+naive@0", "'0'");
+    refused("grid+naive@-4", "'-4'");
+    refused("grid+naive@99999999999999999999", "99999999999999999999");
+    refused("grid+naive@16x", "'16x'");
+    refused("grid+naive@", "''");
+
+    /* The standard sweep: 45 EMM strategies, direct, cache, cache@ each layout. */
+    emm_strategy sweep[64];
+    size_t n = emm_strategy_sweep(sweep, 64);
+    CHECK(n == 50);
+    size_t emm = 0, cache = 0, direct = 0;
+    for (size_t i = 0; i < n; i++) {
+        emm += sweep[i].kind == EMM_STRATEGY_EMM;
+        cache += sweep[i].kind == EMM_STRATEGY_CACHE;
+        direct += sweep[i].kind == EMM_STRATEGY_DIRECT;
+        for (size_t j = 0; j < i; j++)
+            CHECK(memcmp(&sweep[i], &sweep[j], sizeof sweep[i]) != 0);
+    }
+    CHECK(emm == 45 && cache == 4 && direct == 1);
+    CHECK(emm_strategy_sweep(NULL, 0) == 50);
+    return check_done();
+}
