@@ -71,6 +71,13 @@ EMM_API void emm_mesh_bbox(const emm_mesh *m, double lo[3], double hi[3]);
 /* Mean length of the mesh's edges (each edge counted once). */
 EMM_API double emm_mesh_mean_edge_length(const emm_mesh *m);
 
+/* The mesh as two packed arrays, for code that walks it in bulk (layouts,
+ * the shim's geometry snapshot): 3 * vertex_count coordinates (x, y, z per
+ * vertex) and 3 * triangle_count vertex indices. Owned by the mesh, valid
+ * until it is freed. */
+EMM_API const double *emm_mesh_positions(const emm_mesh *m);
+EMM_API const int32_t *emm_mesh_indices(const emm_mesh *m);
+
 /* The thesis' interface (§5). Ids are checked by assert. The returned
  * pointers stay valid until the mesh is freed. */
 EMM_API const emm_vertex *emm_mesh_vertex(const emm_mesh *m, uint32_t id);
