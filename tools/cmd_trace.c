@@ -1,9 +1,499 @@
-/* PLACEHOLDER: replaced by the real 'emm trace' implementation. */
+/* emm trace: describe a trace, export it to Dinero IV's din text format, and
+ * import din text as an address-only trace (DESIGN.md "Traces";
+ * docs/trace-format.md says how multi-byte accesses and labels map). */
+#include <errno.h>
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "cli.h"
+#include "emm/trace.h"
+
+#define READ_BATCH 65536
+
+static const char trace_usage[] =
+    "usage: emm trace info TRACE [--verify]\n"
+    "       emm trace export --din TRACE [-o FILE]\n"
+    "       emm trace import --din FILE -o TRACE [--bytes N] [--compress]\n"
+    "\n"
+    "Describe, export and import access traces (the files EMM_TRACE writes).\n"
+    "'emm trace SUBCOMMAND --help' explains each subcommand.\n";
+
+static const char info_usage[] =
+    "usage: emm trace info TRACE [--verify]\n"
+    "\n"
+    "Prints the trace's version, compression, arrays (kind, record size, count,\n"
+    "base address), geometry, accesses (reads and writes) and bytes on disk per\n"
+    "access.\n"
+    "\n"
+    "  --verify   also read every block, checking checksums and records, and\n"
+    "             print 'verify: ok' or exit 1 with the first problem\n";
+
+static const char export_usage[] =
+    "usage: emm trace export --din TRACE [-o FILE]\n"
+    "\n"
+    "Writes the trace in Dinero IV's din format, one line per access:\n"
+    "'LABEL ADDRESS' with label 0 for a read, 1 for a write and the original\n"
+    "address (base + element * record size + offset) in hex. din has no size:\n"
+    "each access becomes one line at its first byte, which Dinero IV reads as\n"
+    "the 4-byte word holding it.\n"
+    "\n"
+    "  --din      the output format (the only one)\n"
+    "  -o FILE    write to FILE (whole or not at all) instead of stdout\n";
+
+static const char import_usage[] =
+    "usage: emm trace import --din FILE -o TRACE [--bytes N] [--compress]\n"
+    "\n"
+    "Reads Dinero IV din text ('-' for stdin) and writes an address-only trace:\n"
+    "one raw-memory array, no geometry, so only the 'direct' and 'cache'\n"
+    "strategies apply to it. Label 0 is a read, 1 a write; 2 (instruction\n"
+    "fetch) is skipped, as emm models data accesses; other labels are errors.\n"
+    "Text after the address is ignored, as Dinero IV does.\n"
+    "\n"
+    "  --din        the input format (the only one)\n"
+    "  -o TRACE     the trace to write (required)\n"
+    "  --bytes N    bytes per access (default: to the end of the aligned 4-byte\n"
+    "               word holding the address, the word Dinero IV would access)\n"
+    "  --compress   zstd-compress the trace's blocks\n";
+
+/* ------------------------------------------------------------------------ */
+
+static int trace_info(int argc, char **argv)
+{
+    const char *cmd = "trace info";
+    const char *path = NULL;
+    int verify = 0;
+    for (int i = 1; i < argc; i++) {
+        if (cli_is_help(argv[i])) {
+            fputs(info_usage, stdout);
+            return EMM_EXIT_OK;
+        } else if (strcmp(argv[i], "--verify") == 0) {
+            verify = 1;
+        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
+            return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+        } else if (path) {
+            return cli_usage_error(cmd, "one trace at a time ('%s' and '%s')", path, argv[i]);
+        } else {
+            path = argv[i];
+        }
+    }
+    if (!path)
+        return cli_usage_error(cmd, "which trace?");
+
+    emm_error err;
+    emm_trace_reader *r = NULL;
+    if (emm_trace_reader_open(path, &r, &err) != EMM_OK)
+        return cli_fail(&err);
+    const emm_trace_info *info = emm_trace_reader_info(r);
+    struct stat st;
+    uint64_t size = stat(path, &st) == 0 ? (uint64_t)st.st_size : 0;
+    printf("trace:       %s\n", path);
+    printf("version:     %u\n", info->version);
+    printf("compressed:  %s\n", info->compressed ? "yes (zstd)" : "no");
+    printf("arrays:      %u\n", info->narrays);
+    for (uint32_t i = 0; i < info->narrays; i++) {
+        const emm_trace_array *a = &info->arrays[i];
+        if (a->kind == EMM_ARRAY_RAW && a->count == 0)
+            printf("  %u: %-9s  record %u B  count unbounded  base 0x%" PRIx64 "\n", i,
+                   emm_trace_kind_name(a->kind), a->record_size, a->base);
+        else
+            printf("  %u: %-9s  record %u B  count %" PRIu64 "  base 0x%" PRIx64 "\n", i,
+                   emm_trace_kind_name(a->kind), a->record_size, a->count, a->base);
+    }
+    if (info->geometry.nv == 0 && info->geometry.nt == 0)
+        printf("geometry:    none (address-only: only 'direct' and 'cache' apply)\n");
+    else
+        printf("geometry:    %" PRIu64 " vertices, %" PRIu64 " triangles\n", info->geometry.nv,
+               info->geometry.nt);
+    printf("accesses:    %" PRIu64 " (%" PRIu64 " reads, %" PRIu64 " writes)\n", info->accesses,
+           info->accesses - info->writes, info->writes);
+    printf("blocks:      %" PRIu64 "\n", info->blocks);
+    if (info->accesses > 0)
+        printf("file:        %" PRIu64 " bytes, %.2f bytes per access\n", size,
+               (double)size / (double)info->accesses);
+    else
+        printf("file:        %" PRIu64 " bytes\n", size);
+    int rc = EMM_EXIT_OK;
+    if (verify) {
+        emm_trace_record *buf = malloc(READ_BATCH * sizeof *buf);
+        if (!buf) {
+            emm_trace_reader_close(r);
+            cli_error("%s: out of memory", path);
+            return EMM_EXIT_FAIL;
+        }
+        size_t got;
+        emm_status s;
+        while ((s = emm_trace_read(r, buf, READ_BATCH, &got, &err)) == EMM_OK && got > 0) {
+        }
+        free(buf);
+        fflush(stdout);
+        if (s != EMM_OK)
+            rc = cli_fail(&err);
+        else
+            printf("verify:      ok\n");
+    }
+    emm_trace_reader_close(r);
+    return rc;
+}
+
+/* ------------------------------------------------------------------------ */
+
+/* "L HEX\n" into p; returns the end. */
+static char *put_din_line(char *p, int label, uint64_t addr)
+{
+    static const char hex[] = "0123456789abcdef";
+    char tmp[16];
+    int n = 0;
+    do {
+        tmp[n++] = hex[addr & 15];
+        addr >>= 4;
+    } while (addr);
+    *p++ = (char)('0' + label);
+    *p++ = ' ';
+    while (n)
+        *p++ = tmp[--n];
+    *p++ = '\n';
+    return p;
+}
+
+/* An output file written whole or not at all: a temporary file beside it,
+ * renamed at the end. */
+struct out_file {
+    FILE *f;
+    const char *path; /* NULL: stdout */
+    char tmp[4096];
+};
+
+static int out_open(struct out_file *o, const char *path)
+{
+    o->path = path;
+    if (!path) {
+        o->f = stdout;
+        return 0;
+    }
+    snprintf(o->tmp, sizeof o->tmp, "%s.tmp.%ld", path, (long)getpid());
+    o->f = fopen(o->tmp, "wb");
+    if (!o->f) {
+        cli_error("%s: cannot create: %s", o->tmp, strerror(errno));
+        return -1;
+    }
+    return 0;
+}
+
+static int out_close(struct out_file *o, int ok)
+{
+    if (!o->path) {
+        if (fflush(stdout) != 0 && ok) {
+            cli_error("stdout: cannot write: %s", strerror(errno));
+            return -1;
+        }
+        return ok ? 0 : -1;
+    }
+    if (ok && (fflush(o->f) != 0 || fsync(fileno(o->f)) != 0)) {
+        cli_error("%s: cannot write: %s", o->path, strerror(errno));
+        ok = 0;
+    }
+    if (fclose(o->f) != 0 && ok) {
+        cli_error("%s: cannot write: %s", o->path, strerror(errno));
+        ok = 0;
+    }
+    if (ok && rename(o->tmp, o->path) != 0) {
+        cli_error("%s: cannot rename into place: %s", o->path, strerror(errno));
+        ok = 0;
+    }
+    if (!ok)
+        unlink(o->tmp);
+    return ok ? 0 : -1;
+}
+
+static int trace_export(int argc, char **argv)
+{
+    const char *cmd = "trace export";
+    const char *path = NULL, *out = NULL;
+    int din = 0;
+    for (int i = 1; i < argc; i++) {
+        if (cli_is_help(argv[i])) {
+            fputs(export_usage, stdout);
+            return EMM_EXIT_OK;
+        } else if (strcmp(argv[i], "--din") == 0) {
+            din = 1;
+        } else if (strcmp(argv[i], "-o") == 0 || strcmp(argv[i], "--output") == 0) {
+            if (!(out = cli_value(cmd, argc, argv, &i)))
+                return EMM_EXIT_USAGE;
+        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
+            return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+        } else if (path) {
+            return cli_usage_error(cmd, "one trace at a time ('%s' and '%s')", path, argv[i]);
+        } else {
+            path = argv[i];
+        }
+    }
+    if (!din)
+        return cli_usage_error(cmd, "which format? (--din is the only one)");
+    if (!path)
+        return cli_usage_error(cmd, "which trace?");
+
+    emm_error err;
+    emm_trace_reader *r = NULL;
+    if (emm_trace_reader_open(path, &r, &err) != EMM_OK)
+        return cli_fail(&err);
+    const emm_trace_info *info = emm_trace_reader_info(r);
+    emm_trace_record *buf = malloc(READ_BATCH * sizeof *buf);
+    char *text = malloc((size_t)READ_BATCH * 20);
+    struct out_file o;
+    if (!buf || !text) {
+        cli_error("%s: out of memory", path);
+        free(buf);
+        free(text);
+        emm_trace_reader_close(r);
+        return EMM_EXIT_FAIL;
+    }
+    if (out_open(&o, out) != 0) {
+        free(buf);
+        free(text);
+        emm_trace_reader_close(r);
+        return EMM_EXIT_FAIL;
+    }
+    int ok = 1;
+    size_t got;
+    emm_status s;
+    while ((s = emm_trace_read(r, buf, READ_BATCH, &got, &err)) == EMM_OK && got > 0) {
+        char *p = text;
+        for (size_t i = 0; i < got; i++) {
+            const emm_trace_array *a = &info->arrays[buf[i].array];
+            /* The reader checked that the address fits 64 bits (raw arrays:
+             * element is the address, base is added modulo 2^64). */
+            uint64_t addr = a->base + buf[i].element * a->record_size + buf[i].offset;
+            p = put_din_line(p, buf[i].write, addr);
+        }
+        if (fwrite(text, 1, (size_t)(p - text), o.f) != (size_t)(p - text)) {
+            cli_error("%s: cannot write: %s", out ? out : "stdout", strerror(errno));
+            ok = 0;
+            break;
+        }
+    }
+    if (ok && s != EMM_OK) {
+        cli_fail(&err);
+        ok = 0;
+    }
+    free(buf);
+    free(text);
+    emm_trace_reader_close(r);
+    return out_close(&o, ok) == 0 ? EMM_EXIT_OK : EMM_EXIT_FAIL;
+}
+
+/* ------------------------------------------------------------------------ */
+
+static int hexval(int c)
+{
+    if (c >= '0' && c <= '9')
+        return c - '0';
+    if (c >= 'a' && c <= 'f')
+        return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F')
+        return c - 'A' + 10;
+    return -1;
+}
+
+static int is_blank(int c)
+{
+    return c == ' ' || c == '\t' || c == '\r';
+}
+
+/* Parses a hex number with an optional 0x; returns the position after it or
+ * NULL (with *why set) when there is no number or it overflows 64 bits. */
+static const char *parse_hex(const char *p, uint64_t *out, const char **why)
+{
+    if (p[0] == '0' && (p[1] == 'x' || p[1] == 'X') && hexval(p[2]) >= 0)
+        p += 2;
+    if (hexval(*p) < 0) {
+        *why = "expected a hex number";
+        return NULL;
+    }
+    uint64_t v = 0;
+    for (int d; (d = hexval(*p)) >= 0; p++) {
+        if (v >> 60) {
+            *why = "number does not fit in 64 bits";
+            return NULL;
+        }
+        v = v << 4 | (uint64_t)d;
+    }
+    *out = v;
+    return p;
+}
+
+static int trace_import(int argc, char **argv)
+{
+    const char *cmd = "trace import";
+    const char *in = NULL, *out = NULL;
+    int din = 0, compress = 0;
+    uint64_t fixed_bytes = 0;
+    for (int i = 1; i < argc; i++) {
+        if (cli_is_help(argv[i])) {
+            fputs(import_usage, stdout);
+            return EMM_EXIT_OK;
+        } else if (strcmp(argv[i], "--din") == 0) {
+            din = 1;
+        } else if (strcmp(argv[i], "--compress") == 0) {
+            compress = 1;
+        } else if (strcmp(argv[i], "-o") == 0 || strcmp(argv[i], "--output") == 0) {
+            if (!(out = cli_value(cmd, argc, argv, &i)))
+                return EMM_EXIT_USAGE;
+        } else if (strcmp(argv[i], "--bytes") == 0) {
+            const char *v = cli_value(cmd, argc, argv, &i);
+            if (!v || !cli_u64(cmd, "--bytes", v, &fixed_bytes))
+                return EMM_EXIT_USAGE;
+            if (fixed_bytes == 0 || fixed_bytes > UINT32_MAX)
+                return cli_usage_error(cmd, "--bytes must be between 1 and %u", UINT32_MAX);
+        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
+            return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+        } else if (in) {
+            return cli_usage_error(cmd, "one input at a time ('%s' and '%s')", in, argv[i]);
+        } else {
+            in = argv[i];
+        }
+    }
+    if (!din)
+        return cli_usage_error(cmd, "which format? (--din is the only one)");
+    if (!in)
+        return cli_usage_error(cmd, "which din file?");
+    if (!out)
+        return cli_usage_error(cmd, "-o TRACE is required");
+
+    const char *in_name = strcmp(in, "-") == 0 ? "stdin" : in;
+    FILE *f = strcmp(in, "-") == 0 ? stdin : fopen(in, "r");
+    if (!f) {
+        cli_error("%s: cannot open: %s", in, strerror(errno));
+        return EMM_EXIT_FAIL;
+    }
+    /* Raw memory: element = address, one byte per record, no known end. */
+    const emm_trace_array raw = {EMM_ARRAY_RAW, 1, 0, 0};
+    emm_error err;
+    emm_trace_writer *w = NULL;
+    if (emm_trace_writer_open(out, &raw, 1, NULL, compress, &w, &err) != EMM_OK) {
+        if (f != stdin)
+            fclose(f);
+        return cli_fail(&err);
+    }
+    emm_trace_record *buf = malloc(READ_BATCH * sizeof *buf);
+    if (!buf) {
+        cli_error("%s: out of memory", in_name);
+        emm_trace_writer_abort(w);
+        if (f != stdin)
+            fclose(f);
+        return EMM_EXIT_FAIL;
+    }
+    char *line = NULL;
+    size_t cap = 0, nbuf = 0;
+    uint64_t lineno = 0, accesses = 0, skipped = 0;
+    int ok = 1;
+    ssize_t len;
+    while (ok && (len = getline(&line, &cap, f)) >= 0) {
+        lineno++;
+        if ((size_t)len != strlen(line)) {
+            cli_error("%s:%" PRIu64 ": NUL byte in the line", in_name, lineno);
+            ok = 0;
+            break;
+        }
+        const char *p = line, *why = NULL;
+        while (is_blank(*p))
+            p++;
+        if (*p == '\n' || *p == '\0')
+            continue; /* blank lines carry nothing */
+        uint64_t label, addr;
+        if (!(p = parse_hex(p, &label, &why))) {
+            cli_error("%s:%" PRIu64 ": label: %s", in_name, lineno, why);
+            ok = 0;
+            break;
+        }
+        if (!is_blank(*p)) {
+            cli_error("%s:%" PRIu64 ": %s", in_name, lineno,
+                      *p == '\n' || *p == '\0' ? "no address after the label"
+                                               : "the label is not a hex number");
+            ok = 0;
+            break;
+        }
+        while (is_blank(*p))
+            p++;
+        if (!(p = parse_hex(p, &addr, &why))) {
+            cli_error("%s:%" PRIu64 ": address: %s", in_name, lineno, why);
+            ok = 0;
+            break;
+        }
+        if (!is_blank(*p) && *p != '\n' && *p != '\0') {
+            cli_error("%s:%" PRIu64 ": the address is not a hex number", in_name, lineno);
+            ok = 0;
+            break;
+        }
+        if (label == 2) {
+            skipped++;
+            continue;
+        }
+        if (label > 1) {
+            cli_error("%s:%" PRIu64 ": label %" PRIu64
+                      " is not supported (0 read, 1 write, 2 instruction fetch)",
+                      in_name, lineno, label);
+            ok = 0;
+            break;
+        }
+        buf[nbuf++] = (emm_trace_record){
+            .element = addr,
+            .array = 0,
+            .offset = 0,
+            .bytes = fixed_bytes ? (uint32_t)fixed_bytes : (uint32_t)(4 - (addr & 3)),
+            .work = 0,
+            .write = (uint8_t)label,
+        };
+        accesses++;
+        if (nbuf == READ_BATCH) {
+            if (emm_trace_write(w, buf, nbuf, &err) != EMM_OK) {
+                cli_fail(&err);
+                ok = 0;
+            }
+            nbuf = 0;
+        }
+    }
+    if (ok && ferror(f)) {
+        cli_error("%s: cannot read: %s", in_name, strerror(errno));
+        ok = 0;
+    }
+    if (ok && nbuf > 0 && emm_trace_write(w, buf, nbuf, &err) != EMM_OK) {
+        cli_fail(&err);
+        ok = 0;
+    }
+    free(line);
+    free(buf);
+    if (f != stdin)
+        fclose(f);
+    if (!ok) {
+        emm_trace_writer_abort(w);
+        return EMM_EXIT_FAIL;
+    }
+    if (emm_trace_writer_close(w, &err) != EMM_OK)
+        return cli_fail(&err);
+    printf("%s: %" PRIu64 " accesses", out, accesses);
+    if (skipped)
+        printf(" (%" PRIu64 " instruction fetches skipped)", skipped);
+    printf("\n");
+    return EMM_EXIT_OK;
+}
 
 int emm_cmd_trace(int argc, char **argv)
 {
-    (void)argc; (void)argv;
-    cli_error("'trace' is not built yet");
-    return EMM_EXIT_FAIL;
+    if (argc < 2)
+        return cli_usage_error("trace", "which subcommand? (info, export, import)");
+    if (cli_is_help(argv[1])) {
+        fputs(trace_usage, stdout);
+        return EMM_EXIT_OK;
+    }
+    if (strcmp(argv[1], "info") == 0)
+        return trace_info(argc - 1, argv + 1);
+    if (strcmp(argv[1], "export") == 0)
+        return trace_export(argc - 1, argv + 1);
+    if (strcmp(argv[1], "import") == 0)
+        return trace_import(argc - 1, argv + 1);
+    return cli_usage_error("trace", "unknown subcommand '%s' (info, export, import)", argv[1]);
 }

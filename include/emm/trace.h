@@ -58,6 +58,8 @@ typedef struct emm_trace_info {
     emm_trace_geometry geometry;
     uint64_t accesses;   /* records in the file (known once the writer closed) */
     int compressed;      /* blocks are zstd-compressed */
+    uint64_t writes;     /* records with write = 1 (known once the writer closed) */
+    uint64_t blocks;     /* record blocks in the file */
 } emm_trace_info;
 
 typedef struct emm_trace_writer emm_trace_writer;
@@ -87,6 +89,9 @@ EMM_API emm_status emm_trace_read(emm_trace_reader *r, emm_trace_record *buf, si
 /* Starts reading the records again from the first. */
 EMM_API emm_status emm_trace_rewind(emm_trace_reader *r, emm_error *err);
 EMM_API void emm_trace_reader_close(emm_trace_reader *r);
+
+/* "vertices", "triangles" or "raw" (a static string; "?" for other values). */
+EMM_API const char *emm_trace_kind_name(emm_array_kind kind);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,167 @@
+/* emm — the machine model (DESIGN.md "The machine model"; thesis §3.2, §6.1–6.2).
+ *
+ * A simulated STHORM-class core: a local store, a remote store reached by
+ * word-by-word direct reads or by an asynchronous 2-channel DMA engine, and,
+ * for comparison, a set-associative hardware cache whose hit and miss counts
+ * equal Dinero IV's (docs/dinero.md). Every cycle lands in one named bucket;
+ * the buckets add up to the total.
+ *
+ * Use: build a machine (defaults, then a machine file and single overrides),
+ * validate it once, create one model per strategy, feed the models batches of
+ * trace records, read the results. Nothing here is global: two simulations
+ * can run side by side. */
+#ifndef EMM_SIM_H
+#define EMM_SIM_H
+
+#include "emm/common.h"
+#include "emm/strategy.h"
+#include "emm/trace.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- the machine's configuration ------------------------------------------ */
+
+typedef struct emm_machine emm_machine;
+
+/* The cache's fetch policies, Dinero IV's -dfetch d, m and a. */
+typedef enum emm_cache_fetch {
+    EMM_CACHE_FETCH_DEMAND = 0, /* no prefetch */
+    EMM_CACHE_FETCH_MISS,       /* prefetch the next line on a read miss (default) */
+    EMM_CACHE_FETCH_ALWAYS      /* prefetch the next line on every read */
+} emm_cache_fetch;
+
+/* One configuration key, as documented in docs/machine.md. */
+typedef struct emm_machine_key {
+    const char *name;     /* "dma.issue" */
+    const char *unit;     /* "cycles", "bytes", ... */
+    const char *help;     /* one line */
+    const char *fallback; /* the default, as text */
+} emm_machine_key;
+
+/* A machine with every parameter at its default. Free with emm_machine_free. */
+EMM_API emm_status emm_machine_new(emm_machine **out, emm_error *err);
+EMM_API void emm_machine_free(emm_machine *m);
+/* A copy of m (for a model that outlives its caller's machine). */
+EMM_API emm_status emm_machine_clone(const emm_machine *m, emm_machine **out, emm_error *err);
+
+/* Reads an INI-style machine file: "[section]" lines, "key = value" lines
+ * (a key outside a section is written in full: "dma.issue = 266"), comments
+ * from '#' or ';'. A file names each key at most once. On failure err reads
+ * "FILE:LINE: problem" and m keeps the keys set before the bad line. */
+EMM_API emm_status emm_machine_load(emm_machine *m, const char *path, emm_error *err);
+/* The same for text in memory; `name` stands for the file in messages. */
+EMM_API emm_status emm_machine_load_text(emm_machine *m, const char *name, const char *text,
+                                         emm_error *err);
+/* Applies one "KEY=VALUE" override (the --set option). */
+EMM_API emm_status emm_machine_set(emm_machine *m, const char *assignment, emm_error *err);
+/* Sets one key to a value given as text. `where` prefixes messages. */
+EMM_API emm_status emm_machine_set_key(emm_machine *m, const char *key, const char *value,
+                                       const char *where, emm_error *err);
+/* Checks the rules that tie keys together (cache geometry, powers of two).
+ * Each key's own range is checked when it is set. Models require a
+ * validated machine. */
+EMM_API emm_status emm_machine_validate(const emm_machine *m, emm_error *err);
+
+/* The keys, in the order `emm machine show` prints them. */
+EMM_API size_t emm_machine_key_count(void);
+EMM_API const emm_machine_key *emm_machine_key_at(size_t i);
+/* The value of `key` in m as text (as a machine file would spell it);
+ * returns the length needed, as snprintf does; 0 for an unknown key. */
+EMM_API size_t emm_machine_format(const emm_machine *m, const char *key, char *buf, size_t cap);
+/* The value of `key` as a number (an emm_cache_fetch for cache.fetch).
+ * `key` must be one of the keys (assert). */
+EMM_API uint64_t emm_machine_get(const emm_machine *m, const char *key);
+/* True when `key` holds a word (cache.fetch) rather than a number. */
+EMM_API int emm_machine_key_is_text(const char *key);
+
+/* Cycles of one synchronous DMA of `bytes` bytes on an idle engine:
+ * issue + cycles_per_8b*ceil(bytes/8) + chunk_cycles*(ceil(bytes/chunk)-1);
+ * 0 bytes cost nothing. */
+EMM_API uint64_t emm_machine_dma_cycles(const emm_machine *m, uint64_t bytes);
+
+/* ---- cycles and results ---------------------------------------------------- */
+
+typedef enum emm_bucket {
+    EMM_BUCKET_LOCAL_ACCESS = 0, /* local store accesses (and a cache miss's local access) */
+    EMM_BUCKET_REMOTE_ACCESS,    /* direct reads and writes of remote memory */
+    EMM_BUCKET_COMPUTE,          /* the program's own work between accesses */
+    EMM_BUCKET_EMM_INSTRUCTIONS, /* the EMM runtime's look-ups, checks, predictions */
+    EMM_BUCKET_DMA_ISSUE,        /* the core programming the DMA engine */
+    EMM_BUCKET_DMA_STALL,        /* the core waiting for a transfer it needs */
+    EMM_BUCKET_CACHE_HIT,        /* cache hits */
+    EMM_BUCKET_CACHE_MISS_STALL, /* waiting for cache line fills and late prefetches */
+    EMM_BUCKET_COUNT
+} emm_bucket;
+
+/* "local_access", "remote_access", ... (the JSON report's keys). */
+EMM_API const char *emm_bucket_name(emm_bucket b);
+
+typedef struct emm_result {
+    emm_strategy strategy;
+    uint64_t accesses;                   /* records simulated */
+    uint64_t total;                      /* == the sum of cycles[] */
+    uint64_t cycles[EMM_BUCKET_COUNT];
+    int has_cache;                       /* the cache counts below are meaningful */
+    struct {
+        uint64_t demand_fetches;         /* line references by the program (Dinero's "Demand Fetches") */
+        uint64_t demand_misses;
+        uint64_t prefetch_fetches;       /* Dinero's "Prefetch Fetches" */
+        uint64_t prefetch_misses;        /* prefetches that brought a line in */
+        uint64_t late_prefetches;        /* demand hits that waited for a prefetch in flight */
+    } cache;
+    int has_dma;                         /* the DMA counts below are meaningful */
+    struct {
+        uint64_t transfers;
+        uint64_t bytes;
+    } dma;
+    int has_direct;                      /* the direct-read counts below are meaningful */
+    struct {
+        uint64_t words_read;
+        uint64_t words_written;
+    } direct;
+} emm_result;
+
+/* ---- models ---------------------------------------------------------------- */
+
+/* A model simulates one strategy over a stream of trace records. */
+typedef struct emm_model emm_model;
+
+/* A model of strategy s on machine m (validated; copied, so m may be freed)
+ * for records of a trace whose arrays are described by `trace` (copied).
+ * EMM strategies and cache@LAYOUT are EMM_ERR_UNSUPPORTED in this build. */
+EMM_API emm_status emm_model_new(const emm_machine *m, const emm_strategy *s,
+                                 const emm_trace_info *trace, emm_model **out, emm_error *err);
+/* Simulates n records in order. The records must be valid for the trace
+ * (array index and element in range, bytes >= 1): the reader guarantees it
+ * and this loop does not check. */
+EMM_API void emm_model_run(emm_model *model, const emm_trace_record *recs, size_t n);
+/* Back to the state of a new model (empty cache, idle DMA, zero cycles). */
+EMM_API void emm_model_reset(emm_model *model);
+/* The result so far. */
+EMM_API void emm_model_result(const emm_model *model, emm_result *out);
+EMM_API void emm_model_free(emm_model *model);
+
+/* ---- replay ---------------------------------------------------------------- */
+
+/* Called now and then during emm_replay with the records done so far. */
+typedef void (*emm_progress_fn)(void *ctx, uint64_t done, uint64_t total);
+
+/* Simulates every strategy of s[0..n) over the trace at `path` in one
+ * streaming pass (memory does not grow with the trace) and fills
+ * results[0..n). *accesses (when not NULL) receives the records read.
+ * `progress` may be NULL. */
+EMM_API emm_status emm_replay(const char *path, const emm_machine *m, const emm_strategy *s,
+                              size_t n, emm_result *results, uint64_t *accesses,
+                              emm_progress_fn progress, void *progress_ctx, emm_error *err);
+
+/* Writes the JSON report of docs/report.md to `path` (whole or not at all). */
+EMM_API emm_status emm_report_write(const char *path, const char *trace_name,
+                                    const emm_machine *m, uint64_t accesses,
+                                    const emm_result *results, size_t n, emm_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,85 @@
+/* Models: one per strategy, created by strategy kind; the caller sees only
+ * the opaque emm_model (include/emm/sim.h). */
+#include "model.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "error.h"
+
+emm_status emm_addr_map_init(emm_addr_map *map, const emm_trace_info *trace, emm_error *err)
+{
+    uint32_t n = trace ? trace->narrays : 0;
+    map->narrays = n;
+    map->base = calloc(n ? n : 1, sizeof *map->base);
+    map->size = calloc(n ? n : 1, sizeof *map->size);
+    if (!map->base || !map->size) {
+        emm_addr_map_free(map);
+        return emm_fail(err, EMM_ERR_NOMEM, "model: out of memory");
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        map->base[i] = trace->arrays[i].base;
+        map->size[i] = trace->arrays[i].record_size;
+    }
+    return EMM_OK;
+}
+
+void emm_addr_map_free(emm_addr_map *map)
+{
+    free(map->base);
+    free(map->size);
+    map->base = map->size = NULL;
+}
+
+emm_status emm_model_new(const emm_machine *m, const emm_strategy *s,
+                         const emm_trace_info *trace, emm_model **out, emm_error *err)
+{
+    emm_status st;
+    char name[64];
+    if ((st = emm_machine_validate(m, err)) != EMM_OK)
+        return st;
+    emm_strategy_format(s, name, sizeof name);
+    if (s->kind == EMM_STRATEGY_DIRECT)
+        st = emm_direct_model_new(&m->p, trace, out, err);
+    else if (s->kind == EMM_STRATEGY_CACHE && s->layout == EMM_LAYOUT_ORIGINAL)
+        st = emm_cache_model_new(&m->p, trace, out, err);
+    else
+        return emm_fail(err, EMM_ERR_UNSUPPORTED,
+                        "strategy '%s': not implemented in this build (only 'direct' and 'cache')",
+                        name);
+    if (st == EMM_OK)
+        (*out)->strategy = *s;
+    return st;
+}
+
+void emm_model_run(emm_model *model, const emm_trace_record *recs, size_t n)
+{
+    model->ops->run(model, recs, n);
+}
+
+void emm_model_reset(emm_model *model)
+{
+    model->ops->reset(model);
+}
+
+void emm_model_result(const emm_model *model, emm_result *out)
+{
+    memset(out, 0, sizeof *out);
+    model->ops->result(model, out);
+    out->strategy = model->strategy;
+}
+
+void emm_model_free(emm_model *model)
+{
+    if (model)
+        model->ops->destroy(model);
+}
+
+const char *emm_bucket_name(emm_bucket b)
+{
+    static const char *const names[EMM_BUCKET_COUNT] = {
+        "local_access", "remote_access", "compute", "emm_instructions",
+        "dma_issue", "dma_stall", "cache_hit", "cache_miss_stall",
+    };
+    return (unsigned)b < EMM_BUCKET_COUNT ? names[b] : "unknown";
+}

@@ -1,0 +1,47 @@
+/* Internal: what every model implements. A model sees records in batches;
+ * the dispatch through `ops` happens once per batch, never per access, so
+ * each model's loop stays tight (STYLE.md §5, §12).
+ *
+ * A later model (an EMM strategy, or the cache on a reordered layout) embeds
+ * `struct emm_model` as its first member, fills `ops`, and is created from
+ * emm_model_new's dispatch; the replay pipeline does not change. */
+#ifndef EMM_SIM_MODEL_H
+#define EMM_SIM_MODEL_H
+
+#include "machine.h"
+
+struct emm_model_ops {
+    void (*run)(emm_model *m, const emm_trace_record *recs, size_t n);
+    void (*reset)(emm_model *m);
+    void (*result)(const emm_model *m, emm_result *out);
+    void (*destroy)(emm_model *m);
+};
+
+struct emm_model {
+    const struct emm_model_ops *ops;
+    emm_strategy strategy;
+};
+
+/* Where each array's records start and how long they are, for turning a
+ * record into its original address: base[a] + element * size[a] + offset. */
+typedef struct emm_addr_map {
+    uint32_t narrays;
+    uint64_t *base;
+    uint64_t *size;
+} emm_addr_map;
+
+emm_status emm_addr_map_init(emm_addr_map *map, const emm_trace_info *trace, emm_error *err);
+void emm_addr_map_free(emm_addr_map *map);
+
+static inline uint64_t emm_addr_of(const emm_addr_map *map, const emm_trace_record *r)
+{
+    return map->base[r->array] + r->element * map->size[r->array] + r->offset;
+}
+
+/* The constructors of the models this build has. */
+emm_status emm_direct_model_new(const emm_machine_params *p, const emm_trace_info *trace,
+                                emm_model **out, emm_error *err);
+emm_status emm_cache_model_new(const emm_machine_params *p, const emm_trace_info *trace,
+                               emm_model **out, emm_error *err);
+
+#endif
