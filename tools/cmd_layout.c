@@ -1,9 +1,354 @@
-/* PLACEHOLDER: replaced by the real 'emm layout' implementation. */
+/* emm layout: build a strategy's layout (thesis §4.1) over a mesh file and
+ * draw its cells over the mesh as an SVG (the pictures of thesis Figs. 4.2,
+ * 4.5 and 4.6) or print its cell statistics. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "cli.h"
+#include "emm/layout.h"
+#include "emm/mesh.h"
+#include "emm/sim.h"
+#include "emm/strategy.h"
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "usage: emm layout MESH --strategy S [--svg FILE] [--stats] [--local BYTES]\n"
+            "                  [--vertex-bytes N] [--triangle-bytes N]\n"
+            "\n"
+            "Builds the layout of strategy S (grid, tiles or quadtree; thesis 4.1) over a\n"
+            "mesh file and draws or describes its cells. Each cell holds the triangles\n"
+            "whose centroids fall in it and a copy of each of their vertices.\n"
+            "\n"
+            "  --strategy S        LAYOUT+FETCH[@CELL] or cache@LAYOUT, e.g. tiles+convolution@64;\n"
+            "                      CELL is triangles per cell (default %u)\n"
+            "  --svg FILE          draw the mesh, each cell's triangles in its own colour and\n"
+            "                      the cell boundaries in bold (y up); written whole or not at all\n"
+            "  --stats             print cells, triangles and bytes per cell (min, median, max),\n"
+            "                      duplicated vertices, look-up bytes, quadtree depths; the\n"
+            "                      default when --svg is not given\n"
+            "  --local BYTES       local store size (K, M, G allowed): a cell larger than it is\n"
+            "                      an error for an EMM strategy (default: the machine's, 256K;\n"
+            "                      0 = no check)\n"
+            "  --vertex-bytes N    bytes of a vertex record (default %u, the thesis' struct)\n"
+            "  --triangle-bytes N  bytes of a triangle record (default %u)\n"
+            "\n"
+            "A 3D mesh is laid out over the two axes along which its bounding box is\n"
+            "largest. docs/layouts.md explains the layouts.\n",
+            EMM_DEFAULT_CELL, EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES);
+}
+
+/* "20,000": counts read better grouped. */
+static const char *grouped(uint64_t v, char buf[32])
+{
+    char tmp[32];
+    int n = snprintf(tmp, sizeof tmp, "%llu", (unsigned long long)v);
+    int o = 0;
+    for (int i = 0; i < n; i++) {
+        if (i > 0 && (n - i) % 3 == 0)
+            buf[o++] = ',';
+        buf[o++] = tmp[i];
+    }
+    buf[o] = '\0';
+    return buf;
+}
+
+static void print_stats(const emm_layout *l, const char *path, const emm_strategy *s)
+{
+    emm_layout_stats st;
+    emm_layout_get_stats(l, &st);
+    char a[32], b[32], c[32];
+    printf("mesh            %s: %s triangles, %s vertices\n", path,
+           grouped(emm_layout_triangle_count(l), a), grouped(emm_layout_vertex_count(l), b));
+    printf("layout          %s, CELL %u", emm_layout_name(s->layout), s->cell);
+    uint32_t cols, rows;
+    emm_layout_dims(l, &cols, &rows);
+    if (s->layout == EMM_LAYOUT_GRID)
+        printf(" (%u columns x %u rows)", cols, rows);
+    else if (s->layout == EMM_LAYOUT_TILES)
+        printf(" (%u rows of %u and %u tiles)", rows, cols, cols + 1);
+    int axes[2];
+    emm_layout_axes(l, axes, NULL, NULL);
+    printf(", over %c and %c\n", "xyz"[axes[0]], "xyz"[axes[1]]);
+    printf("cells           %s (%s without triangles)\n", grouped(st.cells, a),
+           grouped(st.empty_cells, b));
+    printf("triangles/cell  min %s, median %s, max %s\n", grouped(st.tri_min, a),
+           grouped(st.tri_median, b), grouped(st.tri_max, c));
+    printf("bytes/cell      min %s, median %s, max %s\n", grouped(st.bytes_min, a),
+           grouped(st.bytes_median, b), grouped(st.bytes_max, c));
+    printf("vertex copies   %s (%s duplicated, %s vertices unused)\n",
+           grouped(st.vertex_copies, a), grouped(st.duplicated_vertices, b),
+           grouped(st.unused_vertices, c));
+    printf("image bytes     %s\n", grouped(st.image_bytes, a));
+    printf("lookup bytes    %s\n", grouped(st.lookup_bytes, a));
+    if (s->layout == EMM_LAYOUT_QUADTREE) {
+        printf("quadtree depth  min %u, max %u\n", st.depth_min, st.depth_max);
+        printf("quadtree nodes  %s (%s leaves over CELL at the deepest level)\n",
+               grouped(st.quadtree_nodes, a), grouped(st.overfull_leaves, b));
+    }
+}
+
+/* Pastel colours, light enough that the thin triangle edges stay visible. */
+static const char *const palette[] = {
+    "#8dd3c7", "#ffffb3", "#bebada", "#fb8072", "#80b1d3", "#fdb462",
+    "#b3de69", "#fccde5", "#d9d9d9", "#bc80bd", "#ccebc5", "#ffed6f",
+};
+#define NPALETTE (sizeof palette / sizeof palette[0])
+
+/* Greedy colouring in cell order: each cell takes the first colour none of
+ * its already-coloured neighbours has, or the least used among them. */
+static unsigned char *colour_cells(const emm_layout *l)
+{
+    uint32_t n = emm_layout_cell_count(l);
+    unsigned char *col = malloc(n ? n : 1);
+    if (!col)
+        return NULL;
+    for (uint32_t c = 0; c < n; c++) {
+        unsigned used[NPALETTE] = {0};
+        const uint32_t *nb;
+        uint32_t k = emm_layout_neighbors(l, c, &nb, NULL);
+        for (uint32_t i = 0; i < k; i++)
+            if (nb[i] < c)
+                used[col[nb[i]]]++;
+        unsigned best = 0;
+        for (unsigned p = 1; p < NPALETTE; p++)
+            if (used[p] < used[best])
+                best = p;
+        col[c] = (unsigned char)best;
+    }
+    return col;
+}
+
+typedef struct view {
+    double lo[2], scale, margin, top, height;
+} view;
+
+static double px(const view *v, double x)
+{
+    return v->margin + (x - v->lo[0]) * v->scale;
+}
+
+static double py(const view *v, double y)
+{
+    return v->top + v->height - (y - v->lo[1]) * v->scale; /* y up */
+}
+
+static void write_svg_body(FILE *f, const emm_layout *l, const double *xyz, const int32_t *tri,
+                           const char *path, const emm_strategy *s, const unsigned char *col)
+{
+    uint32_t n = emm_layout_cell_count(l);
+    int axes[2];
+    double lo[2], hi[2];
+    emm_layout_axes(l, axes, lo, hi);
+    /* The view covers every cell (tiles at a row's end and the quadtree's
+     * square reach past the mesh's box). */
+    for (uint32_t c = 0; c < n; c++) {
+        const emm_layout_cell *cell = emm_layout_cell_get(l, c);
+        for (int k = 0; k < 2; k++) {
+            if (cell->lo[k] < lo[k])
+                lo[k] = cell->lo[k];
+            if (cell->hi[k] > hi[k])
+                hi[k] = cell->hi[k];
+        }
+    }
+    double w = hi[0] - lo[0], h = hi[1] - lo[1], big = w > h ? w : h;
+    if (!(big > 0))
+        big = 1;
+    view v = {{lo[0], lo[1]}, 1000.0 / big, 20, 50, h * (1000.0 / big)};
+    double width = w * v.scale + 2 * v.margin, height = v.top + v.height + v.margin;
+    char a[32], b[32];
+    fprintf(f,
+            "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
+            "viewBox=\"0 0 %.2f %.2f\">\n"
+            "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
+            width, height, width, height);
+    fprintf(f,
+            "<text x=\"%.1f\" y=\"30\" font-family=\"sans-serif\" font-size=\"18\">"
+            "%s layout, CELL %u: %s cells, %s triangles (",
+            v.margin, emm_layout_name(s->layout), s->cell, grouped(n, a),
+            grouped(emm_layout_triangle_count(l), b));
+    for (const char *p = path; *p; p++) /* the file name, escaped */
+        switch (*p) {
+        case '<': fputs("&lt;", f); break;
+        case '>': fputs("&gt;", f); break;
+        case '&': fputs("&amp;", f); break;
+        default: fputc(*p, f);
+        }
+    fputs(")</text>\n", f);
+
+    /* Each cell's triangles, filled in the cell's colour, edges thin. */
+    fputs("<g stroke=\"#404040\" stroke-width=\"0.3\" stroke-linejoin=\"round\">\n", f);
+    for (uint32_t c = 0; c < n; c++) {
+        const uint32_t *tris;
+        uint32_t nt = emm_layout_cell_triangles(l, c, &tris);
+        if (nt == 0)
+            continue;
+        fprintf(f, "<path fill=\"%s\" d=\"", palette[col[c]]);
+        for (uint32_t i = 0; i < nt; i++) {
+            const int32_t *t = tri + 3 * (size_t)tris[i];
+            for (int k = 0; k < 3; k++) {
+                const double *p = xyz + 3 * (size_t)t[k];
+                fprintf(f, "%c%.2f %.2f", k == 0 ? 'M' : 'L', px(&v, p[axes[0]]),
+                        py(&v, p[axes[1]]));
+            }
+            fputc('Z', f);
+        }
+        fputs("\"/>\n", f);
+    }
+    fputs("</g>\n", f);
+
+    /* Cell boundaries, bold. */
+    fputs("<g fill=\"none\" stroke=\"black\" stroke-width=\"1.6\">\n", f);
+    for (uint32_t c = 0; c < n; c++) {
+        const emm_layout_cell *cell = emm_layout_cell_get(l, c);
+        fprintf(f, "<rect x=\"%.2f\" y=\"%.2f\" width=\"%.2f\" height=\"%.2f\"/>\n",
+                px(&v, cell->lo[0]), py(&v, cell->hi[1]), (cell->hi[0] - cell->lo[0]) * v.scale,
+                (cell->hi[1] - cell->lo[1]) * v.scale);
+    }
+    fputs("</g>\n</svg>\n", f);
+}
+
+/* Writes the SVG to a temporary file beside `out` and renames it into place. */
+static int write_svg(const char *out, const emm_layout *l, const double *xyz, const int32_t *tri,
+                     const char *path, const emm_strategy *s)
+{
+    emm_error err = {0};
+    size_t n = strlen(out);
+    char *tmp = malloc(n + 16);
+    unsigned char *col = colour_cells(l);
+    if (!tmp || !col) {
+        free(tmp);
+        free(col);
+        cli_error("%s: out of memory", out);
+        return EMM_EXIT_FAIL;
+    }
+    snprintf(tmp, n + 16, "%s.tmp.XXXXXX", out);
+    int fd = mkstemp(tmp);
+    FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
+    if (!f) {
+        snprintf(err.message, sizeof err.message, "%s: cannot create a temporary file beside it: %s",
+                 out, strerror(errno));
+        if (fd >= 0) {
+            close(fd);
+            unlink(tmp);
+        }
+        free(tmp);
+        free(col);
+        return cli_fail(&err);
+    }
+    (void)fchmod(fd, 0644); /* mkstemp makes files private; this is an ordinary output */
+    write_svg_body(f, l, xyz, tri, path, s, col);
+    int failed = ferror(f) != 0, e = errno;
+    if (fclose(f) != 0 && !failed) {
+        failed = 1;
+        e = errno;
+    }
+    if (!failed && rename(tmp, out) != 0) {
+        failed = 1;
+        e = errno;
+    }
+    if (failed) {
+        unlink(tmp);
+        snprintf(err.message, sizeof err.message, "%s: %s", out, strerror(e));
+    }
+    free(tmp);
+    free(col);
+    return failed ? cli_fail(&err) : EMM_EXIT_OK;
+}
 
 int emm_cmd_layout(int argc, char **argv)
 {
-    (void)argc; (void)argv;
-    cli_error("'layout' is not built yet");
-    return EMM_EXIT_FAIL;
+    const char *cmd = "layout";
+    const char *mesh_path = NULL, *strategy = NULL, *svg = NULL;
+    int stats = 0, have_local = 0;
+    uint64_t local = 0, vbytes = EMM_THESIS_VERTEX_BYTES, tbytes = EMM_THESIS_TRIANGLE_BYTES;
+    for (int i = 1; i < argc; i++) {
+        const char *arg = argv[i], *val;
+        if (cli_is_help(arg)) {
+            usage(stdout);
+            return EMM_EXIT_OK;
+        } else if (strcmp(arg, "--strategy") == 0 || strcmp(arg, "-s") == 0) {
+            if (!(strategy = cli_value(cmd, argc, argv, &i)))
+                return EMM_EXIT_USAGE;
+        } else if (strcmp(arg, "--svg") == 0) {
+            if (!(svg = cli_value(cmd, argc, argv, &i)))
+                return EMM_EXIT_USAGE;
+        } else if (strcmp(arg, "--stats") == 0) {
+            stats = 1;
+        } else if (strcmp(arg, "--local") == 0) {
+            if (!(val = cli_value(cmd, argc, argv, &i)) || !cli_size(cmd, arg, val, &local))
+                return EMM_EXIT_USAGE;
+            have_local = 1;
+        } else if (strcmp(arg, "--vertex-bytes") == 0 || strcmp(arg, "--triangle-bytes") == 0) {
+            uint64_t *dst = arg[2] == 'v' ? &vbytes : &tbytes;
+            if (!(val = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, arg, val, dst))
+                return EMM_EXIT_USAGE;
+            if (*dst < 1 || *dst > 65536)
+                return cli_usage_error(cmd, "%s expects 1 to 65536 bytes, not '%s'", arg, val);
+        } else if (arg[0] == '-' && arg[1] != '\0') {
+            return cli_usage_error(cmd, "unknown option '%s'", arg);
+        } else if (!mesh_path) {
+            mesh_path = arg;
+        } else {
+            return cli_usage_error(cmd, "one mesh file, not '%s' as well", arg);
+        }
+    }
+    if (!mesh_path)
+        return cli_usage_error(cmd, "a mesh file is required");
+    if (!strategy)
+        return cli_usage_error(cmd, "--strategy is required (e.g. --strategy tiles+convolution@64)");
+    emm_strategy s;
+    emm_error err;
+    if (emm_strategy_parse(strategy, &s, &err) != EMM_OK)
+        return cli_usage_error(cmd, "%s", err.message);
+    if (s.layout == EMM_LAYOUT_ORIGINAL)
+        return cli_usage_error(cmd,
+                               "strategy '%s' keeps the original layout; give "
+                               "LAYOUT+FETCH[@CELL] or cache@LAYOUT",
+                               strategy);
+    if (!svg)
+        stats = 1;
+    /* Only an EMM strategy moves whole cells into the local store. */
+    if (!have_local && s.kind == EMM_STRATEGY_EMM) {
+        emm_machine *m;
+        if (emm_machine_new(&m, &err) != EMM_OK)
+            return cli_fail(&err);
+        local = emm_machine_get(m, "local.bytes");
+        emm_machine_free(m);
+    }
+    if (s.kind != EMM_STRATEGY_EMM)
+        local = 0;
+
+    emm_mesh *mesh;
+    if (emm_mesh_open(mesh_path, &mesh, &err) != EMM_OK)
+        return cli_fail(&err);
+    const double *xyz = emm_mesh_positions(mesh);
+    const int32_t *tri = emm_mesh_indices(mesh);
+    emm_layout_options opt = {
+        .kind = s.layout,
+        .cell = s.cell,
+        .vertex_bytes = (uint32_t)vbytes,
+        .triangle_bytes = (uint32_t)tbytes,
+        .local_store = local,
+        .fetch = s.fetch,
+    };
+    emm_layout *l;
+    if (emm_layout_build(xyz, emm_mesh_vertex_count(mesh), tri, emm_mesh_triangle_count(mesh),
+                         &opt, mesh_path, &l, &err) != EMM_OK) {
+        emm_mesh_free(mesh);
+        return cli_fail(&err);
+    }
+    int rc = EMM_EXIT_OK;
+    if (svg)
+        rc = write_svg(svg, l, xyz, tri, mesh_path, &s);
+    if (rc == EMM_EXIT_OK && stats)
+        print_stats(l, mesh_path, &s);
+    emm_layout_free(l);
+    emm_mesh_free(mesh);
+    return rc;
 }

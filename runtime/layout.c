@@ -1,0 +1,784 @@
+/* EMM mesh layouts: grid (thesis §4.1.1), interleaving tiles (§4.1.2) and
+ * the parts every layout shares: cells by triangle centroid, vertex copies,
+ * layout indices both ways, cell sizes and the packed remote image (§4.1:
+ * struct CellData), neighbours and relative sides for the fetch schemes
+ * (§4.2). The adaptive quadtree (§4.1.3) is in layout_quadtree.c.
+ * docs/layouts.md explains the choices. */
+#include "layout_internal.h"
+
+#include <assert.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "emm/mesh.h"
+#include "error.h"
+
+/* Ids are 32-bit; vertex copies (at most 3 per triangle) must fit too. */
+#define MAX_TRIANGLES (UINT32_MAX / 3u - 1u)
+
+void emm_layout_free(emm_layout *l)
+{
+    if (!l)
+        return;
+    free(l->nodes);
+    free(l->leaf_node);
+    free(l->cells);
+    free(l->tri_cell);
+    free(l->tri_pos);
+    free(l->cell_tri_start);
+    free(l->cell_tris);
+    free(l->cell_vert_start);
+    free(l->cell_verts);
+    free(l->vcopy_start);
+    free(l->vcopy);
+    free(l->unused_rank);
+    free(l->nb_start);
+    free(l->nb);
+    free(l->nb_side);
+    free(l);
+}
+
+/* "301,200": counts in messages read better grouped. */
+static const char *grouped(uint64_t v, char buf[32])
+{
+    char tmp[32];
+    int n = snprintf(tmp, sizeof tmp, "%llu", (unsigned long long)v);
+    int o = 0;
+    for (int i = 0; i < n; i++) {
+        if (i > 0 && (n - i) % 3 == 0)
+            buf[o++] = ',';
+        buf[o++] = tmp[i];
+    }
+    buf[o] = '\0';
+    return buf;
+}
+
+static emm_status nomem(emm_error *err, const char *name)
+{
+    return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory building the layout", name);
+}
+
+/* The bounding box of the vertices triangles use, and the two axes along
+ * which it is largest (ties keep the lower axis, so a planar mesh uses x, y). */
+static void choose_plane(emm_layout *l, const double *xyz, const int32_t *tri)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < 3 * l->nt; i++) {
+        const double *p = xyz + 3 * (size_t)tri[i];
+        for (int a = 0; a < 3; a++) {
+            if (p[a] < lo[a])
+                lo[a] = p[a];
+            if (p[a] > hi[a])
+                hi[a] = p[a];
+        }
+    }
+    int order[3] = {0, 1, 2};
+    for (int i = 0; i < 3; i++)
+        for (int j = i + 1; j < 3; j++)
+            if (hi[order[j]] - lo[order[j]] > hi[order[i]] - lo[order[i]]) {
+                int t = order[i];
+                order[i] = order[j];
+                order[j] = t;
+            }
+    /* Keep the plane's axes in ascending order (x before y before z). */
+    int a0 = order[0] < order[1] ? order[0] : order[1];
+    int a1 = order[0] < order[1] ? order[1] : order[0];
+    l->axes[0] = a0;
+    l->axes[1] = a1;
+    l->lo[0] = lo[a0];
+    l->hi[0] = hi[a0];
+    l->lo[1] = lo[a1];
+    l->hi[1] = hi[a1];
+}
+
+/* Grid and tiles: about ceil(nt / cell) cells, as cols × rows matching the
+ * bounding box's aspect ratio so cells come out square-ish. */
+static void choose_dims(emm_layout *l)
+{
+    uint64_t want = (l->nt + l->opt.cell - 1) / l->opt.cell;
+    double w = l->hi[0] - l->lo[0], h = l->hi[1] - l->lo[1];
+    uint64_t cols, rows;
+    if (want <= 1 || (w <= 0 && h <= 0)) {
+        cols = rows = 1;
+    } else if (h <= 0) {
+        cols = want;
+        rows = 1;
+    } else if (w <= 0) {
+        cols = 1;
+        rows = want;
+    } else {
+        double c = sqrt((double)want * w / h);
+        cols = c < 1 ? 1 : c >= (double)want ? want : (uint64_t)llround(c);
+        if (cols < 1)
+            cols = 1;
+        rows = (want + cols - 1) / cols;
+    }
+    l->cols = (uint32_t)cols;
+    l->rows = (uint32_t)rows;
+    /* A flat extent gets unit-size cells: every point falls in cell 0 of
+     * that axis, and nothing divides by zero. */
+    l->cw = w > 0 ? w / (double)cols : 1;
+    l->ch = h > 0 ? h / (double)rows : 1;
+}
+
+static uint32_t clamp_index(double v, uint32_t n)
+{
+    if (!(v >= 0)) /* also NaN */
+        return 0;
+    if (v >= (double)n)
+        return n - 1;
+    return (uint32_t)v;
+}
+
+/* First cell of tiles row r: even rows have cols tiles, odd rows cols + 1. */
+static uint32_t tiles_row_start(const emm_layout *l, uint32_t r)
+{
+    return r * l->cols + r / 2;
+}
+
+static uint32_t tiles_row_len(const emm_layout *l, uint32_t r)
+{
+    return l->cols + (r & 1u);
+}
+
+static uint32_t cell_at_grid(const emm_layout *l, double a, double b)
+{
+    uint32_t r = clamp_index((b - l->lo[1]) / l->ch, l->rows);
+    if (l->opt.kind == EMM_LAYOUT_GRID)
+        return r * l->cols + clamp_index((a - l->lo[0]) / l->cw, l->cols);
+    /* Odd rows start half a tile left of the box. */
+    double x = (a - l->lo[0]) / l->cw + ((r & 1u) ? 0.5 : 0.0);
+    return tiles_row_start(l, r) + clamp_index(x, tiles_row_len(l, r));
+}
+
+static void grid_cells(emm_layout *l, const double *cx, const double *cy)
+{
+    for (uint32_t r = 0; r < l->rows; r++) {
+        uint32_t n = l->opt.kind == EMM_LAYOUT_GRID ? l->cols : tiles_row_len(l, r);
+        uint32_t first = l->opt.kind == EMM_LAYOUT_GRID ? r * l->cols : tiles_row_start(l, r);
+        double shift = (l->opt.kind == EMM_LAYOUT_TILES && (r & 1u)) ? -0.5 : 0.0;
+        for (uint32_t c = 0; c < n; c++) {
+            emm_layout_cell *cell = &l->cells[first + c];
+            cell->col = (int32_t)c;
+            cell->row = (int32_t)r;
+            cell->lo[0] = l->lo[0] + ((double)c + shift) * l->cw;
+            cell->hi[0] = l->lo[0] + ((double)c + 1 + shift) * l->cw;
+            cell->lo[1] = l->lo[1] + (double)r * l->ch;
+            cell->hi[1] = l->lo[1] + (double)(r + 1) * l->ch;
+        }
+    }
+    for (size_t t = 0; t < l->nt; t++)
+        l->tri_cell[t] = cell_at_grid(l, cx[t], cy[t]);
+}
+
+/* Doubled cell centres, exact in integers: tiles of odd rows sit half a
+ * tile left of the even rows' tiles with the same column. */
+static void grid_centre2(const emm_layout *l, uint32_t c, int64_t *x2, int64_t *y2)
+{
+    const emm_layout_cell *cell = &l->cells[c];
+    int64_t shift = (l->opt.kind == EMM_LAYOUT_TILES && (cell->row & 1)) ? 0 : 1;
+    *x2 = 2 * (int64_t)cell->col + shift;
+    *y2 = 2 * (int64_t)cell->row + 1;
+}
+
+unsigned emm_layout_move_side(const emm_layout *l, uint32_t from, uint32_t to)
+{
+    assert(from < l->ncells && to < l->ncells);
+    unsigned s = 0;
+    if (l->opt.kind == EMM_LAYOUT_QUADTREE) {
+        /* Leaf squares in units of the finest level, exact. */
+        const emm_qt_node *na = &l->nodes[l->leaf_node[from]], *nb = &l->nodes[l->leaf_node[to]];
+        uint32_t sa = EMM_LAYOUT_MAX_DEPTH - na->depth, sb = EMM_LAYOUT_MAX_DEPTH - nb->depth;
+        uint64_t ax0 = (uint64_t)na->ix << sa, ax1 = (uint64_t)(na->ix + 1) << sa;
+        uint64_t ay0 = (uint64_t)na->iy << sa, ay1 = (uint64_t)(na->iy + 1) << sa;
+        uint64_t bx0 = (uint64_t)nb->ix << sb, bx1 = (uint64_t)(nb->ix + 1) << sb;
+        uint64_t by0 = (uint64_t)nb->iy << sb, by1 = (uint64_t)(nb->iy + 1) << sb;
+        if (bx1 <= ax0)
+            s |= EMM_SIDE_LEFT;
+        if (bx0 >= ax1)
+            s |= EMM_SIDE_RIGHT;
+        if (by1 <= ay0)
+            s |= EMM_SIDE_BOTTOM;
+        if (by0 >= ay1)
+            s |= EMM_SIDE_TOP;
+        return s;
+    }
+    int64_t fx, fy, tx, ty;
+    grid_centre2(l, from, &fx, &fy);
+    grid_centre2(l, to, &tx, &ty);
+    if (tx < fx)
+        s |= EMM_SIDE_LEFT;
+    if (tx > fx)
+        s |= EMM_SIDE_RIGHT;
+    if (ty < fy)
+        s |= EMM_SIDE_BOTTOM;
+    if (ty > fy)
+        s |= EMM_SIDE_TOP;
+    return s;
+}
+
+/* Grid: the 8 surrounding cells; tiles: 2 in the row, and the 2 tiles of
+ * each adjacent row that overlap this one horizontally. */
+static emm_status grid_neighbors(emm_layout *l, const char *name, emm_error *err)
+{
+    size_t cap = (size_t)l->ncells * 8u;
+    l->nb_start = malloc(((size_t)l->ncells + 1) * sizeof *l->nb_start);
+    l->nb = malloc((size_t)cap * sizeof *l->nb);
+    l->nb_side = malloc((size_t)cap * sizeof *l->nb_side);
+    if (!l->nb_start || !l->nb || !l->nb_side)
+        return nomem(err, name);
+    uint32_t n = 0;
+    for (uint32_t c = 0; c < l->ncells; c++) {
+        l->nb_start[c] = n;
+        uint32_t r = (uint32_t)l->cells[c].row, k = (uint32_t)l->cells[c].col;
+        for (int dr = -1; dr <= 1; dr++) {
+            int64_t rr = (int64_t)r + dr;
+            if (rr < 0 || rr >= l->rows)
+                continue;
+            int64_t lo, hi; /* columns of row rr that touch cell c */
+            if (l->opt.kind == EMM_LAYOUT_GRID || dr == 0) {
+                lo = (int64_t)k - 1;
+                hi = (int64_t)k + 1;
+            } else if (r & 1u) { /* odd row: tile k spans [k-1/2, k+1/2) */
+                lo = (int64_t)k - 1;
+                hi = (int64_t)k;
+            } else { /* even row: tile k spans [k, k+1), odd neighbours k, k+1 */
+                lo = (int64_t)k;
+                hi = (int64_t)k + 1;
+            }
+            uint32_t len = l->opt.kind == EMM_LAYOUT_GRID ? l->cols : tiles_row_len(l, (uint32_t)rr);
+            uint32_t first = l->opt.kind == EMM_LAYOUT_GRID ? (uint32_t)rr * l->cols
+                                                            : tiles_row_start(l, (uint32_t)rr);
+            for (int64_t kk = lo; kk <= hi; kk++) {
+                if (kk < 0 || kk >= len || (dr == 0 && kk == k))
+                    continue;
+                uint32_t o = first + (uint32_t)kk;
+                l->nb[n] = o;
+                l->nb_side[n] = (uint8_t)emm_layout_move_side(l, c, o);
+                n++;
+            }
+        }
+    }
+    l->nb_start[l->ncells] = n;
+    return EMM_OK;
+}
+
+/* Counting sort of the triangles by cell: positions follow ascending ids. */
+static emm_status fill_triangles(emm_layout *l, const char *name, emm_error *err)
+{
+    l->cell_tri_start = calloc((size_t)l->ncells + 1, sizeof *l->cell_tri_start);
+    l->cell_tris = malloc(l->nt * sizeof *l->cell_tris);
+    l->tri_pos = malloc(l->nt * sizeof *l->tri_pos);
+    if (!l->cell_tri_start || !l->cell_tris || !l->tri_pos)
+        return nomem(err, name);
+    for (size_t t = 0; t < l->nt; t++)
+        l->cell_tri_start[l->tri_cell[t] + 1]++;
+    for (uint32_t c = 0; c < l->ncells; c++)
+        l->cell_tri_start[c + 1] += l->cell_tri_start[c];
+    uint32_t *next = malloc((size_t)l->ncells * sizeof *next);
+    if (!next)
+        return nomem(err, name);
+    memcpy(next, l->cell_tri_start, (size_t)l->ncells * sizeof *next);
+    for (size_t t = 0; t < l->nt; t++) {
+        uint32_t c = l->tri_cell[t];
+        l->tri_pos[t] = next[c] - l->cell_tri_start[c];
+        l->cell_tris[next[c]++] = (uint32_t)t;
+    }
+    free(next);
+    for (uint32_t c = 0; c < l->ncells; c++)
+        l->cells[c].ntri = l->cell_tri_start[c + 1] - l->cell_tri_start[c];
+    return EMM_OK;
+}
+
+/* Each cell gets a copy of every vertex of its triangles, in order of first
+ * use; then the copies are indexed by vertex (ascending cell). */
+static emm_status fill_vertices(emm_layout *l, const int32_t *tri, const char *name,
+                                emm_error *err)
+{
+    uint32_t *stamp = malloc(l->nv * sizeof *stamp);
+    l->cell_vert_start = malloc(((size_t)l->ncells + 1) * sizeof *l->cell_vert_start);
+    l->cell_verts = malloc(3 * l->nt * sizeof *l->cell_verts);
+    l->vcopy_start = calloc(l->nv + 1, sizeof *l->vcopy_start);
+    if (!stamp || !l->cell_vert_start || !l->cell_verts || !l->vcopy_start) {
+        free(stamp);
+        return nomem(err, name);
+    }
+    memset(stamp, 0xff, l->nv * sizeof *stamp);
+    uint32_t n = 0;
+    for (uint32_t c = 0; c < l->ncells; c++) {
+        l->cell_vert_start[c] = n;
+        for (uint32_t i = l->cell_tri_start[c]; i < l->cell_tri_start[c + 1]; i++) {
+            const int32_t *v = tri + 3 * (size_t)l->cell_tris[i];
+            for (int k = 0; k < 3; k++)
+                if (stamp[v[k]] != c) {
+                    stamp[v[k]] = c;
+                    l->cell_verts[n++] = (uint32_t)v[k];
+                    l->vcopy_start[v[k] + 1]++;
+                }
+        }
+        l->cells[c].nvert = n - l->cell_vert_start[c];
+    }
+    l->cell_vert_start[l->ncells] = n;
+    l->ncopies = n;
+    free(stamp);
+    uint32_t *shrunk = realloc(l->cell_verts, ((size_t)n + 1) * sizeof *shrunk);
+    if (shrunk)
+        l->cell_verts = shrunk;
+
+    l->nunused = 0;
+    for (size_t v = 0; v < l->nv; v++) {
+        if (l->vcopy_start[v + 1] == 0)
+            l->nunused++;
+        l->vcopy_start[v + 1] += l->vcopy_start[v];
+    }
+    l->vcopy = malloc(((size_t)n + 1) * sizeof *l->vcopy);
+    uint32_t *next = malloc((l->nv + 1) * sizeof *next);
+    if (!l->vcopy || !next) {
+        free(next);
+        return nomem(err, name);
+    }
+    memcpy(next, l->vcopy_start, (l->nv + 1) * sizeof *next);
+    for (uint32_t c = 0; c < l->ncells; c++)
+        for (uint32_t i = l->cell_vert_start[c]; i < l->cell_vert_start[c + 1]; i++) {
+            uint32_t v = l->cell_verts[i];
+            l->vcopy[next[v]++] = (emm_layout_index){c, i - l->cell_vert_start[c]};
+        }
+    free(next);
+    if (l->nunused > 0) {
+        l->unused_rank = malloc(l->nv * sizeof *l->unused_rank);
+        if (!l->unused_rank)
+            return nomem(err, name);
+        uint32_t k = 0;
+        for (size_t v = 0; v < l->nv; v++)
+            l->unused_rank[v] = l->vcopy_start[v + 1] == l->vcopy_start[v] ? k++ : UINT32_MAX;
+    }
+    return EMM_OK;
+}
+
+static void fill_sizes(emm_layout *l)
+{
+    uint64_t off = 0;
+    for (uint32_t c = 0; c < l->ncells; c++) {
+        emm_layout_cell *cell = &l->cells[c];
+        cell->bytes = EMM_LAYOUT_HEADER_BYTES + (uint64_t)cell->nvert * l->opt.vertex_bytes +
+                      (uint64_t)cell->ntri * l->opt.triangle_bytes;
+        cell->offset = off;
+        off += cell->bytes;
+    }
+    l->cells_bytes = off;
+}
+
+static emm_status validate(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
+                           const emm_layout_options *opt, const char *name, emm_error *err)
+{
+    if (opt->cell == 0)
+        return emm_fail(err, EMM_ERR_INVALID, "%s: a layout needs at least 1 triangle per cell",
+                        name);
+    if (nt == 0)
+        return emm_fail(err, EMM_ERR_INVALID, "%s: no triangles to lay out", name);
+    if (nt > MAX_TRIANGLES || nv > (size_t)INT32_MAX)
+        return emm_fail(err, EMM_ERR_RANGE,
+                        "%s: %zu vertices and %zu triangles are more than a layout indexes "
+                        "(at most %u triangles)",
+                        name, nv, nt, (unsigned)MAX_TRIANGLES);
+    for (size_t i = 0; i < 3 * nv; i++)
+        if (!isfinite(xyz[i]))
+            return emm_fail(err, EMM_ERR_MESH, "%s: vertex %zu has a non-finite coordinate",
+                            name, i / 3);
+    for (size_t i = 0; i < 3 * nt; i++)
+        if (tri[i] < 0 || (size_t)tri[i] >= nv)
+            return emm_fail(err, EMM_ERR_MESH,
+                            "%s: triangle %zu refers to vertex %lld; the mesh has %zu vertices",
+                            name, i / 3, (long long)tri[i], nv);
+    return EMM_OK;
+}
+
+/* Builds without the local-store check; inputs are validated. */
+static emm_status build_once(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
+                             const emm_layout_options *opt, const char *name, emm_layout **out,
+                             emm_error *err)
+{
+    emm_status st = EMM_OK;
+    emm_layout *l = calloc(1, sizeof *l);
+    if (!l)
+        return nomem(err, name);
+    l->opt = *opt;
+    l->nv = nv;
+    l->nt = nt;
+    choose_plane(l, xyz, tri);
+
+    double *cx = malloc(nt * sizeof *cx), *cy = malloc(nt * sizeof *cy);
+    l->tri_cell = malloc(nt * sizeof *l->tri_cell);
+    if (!cx || !cy || !l->tri_cell) {
+        st = nomem(err, name);
+        goto done;
+    }
+    for (size_t t = 0; t < nt; t++) {
+        const int32_t *v = tri + 3 * t;
+        for (int k = 0; k < 2; k++) {
+            int a = l->axes[k];
+            double s = (xyz[3 * (size_t)v[0] + a] + xyz[3 * (size_t)v[1] + a] +
+                        xyz[3 * (size_t)v[2] + a]) / 3.0;
+            (k == 0 ? cx : cy)[t] = s;
+        }
+    }
+
+    if (l->opt.kind == EMM_LAYOUT_QUADTREE) {
+        st = emm_layout_quadtree_build(l, cx, cy, name, err);
+        if (st != EMM_OK)
+            goto done;
+    } else {
+        choose_dims(l);
+        uint64_t ncells = l->opt.kind == EMM_LAYOUT_GRID
+                              ? (uint64_t)l->cols * l->rows
+                              : (uint64_t)l->cols * l->rows + l->rows / 2;
+        if (ncells * 8 > UINT32_MAX) { /* neighbour lists are 32-bit indexed */
+            st = emm_fail(err, EMM_ERR_RANGE, "%s: %llu cells are too many; use a larger CELL",
+                          name, (unsigned long long)ncells);
+            goto done;
+        }
+        l->ncells = (uint32_t)ncells;
+        l->cells = calloc(ncells, sizeof *l->cells);
+        if (!l->cells) {
+            st = nomem(err, name);
+            goto done;
+        }
+        grid_cells(l, cx, cy);
+        st = grid_neighbors(l, name, err);
+        if (st != EMM_OK)
+            goto done;
+    }
+    st = fill_triangles(l, name, err);
+    if (st == EMM_OK)
+        st = fill_vertices(l, tri, name, err);
+    if (st == EMM_OK)
+        fill_sizes(l);
+
+done:
+    free(cx);
+    free(cy);
+    if (st != EMM_OK) {
+        emm_layout_free(l);
+        return st;
+    }
+    *out = l;
+    return EMM_OK;
+}
+
+static uint32_t largest_cell(const emm_layout *l)
+{
+    uint32_t worst = 0;
+    for (uint32_t c = 1; c < l->ncells; c++)
+        if (l->cells[c].bytes > l->cells[worst].bytes)
+            worst = c;
+    return worst;
+}
+
+/* The largest power of two not above x (x >= 1). */
+static uint32_t floor_pow2(uint64_t x)
+{
+    uint32_t p = 1;
+    while ((uint64_t)p * 2 <= x && p < (1u << 31))
+        p *= 2;
+    return p;
+}
+
+/* The error for a cell larger than the local store. The CELL it suggests
+ * is one that fits: cell bytes grow about linearly with CELL, which gives a
+ * first guess, and the guess is halved until a build of it fits (largest
+ * grid cells do not shrink exactly in proportion). */
+static emm_status too_large(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
+                            const emm_layout *l, const char *name, emm_error *err)
+{
+    uint32_t worst = largest_cell(l);
+    uint64_t bytes = l->cells[worst].bytes, local = l->opt.local_store;
+    uint64_t fit = (uint64_t)((double)l->opt.cell * (double)local / (double)bytes);
+    uint32_t suggest = fit >= 1 ? floor_pow2(fit) : 1;
+    if (suggest >= l->opt.cell)
+        suggest = l->opt.cell / 2;
+    for (; suggest >= 1; suggest /= 2) {
+        emm_layout_options o = l->opt;
+        o.cell = suggest;
+        emm_layout *trial = NULL;
+        emm_status st = build_once(xyz, nv, tri, nt, &o, name, &trial, err);
+        if (st != EMM_OK)
+            return st;
+        int fits = trial->cells[largest_cell(trial)].bytes <= local;
+        emm_layout_free(trial);
+        if (fits)
+            break;
+    }
+    char b1[32], b2[32];
+    const char *layout = emm_layout_name(l->opt.kind);
+    if (suggest == 0)
+        return emm_fail(err, EMM_ERR_RANGE,
+                        "%s: %s cell %u takes %s bytes, more than the %s-byte local store, "
+                        "and no CELL makes every %s cell fit%s",
+                        name, layout, worst, grouped(bytes, b1), grouped(local, b2), layout,
+                        l->opt.kind == EMM_LAYOUT_QUADTREE
+                            ? ""
+                            : " (the quadtree bounds triangles per cell)");
+    const char *fetch = l->opt.fetch != EMM_FETCH_NONE ? emm_fetch_name(l->opt.fetch) : "FETCH";
+    return emm_fail(err, EMM_ERR_RANGE,
+                    "%s: %s cell %u takes %s bytes, more than the %s-byte local store: "
+                    "use a smaller CELL than %u (e.g. %s+%s@%u)",
+                    name, layout, worst, grouped(bytes, b1), grouped(local, b2), l->opt.cell,
+                    layout, fetch, suggest);
+}
+
+emm_status emm_layout_build(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
+                            const emm_layout_options *opt, const char *name, emm_layout **out,
+                            emm_error *err)
+{
+    assert(opt && out && (xyz || nv == 0) && (tri || nt == 0));
+    assert(opt->kind == EMM_LAYOUT_GRID || opt->kind == EMM_LAYOUT_TILES ||
+           opt->kind == EMM_LAYOUT_QUADTREE);
+    *out = NULL;
+    if (!name)
+        name = "mesh";
+    emm_status st = validate(xyz, nv, tri, nt, opt, name, err);
+    if (st != EMM_OK)
+        return st;
+    emm_layout_options o = *opt;
+    if (o.vertex_bytes == 0)
+        o.vertex_bytes = EMM_THESIS_VERTEX_BYTES;
+    if (o.triangle_bytes == 0)
+        o.triangle_bytes = EMM_THESIS_TRIANGLE_BYTES;
+    emm_layout *l = NULL;
+    st = build_once(xyz, nv, tri, nt, &o, name, &l, err);
+    if (st != EMM_OK)
+        return st;
+    if (o.local_store > 0 && l->cells[largest_cell(l)].bytes > o.local_store) {
+        st = too_large(xyz, nv, tri, nt, l, name, err);
+        emm_layout_free(l);
+        return st;
+    }
+    *out = l;
+    return EMM_OK;
+}
+
+const emm_layout_options *emm_layout_get_options(const emm_layout *l)
+{
+    return &l->opt;
+}
+
+uint32_t emm_layout_cell_count(const emm_layout *l)
+{
+    return l->ncells;
+}
+
+size_t emm_layout_triangle_count(const emm_layout *l)
+{
+    return l->nt;
+}
+
+size_t emm_layout_vertex_count(const emm_layout *l)
+{
+    return l->nv;
+}
+
+void emm_layout_axes(const emm_layout *l, int axes[2], double lo[2], double hi[2])
+{
+    for (int k = 0; k < 2; k++) {
+        if (axes)
+            axes[k] = l->axes[k];
+        if (lo)
+            lo[k] = l->lo[k];
+        if (hi)
+            hi[k] = l->hi[k];
+    }
+}
+
+void emm_layout_dims(const emm_layout *l, uint32_t *cols, uint32_t *rows)
+{
+    int q = l->opt.kind == EMM_LAYOUT_QUADTREE;
+    if (cols)
+        *cols = q ? 0 : l->cols;
+    if (rows)
+        *rows = q ? 0 : l->rows;
+}
+
+const emm_layout_cell *emm_layout_cell_get(const emm_layout *l, uint32_t c)
+{
+    assert(c < l->ncells);
+    return &l->cells[c];
+}
+
+uint32_t emm_layout_cell_triangles(const emm_layout *l, uint32_t c, const uint32_t **tris)
+{
+    assert(c < l->ncells);
+    if (tris)
+        *tris = l->cell_tris + l->cell_tri_start[c];
+    return l->cell_tri_start[c + 1] - l->cell_tri_start[c];
+}
+
+uint32_t emm_layout_cell_vertices(const emm_layout *l, uint32_t c, const uint32_t **verts)
+{
+    assert(c < l->ncells);
+    if (verts)
+        *verts = l->cell_verts + l->cell_vert_start[c];
+    return l->cell_vert_start[c + 1] - l->cell_vert_start[c];
+}
+
+uint32_t emm_layout_neighbors(const emm_layout *l, uint32_t c, const uint32_t **cells,
+                              const uint8_t **sides)
+{
+    assert(c < l->ncells);
+    if (cells)
+        *cells = l->nb + l->nb_start[c];
+    if (sides)
+        *sides = l->nb_side + l->nb_start[c];
+    return l->nb_start[c + 1] - l->nb_start[c];
+}
+
+uint32_t emm_layout_cell_at(const emm_layout *l, double a, double b, uint32_t *levels)
+{
+    if (l->opt.kind == EMM_LAYOUT_QUADTREE)
+        return emm_layout_quadtree_cell_at(l, emm_layout_quadtree_quantise(l, 0, a),
+                                           emm_layout_quadtree_quantise(l, 1, b), levels);
+    if (levels)
+        *levels = 0;
+    return cell_at_grid(l, a, b);
+}
+
+emm_layout_index emm_layout_triangle_index(const emm_layout *l, uint32_t t)
+{
+    assert(t < l->nt);
+    return (emm_layout_index){l->tri_cell[t], l->tri_pos[t]};
+}
+
+uint32_t emm_layout_triangle_at(const emm_layout *l, uint32_t cell, uint32_t pos)
+{
+    assert(cell < l->ncells && pos < l->cells[cell].ntri);
+    return l->cell_tris[l->cell_tri_start[cell] + pos];
+}
+
+uint32_t emm_layout_vertex_copies(const emm_layout *l, uint32_t v,
+                                  const emm_layout_index **copies)
+{
+    assert(v < l->nv);
+    if (copies)
+        *copies = l->vcopy + l->vcopy_start[v];
+    return l->vcopy_start[v + 1] - l->vcopy_start[v];
+}
+
+emm_layout_index emm_layout_vertex_home(const emm_layout *l, uint32_t v)
+{
+    assert(v < l->nv);
+    if (l->vcopy_start[v + 1] == l->vcopy_start[v])
+        return (emm_layout_index){EMM_LAYOUT_NONE, l->unused_rank ? l->unused_rank[v] : 0};
+    return l->vcopy[l->vcopy_start[v]];
+}
+
+emm_layout_index emm_layout_vertex_index(const emm_layout *l, uint32_t v, uint32_t cell)
+{
+    assert(v < l->nv);
+    /* Copies are few (a vertex's triangles span a handful of cells) and
+     * sorted by cell. */
+    for (uint32_t i = l->vcopy_start[v]; i < l->vcopy_start[v + 1]; i++) {
+        if (l->vcopy[i].cell == cell)
+            return l->vcopy[i];
+        if (l->vcopy[i].cell > cell)
+            break;
+    }
+    return emm_layout_vertex_home(l, v);
+}
+
+uint32_t emm_layout_vertex_at(const emm_layout *l, uint32_t cell, uint32_t pos)
+{
+    assert(cell < l->ncells && pos < l->cells[cell].nvert);
+    return l->cell_verts[l->cell_vert_start[cell] + pos];
+}
+
+uint64_t emm_layout_image_bytes(const emm_layout *l)
+{
+    return l->cells_bytes + l->nunused * l->opt.vertex_bytes;
+}
+
+uint64_t emm_layout_triangle_address(const emm_layout *l, uint32_t t, uint32_t offset)
+{
+    assert(t < l->nt && offset < l->opt.triangle_bytes);
+    const emm_layout_cell *c = &l->cells[l->tri_cell[t]];
+    return c->offset + EMM_LAYOUT_HEADER_BYTES + (uint64_t)c->nvert * l->opt.vertex_bytes +
+           (uint64_t)l->tri_pos[t] * l->opt.triangle_bytes + offset;
+}
+
+uint64_t emm_layout_vertex_address(const emm_layout *l, uint32_t v, uint32_t from_cell,
+                                   uint32_t offset)
+{
+    assert(v < l->nv && offset < l->opt.vertex_bytes);
+    emm_layout_index ix = from_cell == EMM_LAYOUT_NONE ? emm_layout_vertex_home(l, v)
+                                                       : emm_layout_vertex_index(l, v, from_cell);
+    if (ix.cell == EMM_LAYOUT_NONE)
+        return l->cells_bytes + (uint64_t)ix.pos * l->opt.vertex_bytes + offset;
+    return l->cells[ix.cell].offset + EMM_LAYOUT_HEADER_BYTES +
+           (uint64_t)ix.pos * l->opt.vertex_bytes + offset;
+}
+
+uint64_t emm_layout_lookup_bytes(const emm_layout *l)
+{
+    uint64_t b = 4 * (uint64_t)l->nt + 4 * (uint64_t)l->nv + 8 * (uint64_t)l->ncells;
+    if (l->opt.kind == EMM_LAYOUT_QUADTREE)
+        b += 16 * (uint64_t)l->nnodes;
+    return b;
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+void emm_layout_get_stats(const emm_layout *l, emm_layout_stats *out)
+{
+    memset(out, 0, sizeof *out);
+    out->cells = l->ncells;
+    uint64_t *v = malloc((size_t)l->ncells * sizeof *v);
+    /* Without memory for the medians, report them as 0 rather than fail a
+     * query. */
+    uint32_t mid = (l->ncells - 1) / 2; /* the lower median */
+    out->tri_min = UINT32_MAX;
+    out->bytes_min = UINT64_MAX;
+    out->depth_min = UINT32_MAX;
+    for (uint32_t c = 0; c < l->ncells; c++) {
+        const emm_layout_cell *cell = &l->cells[c];
+        if (cell->ntri == 0)
+            out->empty_cells++;
+        if (cell->ntri < out->tri_min)
+            out->tri_min = cell->ntri;
+        if (cell->ntri > out->tri_max)
+            out->tri_max = cell->ntri;
+        if (cell->bytes < out->bytes_min)
+            out->bytes_min = cell->bytes;
+        if (cell->bytes > out->bytes_max)
+            out->bytes_max = cell->bytes;
+        if (cell->depth < out->depth_min)
+            out->depth_min = cell->depth;
+        if (cell->depth > out->depth_max)
+            out->depth_max = cell->depth;
+    }
+    if (v) {
+        for (uint32_t c = 0; c < l->ncells; c++)
+            v[c] = l->cells[c].ntri;
+        qsort(v, l->ncells, sizeof *v, cmp_u64);
+        out->tri_median = (uint32_t)v[mid];
+        for (uint32_t c = 0; c < l->ncells; c++)
+            v[c] = l->cells[c].bytes;
+        qsort(v, l->ncells, sizeof *v, cmp_u64);
+        out->bytes_median = v[mid];
+        free(v);
+    }
+    out->vertex_copies = l->ncopies;
+    out->unused_vertices = l->nunused;
+    out->duplicated_vertices = l->ncopies - (l->nv - l->nunused);
+    out->image_bytes = emm_layout_image_bytes(l);
+    out->lookup_bytes = emm_layout_lookup_bytes(l);
+    if (l->opt.kind == EMM_LAYOUT_QUADTREE) {
+        out->quadtree_nodes = l->nnodes;
+        out->overfull_leaves = l->overfull;
+    } else {
+        out->depth_min = out->depth_max = 0;
+    }
+}
