@@ -1,0 +1,117 @@
+/* emm — the session: profile → decide → simulate → report (DESIGN.md "The
+ * shim", "Session" and "Output"; thesis Fig. 5.6).
+ *
+ * libemmshim.so is thin: it interposes the allocator, applies the tag rules,
+ * captures accesses into per-thread buffers and forwards them here. The
+ * session owns everything else. It is not thread-safe: the shim serialises
+ * calls (one lock around each call).
+ *
+ * Life of a session:
+ *   emm_session_new(config)            validate everything once
+ *   emm_session_tag(...) / _untag(...)  as the program allocates and frees
+ *   emm_session_access(batch) ...      until it returns EMM_SESSION_DECIDE
+ *   emm_session_decide()               "freeze the data": read the geometry
+ *                                      from the tagged arrays, profile the
+ *                                      window, choose the strategy, build the
+ *                                      models, replay the window through them
+ *   emm_session_access(batch) ...      streamed through the models
+ *   emm_session_finish()               summary on stderr, report, CSV, trace
+ *   emm_session_free()
+ * The caller must make the tagged arrays readable before emm_session_decide
+ * (the fault backend lifts its page protection first). Nothing grows with the
+ * run's length unless the config asks for a trace. */
+#ifndef EMM_SESSION_H
+#define EMM_SESSION_H
+
+#include <stdio.h>
+
+#include "emm/common.h"
+#include "emm/tag.h"
+#include "emm/trace.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct emm_session emm_session;
+
+typedef enum emm_compare {
+    EMM_COMPARE_BASELINES = 0, /* the chosen strategy, direct and cache */
+    EMM_COMPARE_ALL,           /* the whole standard sweep */
+    EMM_COMPARE_NONE           /* the chosen strategy only */
+} emm_compare;
+
+typedef struct emm_session_config {
+    const char *strategy;        /* NULL: decide from the profile (EMM_STRATEGY) */
+    uint64_t window_accesses;    /* profile window in element accesses (0: use iterations) */
+    uint64_t window_iterations;  /* profile window in emm_iteration() calls, when accesses == 0 */
+    emm_compare compare;
+    const char *machine_path;    /* NULL: defaults (EMM_MACHINE) */
+    const char *table_path;      /* NULL: the shipped table only (EMM_TABLE adds a user table) */
+    const char *report_path;     /* NULL: no JSON report (EMM_REPORT); already %p-expanded */
+    const char *profile_dump;    /* NULL: no CSV (EMM_PROFILE_DUMP) */
+    const char *trace_path;      /* NULL: no trace (EMM_TRACE) */
+    const char *capture;         /* the capture backend's name, for the report */
+    const char *program;         /* the program's name, for the summary and report */
+    int log;                     /* 0 quiet, 1 summary (default), 2 verbose */
+} emm_session_config;
+
+/* One captured access, as the capture backends record it: the address, the
+ * bytes (low 31 bits) and write flag (bit 31), and the work since the
+ * previous access (instrumented basic blocks, or 0). */
+typedef struct emm_raw_access {
+    uint64_t addr;
+    uint32_t bytes_write;
+    uint32_t work;
+} emm_raw_access;
+
+#define EMM_RAW_WRITE 0x80000000u
+
+/* emm_session_access's answer. */
+typedef enum emm_session_state {
+    EMM_SESSION_PROFILING = 0, /* still filling the window */
+    EMM_SESSION_DECIDE,        /* the window is full: call emm_session_decide */
+    EMM_SESSION_SIMULATING     /* decided; accesses go through the models */
+} emm_session_state;
+
+EMM_API emm_status emm_session_new(const emm_session_config *cfg, emm_session **out,
+                                   emm_error *err);
+
+/* A tagged array: `count` records of `stride` bytes at `base`; the
+ * coordinates (vertices) or vertex indices (triangles) are consecutive
+ * scalars of `type` at `field_offset`. Returns the array's index (>= 0) or
+ * -1 when the session takes no more arrays (it then ignores this one). A
+ * range already tagged is re-tagged (realloc keeps tags right). */
+EMM_API int emm_session_tag(emm_session *s, emm_array_kind kind, const void *base, size_t count,
+                            size_t stride, size_t field_offset, emm_scalar type);
+/* The array at `base` was freed or moved: its later accesses are not mesh
+ * accesses. */
+EMM_API void emm_session_untag(emm_session *s, const void *base);
+
+/* The address ranges of the tagged arrays, for the capture backends' fast
+ * filter: fills up to cap [lo, hi) pairs and returns how many there are. */
+EMM_API size_t emm_session_ranges(const emm_session *s, uint64_t *lo, uint64_t *hi, size_t cap);
+
+/* A batch of captured accesses; those outside every tagged array are
+ * dropped. */
+EMM_API emm_session_state emm_session_access(emm_session *s, const emm_raw_access *a, size_t n);
+/* One iteration of the program's main loop ended (emm_iteration()). */
+EMM_API emm_session_state emm_session_iteration(emm_session *s);
+
+/* Reads the geometry from the tagged arrays, profiles the window, decides
+ * (or takes the configured strategy), builds the models and replays the
+ * window through them. A failure (e.g. no vertex array was tagged) is
+ * returned; the session then stays quiet and finish reports why. */
+EMM_API emm_status emm_session_decide(emm_session *s, emm_error *err);
+
+/* Ends the session: decides if the window never filled, writes the summary
+ * to `summary` (NULL: none), the JSON report, the CSV and the trace, each
+ * whole or not at all. */
+EMM_API emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err);
+
+EMM_API void emm_session_free(emm_session *s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
