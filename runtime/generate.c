@@ -120,16 +120,20 @@ static void sampler_init(struct sampler *s, const emm_gen_options *opt, bool cut
     s->cut = cut;
     if (opt->density != EMM_DENSITY_CLUSTERED)
         return;
-    /* 3 to 8 clusters, 10-25% background; widths 0.015-0.08 (log-uniform),
-     * centres away from the border so that clusters are mostly inside. */
+    /* 3 to 8 clusters, 30-45% background; widths 0.04-0.12 (log-uniform),
+     * centres away from the border so that clusters are mostly inside. The
+     * densest regions are then a few times denser than the mean and some 20
+     * times denser than the sparsest: non-uniform as the thesis' mesh (§6.1),
+     * yet a grid cell of a few hundred triangles on average still fits the
+     * local store, as the thesis' grid strategies did. */
     s->clusters = 3 + (size_t)(emm_rng_next(&s->rng) % 6);
-    s->background = 0.10 + 0.15 * emm_rng_uniform(&s->rng);
+    s->background = 0.30 + 0.15 * emm_rng_uniform(&s->rng);
     double total = 0;
     for (size_t i = 0; i < s->clusters; i++) {
         struct cluster *c = &s->c[i];
         c->cx = 0.12 + 0.76 * emm_rng_uniform(&s->rng);
         c->cy = 0.12 + 0.76 * emm_rng_uniform(&s->rng);
-        c->sigma = 0.015 * pow(0.08 / 0.015, emm_rng_uniform(&s->rng));
+        c->sigma = 0.04 * pow(0.12 / 0.04, emm_rng_uniform(&s->rng));
         total += 0.5 + emm_rng_uniform(&s->rng);
         c->cumulative = total;
     }
