@@ -14,6 +14,7 @@
 
 #include "emm/mesh.h"
 #include "error.h"
+#include "parse.h"
 
 /* Ids are 32-bit; vertex copies (at most 3 per triangle) must fit too. */
 #define MAX_TRIANGLES (UINT32_MAX / 3u - 1u)
@@ -40,20 +41,6 @@ void emm_layout_free(emm_layout *l)
     free(l);
 }
 
-/* "301,200": counts in messages read better grouped. */
-static const char *grouped(uint64_t v, char buf[32])
-{
-    char tmp[32];
-    int n = snprintf(tmp, sizeof tmp, "%llu", (unsigned long long)v);
-    int o = 0;
-    for (int i = 0; i < n; i++) {
-        if (i > 0 && (n - i) % 3 == 0)
-            buf[o++] = ',';
-        buf[o++] = tmp[i];
-    }
-    buf[o] = '\0';
-    return buf;
-}
 
 static emm_status nomem(emm_error *err, const char *name)
 {
@@ -516,7 +503,7 @@ static emm_status too_large(const double *xyz, size_t nv, const int32_t *tri, si
         return emm_fail(err, EMM_ERR_RANGE,
                         "%s: %s cell %u takes %s bytes, more than the %s-byte local store, "
                         "and no CELL makes every %s cell fit%s",
-                        name, layout, worst, grouped(bytes, b1), grouped(local, b2), layout,
+                        name, layout, worst, emm_grouped(bytes, b1), emm_grouped(local, b2), layout,
                         l->opt.kind == EMM_LAYOUT_QUADTREE
                             ? ""
                             : " (the quadtree bounds triangles per cell)");
@@ -524,7 +511,7 @@ static emm_status too_large(const double *xyz, size_t nv, const int32_t *tri, si
     return emm_fail(err, EMM_ERR_RANGE,
                     "%s: %s cell %u takes %s bytes, more than the %s-byte local store: "
                     "use a smaller CELL than %u (e.g. %s+%s@%u)",
-                    name, layout, worst, grouped(bytes, b1), grouped(local, b2), l->opt.cell,
+                    name, layout, worst, emm_grouped(bytes, b1), emm_grouped(local, b2), l->opt.cell,
                     layout, fetch, suggest);
 }
 

@@ -16,4 +16,8 @@ bool emm_parse_size(const char *s, uint64_t *out);
 /* A finite floating-point number. */
 bool emm_parse_double(const char *s, double *out);
 
+/* Writes v with thousands grouped ("301,200") into buf and returns buf:
+ * counts in messages and tables read better that way. */
+const char *emm_grouped(uint64_t v, char buf[32]);
+
 #endif

@@ -13,6 +13,7 @@
 #include "emm/mesh.h"
 #include "emm/sim.h"
 #include "emm/strategy.h"
+#include "parse.h"
 
 static void usage(FILE *out)
 {
@@ -42,20 +43,6 @@ static void usage(FILE *out)
             EMM_DEFAULT_CELL, EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES);
 }
 
-/* "20,000": counts read better grouped. */
-static const char *grouped(uint64_t v, char buf[32])
-{
-    char tmp[32];
-    int n = snprintf(tmp, sizeof tmp, "%llu", (unsigned long long)v);
-    int o = 0;
-    for (int i = 0; i < n; i++) {
-        if (i > 0 && (n - i) % 3 == 0)
-            buf[o++] = ',';
-        buf[o++] = tmp[i];
-    }
-    buf[o] = '\0';
-    return buf;
-}
 
 static void print_stats(const emm_layout *l, const char *path, const emm_strategy *s)
 {
@@ -63,7 +50,7 @@ static void print_stats(const emm_layout *l, const char *path, const emm_strateg
     emm_layout_get_stats(l, &st);
     char a[32], b[32], c[32];
     printf("mesh            %s: %s triangles, %s vertices\n", path,
-           grouped(emm_layout_triangle_count(l), a), grouped(emm_layout_vertex_count(l), b));
+           emm_grouped(emm_layout_triangle_count(l), a), emm_grouped(emm_layout_vertex_count(l), b));
     printf("layout          %s, CELL %u", emm_layout_name(s->layout), s->cell);
     uint32_t cols, rows;
     emm_layout_dims(l, &cols, &rows);
@@ -74,21 +61,21 @@ static void print_stats(const emm_layout *l, const char *path, const emm_strateg
     int axes[2];
     emm_layout_axes(l, axes, NULL, NULL);
     printf(", over %c and %c\n", "xyz"[axes[0]], "xyz"[axes[1]]);
-    printf("cells           %s (%s without triangles)\n", grouped(st.cells, a),
-           grouped(st.empty_cells, b));
-    printf("triangles/cell  min %s, median %s, max %s\n", grouped(st.tri_min, a),
-           grouped(st.tri_median, b), grouped(st.tri_max, c));
-    printf("bytes/cell      min %s, median %s, max %s\n", grouped(st.bytes_min, a),
-           grouped(st.bytes_median, b), grouped(st.bytes_max, c));
+    printf("cells           %s (%s without triangles)\n", emm_grouped(st.cells, a),
+           emm_grouped(st.empty_cells, b));
+    printf("triangles/cell  min %s, median %s, max %s\n", emm_grouped(st.tri_min, a),
+           emm_grouped(st.tri_median, b), emm_grouped(st.tri_max, c));
+    printf("bytes/cell      min %s, median %s, max %s\n", emm_grouped(st.bytes_min, a),
+           emm_grouped(st.bytes_median, b), emm_grouped(st.bytes_max, c));
     printf("vertex copies   %s (%s duplicated, %s vertices unused)\n",
-           grouped(st.vertex_copies, a), grouped(st.duplicated_vertices, b),
-           grouped(st.unused_vertices, c));
-    printf("image bytes     %s\n", grouped(st.image_bytes, a));
-    printf("lookup bytes    %s\n", grouped(st.lookup_bytes, a));
+           emm_grouped(st.vertex_copies, a), emm_grouped(st.duplicated_vertices, b),
+           emm_grouped(st.unused_vertices, c));
+    printf("image bytes     %s\n", emm_grouped(st.image_bytes, a));
+    printf("lookup bytes    %s\n", emm_grouped(st.lookup_bytes, a));
     if (s->layout == EMM_LAYOUT_QUADTREE) {
         printf("quadtree depth  min %u, max %u\n", st.depth_min, st.depth_max);
         printf("quadtree nodes  %s (%s leaves over CELL at the deepest level)\n",
-               grouped(st.quadtree_nodes, a), grouped(st.overfull_leaves, b));
+               emm_grouped(st.quadtree_nodes, a), emm_grouped(st.overfull_leaves, b));
     }
 }
 
@@ -170,8 +157,8 @@ static void write_svg_body(FILE *f, const emm_layout *l, const double *xyz, cons
     fprintf(f,
             "<text x=\"%.1f\" y=\"30\" font-family=\"sans-serif\" font-size=\"18\">"
             "%s layout, CELL %u: %s cells, %s triangles (",
-            v.margin, emm_layout_name(s->layout), s->cell, grouped(n, a),
-            grouped(emm_layout_triangle_count(l), b));
+            v.margin, emm_layout_name(s->layout), s->cell, emm_grouped(n, a),
+            emm_grouped(emm_layout_triangle_count(l), b));
     for (const char *p = path; *p; p++) /* the file name, escaped */
         switch (*p) {
         case '<': fputs("&lt;", f); break;
