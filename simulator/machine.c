@@ -79,6 +79,8 @@ static const struct key_desc keys[] = {
      KEY_COUNT, P(emm_predict), 10, 0, 1000000},
     {{"emm.dma_issue_instr", "cycles", "EMM runtime: bookkeeping around one DMA request", "20"},
      KEY_COUNT, P(emm_dma_issue_instr), 20, 0, 1000000},
+    {{"emm.fifo", "moves", "extrapolated fetching: moves between cells kept to predict the next (thesis 4.2.2)", "4"},
+     KEY_COUNT, P(emm_fifo), 4, 1, 64},
 };
 
 #define NKEYS (sizeof keys / sizeof keys[0])

@@ -29,6 +29,7 @@ typedef struct emm_machine_params {
     uint64_t emm_quadtree_level;
     uint64_t emm_predict;
     uint64_t emm_dma_issue_instr;
+    uint64_t emm_fifo; /* extrapolated fetching: moves remembered */
 } emm_machine_params;
 
 struct emm_machine {

@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cache_layout.h"
+#include "emm_fetch.h"
 #include "error.h"
 
 emm_status emm_addr_map_init(emm_addr_map *map, const emm_trace_info *trace, emm_error *err)
@@ -43,6 +45,10 @@ emm_status emm_model_new(const emm_machine *m, const emm_strategy *s,
         st = emm_direct_model_new(&m->p, trace, out, err);
     else if (s->kind == EMM_STRATEGY_CACHE && s->layout == EMM_LAYOUT_ORIGINAL)
         st = emm_cache_model_new(&m->p, trace, out, err);
+    else if (s->kind == EMM_STRATEGY_CACHE)
+        st = emm_cache_layout_model_new(&m->p, s, trace, out, err);
+    else if (s->kind == EMM_STRATEGY_EMM)
+        st = emm_emm_model_new(&m->p, s, trace, out, err);
     else
         return emm_fail(err, EMM_ERR_UNSUPPORTED,
                         "strategy '%s': not implemented in this build (only 'direct' and 'cache')",

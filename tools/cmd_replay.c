@@ -12,12 +12,14 @@
 #include "machine_cli.h"
 
 #define MAX_STRATEGIES 64
+#define MAX_JOBS 256
 
 static void usage(FILE *out)
 {
     fprintf(out,
             "usage: emm replay TRACE [--strategy S]... [--json FILE] [--machine FILE]\n"
-            "                  [--set KEY=VALUE]... [--quiet]\n"
+            "                  [--set KEY=VALUE]... [--jobs N] [--quiet]\n"
+            "       emm replay TRACE --all [--json FILE] [--jobs N] ...\n"
             "\n"
             "Simulates the accesses recorded in TRACE on the machine model, once per\n"
             "strategy, in one pass over the file, and prints a table: total cycles, seconds\n"
@@ -25,10 +27,22 @@ static void usage(FILE *out)
             "cache's line counts (Dinero IV's demand fetches, demand misses, prefetch\n"
             "fetches) or the DMA counts.\n"
             "\n"
-            "  --strategy S     direct (word-by-word remote reads) or cache (the hardware\n"
-            "                   cache on the original addresses); may be repeated; default:\n"
-            "                   both. EMM strategies (grid+naive@64, ...) and cache@LAYOUT are\n"
-            "                   not implemented in this build.\n"
+            "With --all, simulates the standard sweep (3 layouts x 3 fetch schemes x cells\n"
+            "16, 32, 64, 128, 256, then direct, cache and cache@ each layout: 50\n"
+            "strategies) and prints one line per strategy, fastest first: total cycles,\n"
+            "seconds, speed-up over direct and over cache, and the largest buckets. A\n"
+            "strategy that cannot run on this trace (a cell larger than the local store, a\n"
+            "trace without geometry) is listed as skipped with the reason, and the sweep\n"
+            "goes on.\n"
+            "\n"
+            "  --strategy S     direct (word-by-word remote reads), cache (the hardware cache\n"
+            "                   on the original addresses), cache@LAYOUT (the cache on the\n"
+            "                   addresses of a reordered layout: grid, tiles, quadtree) or\n"
+            "                   LAYOUT+FETCH[@CELL] (an EMM strategy); may be repeated;\n"
+            "                   default: direct and cache\n"
+            "  --all            the standard sweep (not with --strategy)\n"
+            "  --jobs N         threads simulating strategies (default: the online CPUs,\n"
+            "                   at most one per strategy); results do not depend on N\n"
             "  --json FILE      also write the JSON report (docs/report.md), whole or not at all\n"
             "  --quiet          no table, no progress\n"
             MACHINE_CLI_HELP
@@ -106,14 +120,105 @@ static void print_table(const char *trace, uint64_t accesses, const emm_machine 
     printf("\n");
 }
 
+/* --all: one line per strategy, fastest first, then the skipped ones. */
+struct ranked {
+    const emm_result *res;
+    const emm_error *skip;
+};
+
+static int by_total(const void *a, const void *b)
+{
+    const struct ranked *x = a, *y = b;
+    int xs = x->skip->status != EMM_OK, ys = y->skip->status != EMM_OK;
+    if (xs != ys)
+        return xs - ys;
+    if (!xs && x->res->total != y->res->total)
+        return x->res->total < y->res->total ? -1 : 1;
+    return x->res < y->res ? -1 : x->res > y->res; /* the sweep's order */
+}
+
+static void speedup(char *buf, size_t cap, const emm_result *base, const emm_result *r)
+{
+    if (!base || r->total == 0)
+        snprintf(buf, cap, "-");
+    else
+        snprintf(buf, cap, "%.2fx", (double)base->total / (double)r->total);
+}
+
+static void print_sweep(const char *trace, uint64_t accesses, const emm_machine *m,
+                        const emm_result *res, const emm_error *skipped, size_t n)
+{
+    double hz = (double)emm_machine_get(m, "clock.mhz") * 1e6;
+    const emm_result *direct = NULL, *cache = NULL;
+    struct ranked order[MAX_STRATEGIES];
+    size_t ran = 0;
+    for (size_t i = 0; i < n; i++) {
+        order[i].res = &res[i];
+        order[i].skip = &skipped[i];
+        if (skipped[i].status != EMM_OK)
+            continue;
+        ran++;
+        if (res[i].strategy.kind == EMM_STRATEGY_DIRECT && !direct)
+            direct = &res[i];
+        if (res[i].strategy.kind == EMM_STRATEGY_CACHE &&
+            res[i].strategy.layout == EMM_LAYOUT_ORIGINAL && !cache)
+            cache = &res[i];
+    }
+    qsort(order, n, sizeof *order, by_total);
+    printf("trace %s: %llu accesses, %zu strategies (%zu skipped)\n\n", trace,
+           (unsigned long long)accesses, n, n - ran);
+    printf("%4s  %-26s %15s %11s %9s %9s  %s\n", "rank", "strategy", "total cycles", "seconds",
+           "vs direct", "vs cache", "largest buckets");
+    for (size_t k = 0; k < ran; k++) {
+        const emm_result *r = order[k].res;
+        char name[64], vd[32], vc[32], top[128] = "";
+        int used[EMM_BUCKET_COUNT] = {0};
+        size_t len = 0;
+        emm_strategy_format(&r->strategy, name, sizeof name);
+        speedup(vd, sizeof vd, direct, r);
+        speedup(vc, sizeof vc, cache, r);
+        /* The three largest non-empty buckets. */
+        for (int t = 0; t < 3; t++) {
+            int best = -1;
+            for (int b = 0; b < EMM_BUCKET_COUNT; b++)
+                if (!used[b] && r->cycles[b] > 0 && (best < 0 || r->cycles[b] > r->cycles[best]))
+                    best = b;
+            if (best < 0)
+                break;
+            used[best] = 1;
+            len += (size_t)snprintf(top + len, sizeof top - len, "%s%s %.0f%%", t ? ", " : "",
+                                    emm_bucket_name((emm_bucket)best),
+                                    pct(r->cycles[best], r->total));
+            if (len >= sizeof top)
+                break;
+        }
+        printf("%4zu  %-26s %15llu %11.6f %9s %9s  %s\n", k + 1, name,
+               (unsigned long long)r->total, (double)r->total / hz, vd, vc, top);
+    }
+    if (ran < n) {
+        printf("\nskipped:\n");
+        for (size_t k = ran; k < n; k++) {
+            char name[64];
+            emm_strategy_format(&order[k].res->strategy, name, sizeof name);
+            /* Messages usually name the strategy already. */
+            if (strstr(order[k].skip->message, name))
+                printf("  %s\n", order[k].skip->message);
+            else
+                printf("  %s: %s\n", name, order[k].skip->message);
+        }
+    }
+}
+
 int emm_cmd_replay(int argc, char **argv)
 {
     machine_cli mc = {0};
     emm_strategy strategies[MAX_STRATEGIES];
     emm_result results[MAX_STRATEGIES];
+    emm_error skipped[MAX_STRATEGIES];
     size_t nstrategies = 0;
     const char *trace = NULL, *json = NULL;
-    int quiet = 0, rc;
+    int quiet = 0, all = 0, rc;
+    uint64_t jobs = 0;
     emm_machine *m = NULL;
     emm_error err;
     uint64_t accesses = 0;
@@ -139,6 +244,15 @@ int emm_cmd_replay(int argc, char **argv)
             if (emm_strategy_parse(v, &strategies[nstrategies], &err) != EMM_OK)
                 return cli_usage_error("replay", "%s", err.message);
             nstrategies++;
+        } else if (strcmp(argv[i], "--all") == 0) {
+            all = 1;
+        } else if (strcmp(argv[i], "--jobs") == 0 || strcmp(argv[i], "-j") == 0) {
+            const char *opt = argv[i];
+            if (!(v = cli_value("replay", argc, argv, &i)) || !cli_u64("replay", opt, v, &jobs))
+                return EMM_EXIT_USAGE;
+            if (jobs < 1 || jobs > MAX_JOBS)
+                return cli_usage_error("replay", "%s '%s': a number of threads from 1 to %d", opt,
+                                       v, MAX_JOBS);
         } else if (strcmp(argv[i], "--json") == 0) {
             if (!(json = cli_value("replay", argc, argv, &i)))
                 return EMM_EXIT_USAGE;
@@ -154,7 +268,14 @@ int emm_cmd_replay(int argc, char **argv)
     }
     if (!trace)
         return cli_usage_error("replay", "missing TRACE");
-    if (nstrategies == 0) {
+    if (all && nstrategies > 0)
+        return cli_usage_error("replay", "--all and --strategy do not go together");
+    if (all) {
+        nstrategies = emm_strategy_sweep(strategies, MAX_STRATEGIES);
+        if (nstrategies > MAX_STRATEGIES)
+            return cli_usage_error("replay", "the sweep has more than %d strategies",
+                                   MAX_STRATEGIES);
+    } else if (nstrategies == 0) {
         emm_strategy_parse("direct", &strategies[nstrategies++], NULL);
         emm_strategy_parse("cache", &strategies[nstrategies++], NULL);
     }
@@ -162,8 +283,9 @@ int emm_cmd_replay(int argc, char **argv)
         return rc;
 
     pctx.on = !quiet && isatty(STDERR_FILENO);
-    if (emm_replay(trace, m, strategies, nstrategies, results, &accesses, progress, &pctx,
-                   &err) != EMM_OK) {
+    emm_replay_options ropt = {(unsigned)jobs, progress, &pctx};
+    if (emm_replay_ex(trace, m, strategies, nstrategies, &ropt, results, all ? skipped : NULL,
+                      &accesses, &err) != EMM_OK) {
         if (pctx.on)
             fputc('\n', stderr);
         emm_machine_free(m);
@@ -171,11 +293,14 @@ int emm_cmd_replay(int argc, char **argv)
     }
     if (pctx.on)
         fprintf(stderr, "\r\033[K");
-    if (json && emm_report_write(json, trace, m, accesses, results, nstrategies, &err) != EMM_OK) {
+    if (json && emm_report_write_ex(json, trace, m, accesses, results, all ? skipped : NULL,
+                                    nstrategies, &err) != EMM_OK) {
         emm_machine_free(m);
         return cli_fail(&err);
     }
-    if (!quiet)
+    if (!quiet && all)
+        print_sweep(trace, accesses, m, results, skipped, nstrategies);
+    else if (!quiet)
         print_table(trace, accesses, m, results, nstrategies);
     emm_machine_free(m);
     return EMM_EXIT_OK;

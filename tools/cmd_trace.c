@@ -1,6 +1,7 @@
-/* emm trace: describe a trace, export it to Dinero IV's din text format, and
+/* emm trace: describe a trace, export it to Dinero IV's din text format,
  * import din text as an address-only trace (DESIGN.md "Traces";
- * docs/trace-format.md says how multi-byte accesses and labels map). */
+ * docs/trace-format.md says how multi-byte accesses and labels map), and
+ * synthesise traces of canonical traversals (include/emm/synth.h). */
 #include <errno.h>
 #include <inttypes.h>
 #include <stdio.h>
@@ -10,6 +11,8 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "emm/mesh.h"
+#include "emm/synth.h"
 #include "emm/trace.h"
 
 #define READ_BATCH 65536
@@ -18,8 +21,11 @@ static const char trace_usage[] =
     "usage: emm trace info TRACE [--verify]\n"
     "       emm trace export --din TRACE [-o FILE]\n"
     "       emm trace import --din FILE -o TRACE [--bytes N] [--compress]\n"
+    "       emm trace synth --mesh FILE --pattern P -o TRACE [--seed S] [--visits N]\n"
+    "                       [--length L] [--corner] [--work W] [--compress]\n"
     "\n"
-    "Describe, export and import access traces (the files EMM_TRACE writes).\n"
+    "Describe, export, import and synthesise access traces (the files EMM_TRACE\n"
+    "writes).\n"
     "'emm trace SUBCOMMAND --help' explains each subcommand.\n";
 
 static const char info_usage[] =
@@ -481,10 +487,119 @@ static int trace_import(int argc, char **argv)
     return EMM_EXIT_OK;
 }
 
+/* ------------------------------------------------------------------------ */
+
+static const char synth_usage[] =
+    "usage: emm trace synth --mesh FILE --pattern P -o TRACE [--seed S] [--visits N]\n"
+    "                       [--length L] [--corner] [--work W] [--compress]\n"
+    "\n"
+    "Writes the trace of a canonical traversal over a mesh (thesis §5, Table 5.1):\n"
+    "each triangle visit reads the triangle's record (vertex indices and\n"
+    "neighbours, 24 bytes) and then its three vertices' coordinates (24 bytes\n"
+    "each), so a trace has 4 records per visit, over the thesis' record layout\n"
+    "(80-byte vertices, 28-byte triangles) and the mesh's geometry. The same\n"
+    "options give the same file, byte for byte.\n"
+    "\n"
+    "  --mesh FILE      the mesh (OFF, OBJ, PLY, STL)\n"
+    "  --pattern P      region    breadth-first growth over edge neighbours from a seed\n"
+    "                   curve     straight walks across triangles from random starts\n"
+    "                   scanline  rows of triangles by centroid, left to right\n"
+    "                   zorder    triangles in Z-order (Morton) of their centroids\n"
+    "                   gray      triangles in Gray-code order of their centroids\n"
+    "                   hilbert   triangles in Hilbert order of their centroids\n"
+    "                   random    triangles in a uniformly random order\n"
+    "                   spiral    triangles by angle then radius around the centre\n"
+    "  -o, --output F   the trace to write (required), whole or not at all\n"
+    "  --seed S         seed of region's start, curves' starts and directions and\n"
+    "                   random's order (default 1)\n"
+    "  --visits N       stop after N triangle visits (default: every triangle once;\n"
+    "                   curve: as many visits as triangles). Only curve visits\n"
+    "                   a triangle more than once, so the other patterns stop at\n"
+    "                   the triangle count\n"
+    "  --length L       curve: triangles per walk before a new walk starts\n"
+    "                   (default 0: walk to the boundary)\n"
+    "  --corner         region: start at the corner triangle (lowest x + y centroid)\n"
+    "                   instead of one drawn from the seed\n"
+    "  --work W         compute cycles recorded before each access (default 0)\n"
+    "  --compress       zstd-compress the trace's blocks\n";
+
+static int trace_synth(int argc, char **argv)
+{
+    const char *cmd = "trace synth";
+    const char *mesh_path = NULL, *pattern = NULL, *out = NULL;
+    emm_synth_options opt;
+    uint64_t v;
+    emm_error err;
+
+    memset(&opt, 0, sizeof opt);
+    opt.seed = 1;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i], *val;
+        if (cli_is_help(a)) {
+            fputs(synth_usage, stdout);
+            return EMM_EXIT_OK;
+        } else if (strcmp(a, "--mesh") == 0) {
+            if (!(mesh_path = cli_value(cmd, argc, argv, &i)))
+                return EMM_EXIT_USAGE;
+        } else if (strcmp(a, "--pattern") == 0) {
+            if (!(pattern = cli_value(cmd, argc, argv, &i)))
+                return EMM_EXIT_USAGE;
+        } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) {
+            if (!(out = cli_value(cmd, argc, argv, &i)))
+                return EMM_EXIT_USAGE;
+        } else if (strcmp(a, "--seed") == 0) {
+            if (!(val = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, a, val, &opt.seed))
+                return EMM_EXIT_USAGE;
+        } else if (strcmp(a, "--visits") == 0) {
+            if (!(val = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, a, val, &opt.visits))
+                return EMM_EXIT_USAGE;
+            if (opt.visits == 0)
+                return cli_usage_error(cmd, "--visits must be at least 1");
+        } else if (strcmp(a, "--length") == 0) {
+            if (!(val = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, a, val, &opt.length))
+                return EMM_EXIT_USAGE;
+        } else if (strcmp(a, "--work") == 0) {
+            if (!(val = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, a, val, &v))
+                return EMM_EXIT_USAGE;
+            if (v > UINT32_MAX)
+                return cli_usage_error(cmd, "--work '%s' is above %u", val, UINT32_MAX);
+            opt.work = (uint32_t)v;
+        } else if (strcmp(a, "--corner") == 0) {
+            opt.corner_seed = 1;
+        } else if (strcmp(a, "--compress") == 0) {
+            opt.compress = 1;
+        } else if (a[0] == '-' && a[1] != '\0') {
+            return cli_usage_error(cmd, "unknown option '%s'", a);
+        } else {
+            return cli_usage_error(cmd, "unexpected argument '%s'", a);
+        }
+    }
+    if (!mesh_path)
+        return cli_usage_error(cmd, "missing --mesh FILE");
+    if (!pattern)
+        return cli_usage_error(cmd, "missing --pattern P");
+    if (!out)
+        return cli_usage_error(cmd, "missing -o TRACE");
+    if (emm_pattern_parse(pattern, &opt.pattern, &err) != EMM_OK)
+        return cli_usage_error(cmd, "%s", err.message);
+
+    emm_mesh *mesh = NULL;
+    uint64_t records = 0;
+    if (emm_mesh_open(mesh_path, &mesh, &err) != EMM_OK)
+        return cli_fail(&err);
+    emm_status st = emm_synth_trace(mesh, &opt, out, &records, &err);
+    emm_mesh_free(mesh);
+    if (st != EMM_OK)
+        return cli_fail(&err);
+    printf("wrote %s: %" PRIu64 " records (pattern %s)\n", out, records,
+           emm_pattern_name(opt.pattern));
+    return EMM_EXIT_OK;
+}
+
 int emm_cmd_trace(int argc, char **argv)
 {
     if (argc < 2)
-        return cli_usage_error("trace", "which subcommand? (info, export, import)");
+        return cli_usage_error("trace", "which subcommand? (info, export, import, synth)");
     if (cli_is_help(argv[1])) {
         fputs(trace_usage, stdout);
         return EMM_EXIT_OK;
@@ -495,5 +610,8 @@ int emm_cmd_trace(int argc, char **argv)
         return trace_export(argc - 1, argv + 1);
     if (strcmp(argv[1], "import") == 0)
         return trace_import(argc - 1, argv + 1);
-    return cli_usage_error("trace", "unknown subcommand '%s' (info, export, import)", argv[1]);
+    if (strcmp(argv[1], "synth") == 0)
+        return trace_synth(argc - 1, argv + 1);
+    return cli_usage_error("trace", "unknown subcommand '%s' (info, export, import, synth)",
+                           argv[1]);
 }

@@ -17,6 +17,9 @@ static const struct command commands[] = {
     {"trace", emm_cmd_trace, "describe, export and import access traces"},
     {"replay", emm_cmd_replay, "simulate a trace under a strategy"},
     {"layout", emm_cmd_layout, "build a layout and draw or describe its cells"},
+    {"profile", emm_cmd_profile, "distance profile of a trace and the strategy it picks"},
+    {"table", emm_cmd_table, "list the strategy table or add a sample to it"},
+    {"run", emm_cmd_run, "run a program under the shim: profile, decide, simulate"},
 };
 
 static void usage(FILE *out)

@@ -71,7 +71,9 @@ typedef struct emm_raw_access {
 typedef enum emm_session_state {
     EMM_SESSION_PROFILING = 0, /* still filling the window */
     EMM_SESSION_DECIDE,        /* the window is full: call emm_session_decide */
-    EMM_SESSION_SIMULATING     /* decided; accesses go through the models */
+    EMM_SESSION_SIMULATING,    /* decided; accesses go through the models */
+    EMM_SESSION_OFF            /* the session stepped aside (a failure, or finished):
+                                  capturing more is useless */
 } emm_session_state;
 
 EMM_API emm_status emm_session_new(const emm_session_config *cfg, emm_session **out,
@@ -85,7 +87,10 @@ EMM_API emm_status emm_session_new(const emm_session_config *cfg, emm_session **
 EMM_API int emm_session_tag(emm_session *s, emm_array_kind kind, const void *base, size_t count,
                             size_t stride, size_t field_offset, emm_scalar type);
 /* The array at `base` was freed or moved: its later accesses are not mesh
- * accesses. */
+ * accesses. Call it while the memory is still readable: before the
+ * decision, the session copies the array's coordinates or indices when the
+ * window holds accesses to it (a short program that frees its mesh before
+ * exit is still decided at finish). */
 EMM_API void emm_session_untag(emm_session *s, const void *base);
 
 /* The address ranges of the tagged arrays, for the capture backends' fast
@@ -93,7 +98,12 @@ EMM_API void emm_session_untag(emm_session *s, const void *base);
 EMM_API size_t emm_session_ranges(const emm_session *s, uint64_t *lo, uint64_t *hi, size_t cap);
 
 /* A batch of captured accesses; those outside every tagged array are
- * dropped. */
+ * dropped (their work is added to the next kept access). An access that runs
+ * past the end of its record is attributed whole to the record it starts in.
+ * Before the decision the window's records are buffered: at most 32 per
+ * element access of the window (or 2^20 for a window in iterations), past
+ * which the answer is EMM_SESSION_DECIDE; accesses given after that answer
+ * and before emm_session_decide are still buffered. */
 EMM_API emm_session_state emm_session_access(emm_session *s, const emm_raw_access *a, size_t n);
 /* One iteration of the program's main loop ended (emm_iteration()). */
 EMM_API emm_session_state emm_session_iteration(emm_session *s);
@@ -105,8 +115,19 @@ EMM_API emm_session_state emm_session_iteration(emm_session *s);
 EMM_API emm_status emm_session_decide(emm_session *s, emm_error *err);
 
 /* Ends the session: decides if the window never filled, writes the summary
- * to `summary` (NULL: none), the JSON report, the CSV and the trace, each
- * whole or not at all. */
+ * to `summary` (NULL: none; nothing at log 0), the JSON report, the CSV and
+ * the trace, each whole or not at all (a temporary file renamed into place).
+ * When the session had stepped aside, the summary says why (so the caller
+ * need not print err again) and the failure is returned; no file is
+ * written. A second call does nothing and returns EMM_OK.
+ *
+ * Not async-signal-safe: it allocates and uses stdio. Safe from an atexit
+ * handler or a destructor. From a SIGTERM/SIGINT handler it is safe only
+ * when the interrupted code was inside neither the session (take the shim's
+ * lock with trylock and skip finish when that fails) nor malloc or stdio,
+ * which a handler cannot know: a handler that calls it trades a rare hang
+ * for the report. Either way a file is whole or absent: each is renamed
+ * into place only once complete. */
 EMM_API emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err);
 
 EMM_API void emm_session_free(emm_session *s);

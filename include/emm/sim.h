@@ -121,6 +121,21 @@ typedef struct emm_result {
         uint64_t words_read;
         uint64_t words_written;
     } direct;
+    int has_emm;                         /* the EMM counts below are meaningful (docs/fetch.md) */
+    struct {
+        uint64_t cell_changes;           /* accesses in a different cell than the access before */
+        uint64_t demand_fetches;         /* cells fetched because an access needed them */
+        uint64_t demand_bytes;
+        uint64_t prefetches;             /* cells fetched ahead by the fetch scheme */
+        uint64_t prefetch_bytes;
+        uint64_t useful_prefetches;      /* prefetched cells entered before their eviction */
+        uint64_t dropped_prefetches;     /* prefetches skipped: no room without evicting a cell in flight */
+        uint64_t evictions;              /* resident cells evicted to make room */
+        uint64_t other_accesses;         /* records outside the layout (RAW arrays, unused
+                                            vertices), read directly from remote memory */
+        uint64_t local_budget;           /* local store bytes for cells: local.bytes minus look-up bytes */
+        uint64_t lookup_bytes;           /* the layout's look-up tables in the local store */
+    } emm;
 } emm_result;
 
 /* ---- models ---------------------------------------------------------------- */
@@ -130,7 +145,10 @@ typedef struct emm_model emm_model;
 
 /* A model of strategy s on machine m (validated; copied, so m may be freed)
  * for records of a trace whose arrays are described by `trace` (copied).
- * EMM strategies and cache@LAYOUT are EMM_ERR_UNSUPPORTED in this build. */
+ * EMM strategies (docs/fetch.md) and cache@LAYOUT need the trace's
+ * geometry (EMM_ERR_INVALID for an address-only trace); an EMM strategy
+ * whose cells do not fit the local store left by the layout's look-up
+ * tables is EMM_ERR_RANGE, with a message naming a CELL that fits. */
 EMM_API emm_status emm_model_new(const emm_machine *m, const emm_strategy *s,
                                  const emm_trace_info *trace, emm_model **out, emm_error *err);
 /* Simulates n records in order. The records must be valid for the trace
@@ -156,10 +174,37 @@ EMM_API emm_status emm_replay(const char *path, const emm_machine *m, const emm_
                               size_t n, emm_result *results, uint64_t *accesses,
                               emm_progress_fn progress, void *progress_ctx, emm_error *err);
 
+/* How emm_replay_ex runs; zero-initialise, then set what you need. */
+typedef struct emm_replay_options {
+    /* Threads simulating models; 0: the online CPUs. Never more than the
+     * models. Each model runs on one thread at a time and sees every record
+     * in order, so the results do not depend on `jobs`. */
+    unsigned jobs;
+    emm_progress_fn progress; /* may be NULL; called from the calling thread */
+    void *progress_ctx;
+} emm_replay_options;
+
+/* emm_replay with options (opt may be NULL: defaults). The trace is read
+ * once; its records go to every model in windows, the models split over
+ * opt->jobs threads. With `skipped` NULL a strategy whose model cannot be
+ * built fails the replay, as in emm_replay. With `skipped` (n entries), such
+ * a strategy gets its error in skipped[i] (status != EMM_OK) and a result
+ * with only the strategy set, and the others go on; skipped[i].status is
+ * EMM_OK for the strategies that ran. */
+EMM_API emm_status emm_replay_ex(const char *path, const emm_machine *m, const emm_strategy *s,
+                                 size_t n, const emm_replay_options *opt, emm_result *results,
+                                 emm_error *skipped, uint64_t *accesses, emm_error *err);
+
 /* Writes the JSON report of docs/report.md to `path` (whole or not at all). */
 EMM_API emm_status emm_report_write(const char *path, const char *trace_name,
                                     const emm_machine *m, uint64_t accesses,
                                     const emm_result *results, size_t n, emm_error *err);
+/* The same, where skipped (may be NULL) marks strategies that did not run,
+ * as emm_replay_ex fills it: they are written as {"strategy": ..., "error": ...}. */
+EMM_API emm_status emm_report_write_ex(const char *path, const char *trace_name,
+                                       const emm_machine *m, uint64_t accesses,
+                                       const emm_result *results, const emm_error *skipped,
+                                       size_t n, emm_error *err);
 
 #ifdef __cplusplus
 }

@@ -70,7 +70,7 @@ expect 0 "$EMM" replay "$W/t.emmt" --strategy direct --strategy cache --json "$W
 has 'remote_access'
 [ "$(grep -c '"strategy"' "$W/both.json")" = 2 ] || no "two results"
 expect 0 "$EMM" replay "$W/t.emmt"; has 'direct'; has 'cache'
-expect 1 "$EMM" replay "$W/t.emmt" --strategy grid+naive@64; has 'not implemented in this build'
+expect 1 "$EMM" replay "$W/t.emmt" --strategy grid+naive@64; has 'address-only trace'
 expect 2 "$EMM" replay "$W/t.emmt" --strategy bogus
 expect 1 "$EMM" replay "$W/nope.emmt"; has 'nope.emmt'
 expect 2 "$EMM" replay

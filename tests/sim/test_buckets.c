@@ -72,11 +72,14 @@ static void direct(void)
     {
         emm_strategy s;
         emm_model *x = NULL;
+        /* EMM strategies need geometry too (tests/fetch covers them). */
         REQUIRE(emm_strategy_parse("grid+naive@64", &s, &err) == EMM_OK);
-        CHECK(emm_model_new(m, &s, &info, &x, &err) == EMM_ERR_UNSUPPORTED);
-        CHECK(strstr(err.message, "not implemented in this build") != NULL);
+        CHECK(emm_model_new(m, &s, &info, &x, &err) == EMM_ERR_INVALID);
+        CHECK(strstr(err.message, "address-only") != NULL);
+        /* cache@LAYOUT needs geometry, which this trace lacks. */
         REQUIRE(emm_strategy_parse("cache@tiles", &s, &err) == EMM_OK);
-        CHECK(emm_model_new(m, &s, &info, &x, &err) == EMM_ERR_UNSUPPORTED);
+        CHECK(emm_model_new(m, &s, &info, &x, &err) == EMM_ERR_INVALID);
+        CHECK(strstr(err.message, "address-only") != NULL);
     }
     emm_machine_free(m);
 }

@@ -1,0 +1,115 @@
+/* emm — the distance profile (thesis §5, Eq. 5.1; DESIGN.md "Distance
+ * profile and the strategy table").
+ *
+ * For the i-th element access with position p_i,
+ *
+ *     D_i = Σ_{k<i} ‖p_i − p_k‖                                  (Eq. 5.1)
+ *
+ * Positions are 2D (the two largest extents of the mesh's bounding box) and
+ * scaled by the bounding box's diagonal, so profiles of different meshes
+ * compare. An element access is an access to a vertex (its coordinates) or a
+ * triangle (its centroid); consecutive accesses to one element count once.
+ *
+ * Two methods compute D: an exact one, O(n²) in SIMD over up to two threads,
+ * and a fast one, a tree code over the earlier accesses with a stated bound
+ * on its relative error. emm_profile_compute picks by length.
+ *
+ * The profile is then reduced to a fixed-size feature vector
+ * (emm_profile_features) that the strategy table (emm/table.h) compares. */
+#ifndef EMM_PROFILE_H
+#define EMM_PROFILE_H
+
+#include "emm/common.h"
+#include "emm/trace.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* emm_profile_compute uses the exact method up to this many accesses and the
+ * fast method beyond. */
+#define EMM_PROFILE_EXACT_MAX 65536u
+/* The fast method's default opening angle: a node's aggregate stands for its
+ * points when r ≤ θ·d (r: the node's radius about its centroid, d: the
+ * distance from the query to that centroid). The stated worst-case bound at
+ * 0.45 is 0.105; the errors measured on access-like sequences are far lower
+ * (bench/profile_speed: 1.5e-4 on 1,000,000 accesses, in 0.85 s on two
+ * cores; tests/profile: at most 6.1e-4), so this is where speed and accuracy
+ * meet. docs/profile.md. */
+#define EMM_PROFILE_THETA 0.45
+/* The default profile window, in element accesses. */
+#define EMM_PROFILE_DEFAULT_WINDOW 16384u
+/* The shortest profile that has features. */
+#define EMM_PROFILE_MIN 256u
+
+/* Exact Eq. 5.1. `xy` holds n positions as x0, y0, x1, y1, ...; D receives n
+ * values (D[0] = 0). Double precision throughout: the result differs from a
+ * naive double loop only by summation order (relative 1e-12 at most for any
+ * n this is meant for). Uses AVX2 when the processor has it, SSE2 otherwise,
+ * and up to two threads (one when a thread cannot be started). */
+EMM_API void emm_profile_exact(const double *xy, size_t n, double *D);
+
+/* The fast method's bound on the relative error of every D_i for opening
+ * angle theta (0 < theta < 1): each term ‖p − q‖ a node's aggregate stands
+ * for is replaced by its second-order Taylor expansion about the node's
+ * centroid, whose remainder is at most (1/(3√3))·r³/(d−r)² per point, while
+ * the term itself is at least d − r; so the relative error of the sum is at
+ * most (1/(3√3))·(θ/(1−θ))³. */
+EMM_API double emm_profile_fast_bound(double theta);
+
+/* Fast Eq. 5.1: an incremental quadtree over the earlier positions whose
+ * nodes keep count, first and second moments and the bounding box of their
+ * points; a node far enough (r ≤ θ·d) contributes its multipole sum, a near
+ * leaf its points one by one. Relative error at most
+ * emm_profile_fast_bound(theta). Two threads, each with its own tree over
+ * its half of the queries. Fails only when memory runs out. */
+EMM_API emm_status emm_profile_fast(const double *xy, size_t n, double theta, double *D,
+                                    emm_error *err);
+
+/* Exact when n ≤ EMM_PROFILE_EXACT_MAX, fast with EMM_PROFILE_THETA beyond.
+ * *exact (may be NULL) tells which ran. */
+EMM_API emm_status emm_profile_compute(const double *xy, size_t n, double *D, int *exact,
+                                       emm_error *err);
+
+/* Reduces a profile of n ≥ EMM_PROFILE_MIN values to EMM_FEATURES numbers
+ * (documented in docs/profile.md): the shape of the mean distance
+ * m_i = D_i / i on a log scale of i, how fast it grows, how much it jumps,
+ * and how its change over a lag of L accesses grows with L (locality across
+ * scales, which makes the Z-order and Gray-code orders of thesis Fig. 5.3
+ * alike). The values do not depend on the mesh's size or on n for a given
+ * shape. Returns EMM_ERR_RANGE (naming `name`) when n is too short. */
+#define EMM_FEATURES 19
+EMM_API emm_status emm_profile_features(const double *D, size_t n, const char *name,
+                                        double f[EMM_FEATURES], emm_error *err);
+
+/* Collects the positions of a trace's element accesses. Build one from the
+ * trace's description, feed it records in order, and stop when it is full.
+ * `name` names the trace in error messages. */
+typedef struct emm_profiler emm_profiler;
+
+/* Fails with EMM_ERR_UNSUPPORTED when no array of the trace has positions
+ * (an address-only trace: RAW arrays, or no geometry). window = 0 means
+ * EMM_PROFILE_DEFAULT_WINDOW. */
+EMM_API emm_status emm_profiler_new(const emm_trace_info *info, uint64_t window,
+                                    const char *name, emm_profiler **out, emm_error *err);
+/* Adds records; records of RAW arrays are skipped. An element outside the
+ * geometry is an error. Records after the window is full are ignored. */
+EMM_API emm_status emm_profiler_add(emm_profiler *p, const emm_trace_record *recs, size_t n,
+                                    emm_error *err);
+/* True once `window` element accesses are collected. */
+EMM_API int emm_profiler_full(const emm_profiler *p);
+/* The positions so far (x0, y0, x1, y1, ...), owned by p; *n receives their count. */
+EMM_API const double *emm_profiler_positions(const emm_profiler *p, size_t *n);
+EMM_API void emm_profiler_free(emm_profiler *p);
+
+/* Reads a trace from its first record until `window` element accesses
+ * (0: EMM_PROFILE_DEFAULT_WINDOW) or its end and returns their positions in
+ * *xy (malloc'd, the caller frees) and their count in *n. */
+EMM_API emm_status emm_profile_trace_positions(emm_trace_reader *r, uint64_t window,
+                                               const char *name, double **xy, size_t *n,
+                                               emm_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

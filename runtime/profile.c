@@ -1,0 +1,794 @@
+/* The distance profiler (thesis §5, Eq. 5.1, Figs 5.4–5.5): exact and fast
+ * computation of D_i = Σ_{k<i} ‖p_i − p_k‖, the positions of a trace's
+ * element accesses, and the feature vector the strategy table compares.
+ * docs/profile.md explains the choices. */
+#include "emm/profile.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <emmintrin.h>
+#include <immintrin.h>
+
+#include "error.h"
+
+/* ---- exact ------------------------------------------------------------ */
+
+typedef double (*row_fn)(const double *x, const double *y, size_t n, double px, double py);
+
+/* Σ_{k<n} ‖(x_k, y_k) − p‖, two lanes and two accumulators: the square root
+ * is the bottleneck, so independent chains keep the unit busy. */
+static double row_sse2(const double *x, const double *y, size_t n, double px, double py)
+{
+    __m128d a0 = _mm_setzero_pd(), a1 = _mm_setzero_pd();
+    __m128d X = _mm_set1_pd(px), Y = _mm_set1_pd(py);
+    size_t k = 0;
+    for (; k + 4 <= n; k += 4) {
+        __m128d dx = _mm_sub_pd(_mm_loadu_pd(x + k), X), dy = _mm_sub_pd(_mm_loadu_pd(y + k), Y);
+        a0 = _mm_add_pd(a0, _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy))));
+        dx = _mm_sub_pd(_mm_loadu_pd(x + k + 2), X);
+        dy = _mm_sub_pd(_mm_loadu_pd(y + k + 2), Y);
+        a1 = _mm_add_pd(a1, _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy))));
+    }
+    double lanes[2];
+    _mm_storeu_pd(lanes, _mm_add_pd(a0, a1));
+    double s = lanes[0] + lanes[1];
+    for (; k < n; k++) {
+        double dx = x[k] - px, dy = y[k] - py;
+        s += sqrt(dx * dx + dy * dy);
+    }
+    return s;
+}
+
+/* The same with four lanes, for processors that have AVX2 (the build
+ * targets baseline x86-64, so this is chosen at run time). */
+__attribute__((target("avx2"))) static double row_avx2(const double *x, const double *y,
+                                                        size_t n, double px, double py)
+{
+    __m256d a0 = _mm256_setzero_pd(), a1 = _mm256_setzero_pd();
+    __m256d X = _mm256_set1_pd(px), Y = _mm256_set1_pd(py);
+    size_t k = 0;
+    for (; k + 8 <= n; k += 8) {
+        __m256d dx = _mm256_sub_pd(_mm256_loadu_pd(x + k), X);
+        __m256d dy = _mm256_sub_pd(_mm256_loadu_pd(y + k), Y);
+        a0 = _mm256_add_pd(a0, _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx),
+                                                             _mm256_mul_pd(dy, dy))));
+        dx = _mm256_sub_pd(_mm256_loadu_pd(x + k + 4), X);
+        dy = _mm256_sub_pd(_mm256_loadu_pd(y + k + 4), Y);
+        a1 = _mm256_add_pd(a1, _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx),
+                                                             _mm256_mul_pd(dy, dy))));
+    }
+    double lanes[4];
+    _mm256_storeu_pd(lanes, _mm256_add_pd(a0, a1));
+    double s = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+    for (; k < n; k++) {
+        double dx = x[k] - px, dy = y[k] - py;
+        s += sqrt(dx * dx + dy * dy);
+    }
+    return s;
+}
+
+static row_fn pick_row(void)
+{
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") ? row_avx2 : row_sse2;
+}
+
+struct exact_job {
+    const double *x, *y;
+    double *D;
+    size_t lo, hi;
+    row_fn row;
+};
+
+static void *exact_run(void *arg)
+{
+    struct exact_job *j = arg;
+    for (size_t i = j->lo; i < j->hi; i++)
+        j->D[i] = j->row(j->x, j->y, i, j->x[i], j->y[i]);
+    return NULL;
+}
+
+/* Too short to be worth a thread. */
+#define EXACT_THREAD_MIN 2048u
+
+void emm_profile_exact(const double *xy, size_t n, double *D)
+{
+    if (n == 0)
+        return;
+    double *x = malloc(2 * n * sizeof *x);
+    if (!x) {
+        /* No room for the split copy: the scalar loop on the caller's array. */
+        for (size_t i = 0; i < n; i++) {
+            double s = 0;
+            for (size_t k = 0; k < i; k++) {
+                double dx = xy[2 * k] - xy[2 * i], dy = xy[2 * k + 1] - xy[2 * i + 1];
+                s += sqrt(dx * dx + dy * dy);
+            }
+            D[i] = s;
+        }
+        return;
+    }
+    double *y = x + n;
+    for (size_t i = 0; i < n; i++) {
+        x[i] = xy[2 * i];
+        y[i] = xy[2 * i + 1];
+    }
+    row_fn row = pick_row();
+    /* Row i costs i: the split at n/√2 halves the work. */
+    size_t mid = n < EXACT_THREAD_MIN ? n : (size_t)((double)n * 0.70710678118654752);
+    struct exact_job jobs[2] = {{x, y, D, 0, mid, row}, {x, y, D, mid, n, row}};
+    pthread_t th;
+    bool threaded = mid < n && pthread_create(&th, NULL, exact_run, &jobs[1]) == 0;
+    exact_run(&jobs[0]);
+    if (threaded)
+        pthread_join(th, NULL);
+    else if (mid < n)
+        exact_run(&jobs[1]);
+    free(x);
+}
+
+/* ---- fast ------------------------------------------------------------- */
+
+/* A quadtree node. Moments are about the node's box centre (bx, by), which
+ * keeps them small and their central forms accurate. */
+struct qnode {
+    double cx, cy;             /* centroid of the points */
+    double r2;                 /* squared radius about the centroid (bounding-box corners) */
+    double mxx, mxy, myy;      /* central second moments */
+    double minx, maxx, miny, maxy; /* bounding box of the points */
+    double bx, by, half;       /* box centre and half side */
+    uint32_t count;
+    int32_t child;             /* first of four children, or -1 for a leaf */
+    int32_t head;              /* leaf: first point (index into the list), -1 if none */
+    uint32_t depth;
+};
+
+/* A leaf splits when it holds more points than this (unless at MAX_DEPTH,
+ * where only duplicates and near-duplicates end up). */
+#define LEAF_MAX 24u
+#define MAX_DEPTH 40u
+
+struct qtree {
+    struct qnode *node;
+    size_t nnodes, cap;
+    const double *xy;
+    int32_t *next; /* per point: the next point in the same leaf */
+    double theta2;
+    /* traversal stack */
+    int32_t *stack;
+    size_t stack_cap;
+};
+
+static void qnode_init(struct qnode *q, double bx, double by, double half, uint32_t depth)
+{
+    memset(q, 0, sizeof *q);
+    q->bx = bx;
+    q->by = by;
+    q->half = half;
+    q->minx = q->miny = INFINITY;
+    q->maxx = q->maxy = -INFINITY;
+    q->child = -1;
+    q->head = -1;
+    q->depth = depth;
+}
+
+/* Adds a point to a node's aggregates: Welford's update keeps the central
+ * moments accurate, and the query reads them without further arithmetic. */
+static void qnode_account(struct qnode *q, double x, double y)
+{
+    q->count++;
+    double dx = x - q->cx, dy = y - q->cy;
+    double inv = 1.0 / q->count;
+    q->cx += dx * inv;
+    q->cy += dy * inv;
+    q->mxx += dx * (x - q->cx);
+    q->mxy += dx * (y - q->cy);
+    q->myy += dy * (y - q->cy);
+    if (x < q->minx) q->minx = x;
+    if (x > q->maxx) q->maxx = x;
+    if (y < q->miny) q->miny = y;
+    if (y > q->maxy) q->maxy = y;
+    double rx = fmax(q->cx - q->minx, q->maxx - q->cx), ry = fmax(q->cy - q->miny, q->maxy - q->cy);
+    q->r2 = rx * rx + ry * ry;
+}
+
+static int quadrant(const struct qnode *q, double x, double y)
+{
+    return (x >= q->bx) | ((y >= q->by) << 1);
+}
+
+static bool qtree_split(struct qtree *t, int32_t ni)
+{
+    if (t->nnodes + 4 > t->cap) {
+        size_t cap = t->cap * 2;
+        struct qnode *nn = realloc(t->node, cap * sizeof *nn);
+        if (!nn)
+            return false;
+        t->node = nn;
+        t->cap = cap;
+    }
+    struct qnode *q = &t->node[ni];
+    int32_t first = (int32_t)t->nnodes;
+    double h = q->half * 0.5;
+    for (int c = 0; c < 4; c++)
+        qnode_init(&t->node[first + c], q->bx + ((c & 1) ? h : -h), q->by + ((c & 2) ? h : -h), h,
+                   q->depth + 1);
+    t->nnodes += 4;
+    for (int32_t k = q->head; k >= 0;) {
+        int32_t nk = t->next[k];
+        double x = t->xy[2 * k], y = t->xy[2 * k + 1];
+        struct qnode *c = &t->node[first + quadrant(q, x, y)];
+        qnode_account(c, x, y);
+        t->next[k] = c->head;
+        c->head = k;
+        k = nk;
+    }
+    q->child = first;
+    q->head = -1;
+    return true;
+}
+
+static bool qtree_insert(struct qtree *t, int32_t k)
+{
+    double x = t->xy[2 * k], y = t->xy[2 * k + 1];
+    int32_t ni = 0;
+    for (;;) {
+        struct qnode *q = &t->node[ni];
+        qnode_account(q, x, y);
+        if (q->child >= 0) {
+            ni = q->child + quadrant(q, x, y);
+            continue;
+        }
+        t->next[k] = q->head;
+        q->head = k;
+        if (q->count > LEAF_MAX && q->depth < MAX_DEPTH)
+            return qtree_split(t, ni);
+        return true;
+    }
+}
+
+/* Σ over the tree's points of ‖p − q‖, within the relative bound. */
+static double qtree_query(struct qtree *t, double px, double py)
+{
+    double sum = 0;
+    size_t top = 0;
+    t->stack[top++] = 0;
+    while (top) {
+        const struct qnode *q = &t->node[t->stack[--top]];
+        if (q->count == 0)
+            continue;
+        double dx = px - q->cx, dy = py - q->cy;
+        double d2 = dx * dx + dy * dy;
+        if (q->r2 <= t->theta2 * d2 && d2 > 0) {
+            /* Multipole: n·d + (tr M − uᵀMu) / (2d), M the central second moments. */
+            double d = sqrt(d2);
+            double quad = (dx * dx * q->mxx + 2 * dx * dy * q->mxy + dy * dy * q->myy) / d2;
+            sum += q->count * d + (q->mxx + q->myy - quad) / (2 * d);
+        } else if (q->child < 0) {
+            for (int32_t k = q->head; k >= 0; k = t->next[k]) {
+                double ex = t->xy[2 * k] - px, ey = t->xy[2 * k + 1] - py;
+                sum += sqrt(ex * ex + ey * ey);
+            }
+        } else {
+            for (int c = 0; c < 4; c++)
+                t->stack[top++] = q->child + c;
+        }
+    }
+    return sum;
+}
+
+struct fast_job {
+    const double *xy;
+    size_t n, lo, hi; /* answers queries lo..hi-1; inserts 0..hi-1 */
+    double theta;
+    double *D;
+    double bx, by, half;
+    bool ok;
+};
+
+static void *fast_run(void *arg)
+{
+    struct fast_job *j = arg;
+    struct qtree t = {0};
+    j->ok = false;
+    t.cap = 1024;
+    t.node = malloc(t.cap * sizeof *t.node);
+    t.next = malloc(j->hi * sizeof *t.next);
+    t.stack_cap = 4 * MAX_DEPTH + 8;
+    t.stack = malloc(t.stack_cap * sizeof *t.stack);
+    t.xy = j->xy;
+    t.theta2 = j->theta * j->theta;
+    if (t.node && t.next && t.stack) {
+        qnode_init(&t.node[0], j->bx, j->by, j->half, 0);
+        t.nnodes = 1;
+        size_t i = 0;
+        bool ok = true;
+        for (; i < j->lo && ok; i++)
+            ok = qtree_insert(&t, (int32_t)i);
+        for (; i < j->hi && ok; i++) {
+            j->D[i] = qtree_query(&t, j->xy[2 * i], j->xy[2 * i + 1]);
+            ok = qtree_insert(&t, (int32_t)i);
+        }
+        j->ok = ok;
+    }
+    free(t.node);
+    free(t.next);
+    free(t.stack);
+    return NULL;
+}
+
+double emm_profile_fast_bound(double theta)
+{
+    if (!(theta > 0 && theta < 1))
+        return INFINITY;
+    double q = theta / (1 - theta);
+    return q * q * q / (3 * sqrt(3.0));
+}
+
+emm_status emm_profile_fast(const double *xy, size_t n, double theta, double *D, emm_error *err)
+{
+    if (!(theta > 0 && theta < 1))
+        return emm_fail(err, EMM_ERR_RANGE, "opening angle %g: must be between 0 and 1", theta);
+    if (n > (size_t)INT32_MAX)
+        return emm_fail(err, EMM_ERR_RANGE, "%zu accesses: the fast profile takes at most %d",
+                        n, INT32_MAX);
+    if (n == 0)
+        return EMM_OK;
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (size_t i = 0; i < n; i++)
+        for (int a = 0; a < 2; a++) {
+            lo[a] = fmin(lo[a], xy[2 * i + a]);
+            hi[a] = fmax(hi[a], xy[2 * i + a]);
+        }
+    double half = 0.5 * fmax(hi[0] - lo[0], hi[1] - lo[1]);
+    half = half > 0 ? half * (1 + 1e-9) : 1.0;
+    /* Answering queries costs far more than inserting, so the second thread,
+     * which first inserts the first part, takes a little less than half. */
+    size_t mid = n < 4096 ? n : n / 2 + n / 50;
+    struct fast_job jobs[2] = {
+        {xy, n, 0, mid, theta, D, 0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), half, false},
+        {xy, n, mid, n, theta, D, 0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), half, false},
+    };
+    pthread_t th;
+    bool threaded = mid < n && pthread_create(&th, NULL, fast_run, &jobs[1]) == 0;
+    fast_run(&jobs[0]);
+    if (threaded)
+        pthread_join(th, NULL);
+    else if (mid < n)
+        fast_run(&jobs[1]);
+    if (!jobs[0].ok || (mid < n && !jobs[1].ok))
+        return emm_fail(err, EMM_ERR_NOMEM, "%zu accesses: out of memory for the profile's tree", n);
+    return EMM_OK;
+}
+
+emm_status emm_profile_compute(const double *xy, size_t n, double *D, int *exact, emm_error *err)
+{
+    if (n <= EMM_PROFILE_EXACT_MAX) {
+        emm_profile_exact(xy, n, D);
+        if (exact)
+            *exact = 1;
+        return EMM_OK;
+    }
+    if (exact)
+        *exact = 0;
+    return emm_profile_fast(xy, n, EMM_PROFILE_THETA, D, err);
+}
+
+/* ---- positions of element accesses -------------------------------------- */
+
+struct emm_profiler {
+    const emm_trace_info *info;
+    char name[256];
+    uint64_t window;
+    int ax, ay;           /* the two axes kept */
+    double lo[2], scale;  /* position = (coordinate − lo) · scale */
+    double *xy;
+    size_t n, cap;
+    uint32_t last_array;
+    uint64_t last_element;
+    bool any;
+};
+
+emm_status emm_profiler_new(const emm_trace_info *info, uint64_t window, const char *name,
+                            emm_profiler **out, emm_error *err)
+{
+    const emm_trace_geometry *g = &info->geometry;
+    *out = NULL;
+    bool positional = false;
+    for (uint32_t a = 0; a < info->narrays; a++) {
+        if (info->arrays[a].kind == EMM_ARRAY_VERTICES && g->nv > 0)
+            positional = true;
+        if (info->arrays[a].kind == EMM_ARRAY_TRIANGLES && g->nt > 0 && g->nv > 0)
+            positional = true;
+    }
+    if (!positional)
+        return emm_fail(err, EMM_ERR_UNSUPPORTED,
+                        "%s: an address-only trace (no vertex or triangle array with geometry) "
+                        "has no positions to profile",
+                        name);
+    emm_profiler *p = calloc(1, sizeof *p);
+    if (!p)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+    p->info = info;
+    snprintf(p->name, sizeof p->name, "%s", name);
+    p->window = window ? window : EMM_PROFILE_DEFAULT_WINDOW;
+
+    /* The plane of the two largest extents, as the synthetic patterns and the
+     * layouts see the mesh; scaled by the bounding box's diagonal in it. */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint64_t v = 0; v < g->nv; v++)
+        for (int a = 0; a < 3; a++) {
+            lo[a] = fmin(lo[a], g->xyz[3 * v + a]);
+            hi[a] = fmax(hi[a], g->xyz[3 * v + a]);
+        }
+    double ext[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+    int drop = 2;
+    if (ext[0] < ext[drop])
+        drop = 0;
+    if (ext[1] < ext[drop])
+        drop = 1;
+    p->ax = drop == 0 ? 1 : 0;
+    p->ay = drop == 2 ? 1 : 2;
+    p->lo[0] = lo[p->ax];
+    p->lo[1] = lo[p->ay];
+    double diag = hypot(ext[p->ax], ext[p->ay]);
+    p->scale = diag > 0 && isfinite(diag) ? 1.0 / diag : 1.0;
+    *out = p;
+    return EMM_OK;
+}
+
+static bool profiler_push(emm_profiler *p, double x, double y)
+{
+    if (p->n == p->cap) {
+        size_t cap = p->cap ? 2 * p->cap : 4096;
+        if (cap > p->window)
+            cap = (size_t)p->window;
+        double *nxy = realloc(p->xy, 2 * cap * sizeof *nxy);
+        if (!nxy)
+            return false;
+        p->xy = nxy;
+        p->cap = cap;
+    }
+    p->xy[2 * p->n] = (x - p->lo[0]) * p->scale;
+    p->xy[2 * p->n + 1] = (y - p->lo[1]) * p->scale;
+    p->n++;
+    return true;
+}
+
+emm_status emm_profiler_add(emm_profiler *p, const emm_trace_record *recs, size_t n,
+                            emm_error *err)
+{
+    const emm_trace_geometry *g = &p->info->geometry;
+    for (size_t r = 0; r < n && p->n < p->window; r++) {
+        const emm_trace_record *rec = &recs[r];
+        if (rec->array >= p->info->narrays)
+            return emm_fail(err, EMM_ERR_FORMAT, "%s: a record names array %u of %u", p->name,
+                            rec->array, p->info->narrays);
+        emm_array_kind kind = p->info->arrays[rec->array].kind;
+        if (kind == EMM_ARRAY_RAW)
+            continue;
+        if (p->any && rec->array == p->last_array && rec->element == p->last_element)
+            continue;
+        p->any = true;
+        p->last_array = rec->array;
+        p->last_element = rec->element;
+        double x, y;
+        if (kind == EMM_ARRAY_VERTICES) {
+            if (rec->element >= g->nv)
+                return emm_fail(err, EMM_ERR_FORMAT,
+                                "%s: access to vertex %llu, but the geometry has %llu vertices",
+                                p->name, (unsigned long long)rec->element,
+                                (unsigned long long)g->nv);
+            x = g->xyz[3 * rec->element + p->ax];
+            y = g->xyz[3 * rec->element + p->ay];
+        } else {
+            if (rec->element >= g->nt)
+                return emm_fail(err, EMM_ERR_FORMAT,
+                                "%s: access to triangle %llu, but the geometry has %llu triangles",
+                                p->name, (unsigned long long)rec->element,
+                                (unsigned long long)g->nt);
+            x = y = 0;
+            for (int c = 0; c < 3; c++) {
+                int32_t v = g->tri[3 * rec->element + c];
+                if (v < 0 || (uint64_t)v >= g->nv)
+                    return emm_fail(err, EMM_ERR_FORMAT,
+                                    "%s: triangle %llu has vertex %d, outside the geometry",
+                                    p->name, (unsigned long long)rec->element, v);
+                x += g->xyz[3 * (uint64_t)v + p->ax];
+                y += g->xyz[3 * (uint64_t)v + p->ay];
+            }
+            x /= 3;
+            y /= 3;
+        }
+        if (!profiler_push(p, x, y))
+            return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile window",
+                            p->name);
+    }
+    return EMM_OK;
+}
+
+int emm_profiler_full(const emm_profiler *p)
+{
+    return p->n >= p->window;
+}
+
+const double *emm_profiler_positions(const emm_profiler *p, size_t *n)
+{
+    *n = p->n;
+    return p->xy;
+}
+
+void emm_profiler_free(emm_profiler *p)
+{
+    if (p) {
+        free(p->xy);
+        free(p);
+    }
+}
+
+emm_status emm_profile_trace_positions(emm_trace_reader *r, uint64_t window, const char *name,
+                                       double **xy, size_t *n, emm_error *err)
+{
+    emm_profiler *p;
+    *xy = NULL;
+    *n = 0;
+    emm_status st = emm_trace_rewind(r, err);
+    if (st == EMM_OK)
+        st = emm_profiler_new(emm_trace_reader_info(r), window, name, &p, err);
+    if (st != EMM_OK)
+        return st;
+    enum { CHUNK = 4096 };
+    emm_trace_record *buf = malloc(CHUNK * sizeof *buf);
+    if (!buf) {
+        emm_profiler_free(p);
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+    }
+    size_t got;
+    while (st == EMM_OK && !emm_profiler_full(p)) {
+        st = emm_trace_read(r, buf, CHUNK, &got, err);
+        if (st != EMM_OK || got == 0)
+            break;
+        st = emm_profiler_add(p, buf, got, err);
+    }
+    free(buf);
+    if (st == EMM_OK) {
+        *xy = p->xy;
+        *n = p->n;
+        p->xy = NULL;
+    }
+    emm_profiler_free(p);
+    return st;
+}
+
+/* ---- features ----------------------------------------------------------- */
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The q-quantile of v[0..n) (reorders v). */
+static double quantile(double *v, size_t n, double q)
+{
+    if (n == 0)
+        return 0;
+    qsort(v, n, sizeof *v, cmp_double);
+    size_t k = (size_t)(q * (double)(n - 1) + 0.5);
+    return v[k < n ? k : n - 1];
+}
+
+/* Mean of m_i = D_i / i over [a, b). */
+static double mean_m(const double *D, size_t a, size_t b)
+{
+    double s = 0;
+    if (a < 1)
+        a = 1;
+    if (b <= a)
+        b = a + 1;
+    for (size_t i = a; i < b; i++)
+        s += D[i] / (double)i;
+    return s / (double)(b - a);
+}
+
+/* Least-squares line through (x, y); returns the slope and the RMS residual. */
+static void fit_line(const double *x, const double *y, size_t n, double *slope, double *rms)
+{
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (size_t i = 0; i < n; i++) {
+        sx += x[i];
+        sy += y[i];
+        sxx += x[i] * x[i];
+        sxy += x[i] * y[i];
+    }
+    double den = (double)n * sxx - sx * sx;
+    double b = den > 0 ? ((double)n * sxy - sx * sy) / den : 0;
+    double a = (sy - b * sx) / (double)n;
+    double r = 0;
+    for (size_t i = 0; i < n; i++) {
+        double e = y[i] - (a + b * x[i]);
+        r += e * e;
+    }
+    *slope = b;
+    *rms = n ? sqrt(r / (double)n) : 0;
+}
+
+/* Segment medians of log m over [a, b): nseg segments, their centres in lx. */
+static size_t segment_medians(const double *D, size_t a, size_t b, size_t nseg, double *tmp,
+                              double *lx, double *ly)
+{
+    size_t len = (b - a) / nseg, k = 0;
+    if (len < 1)
+        return 0;
+    for (size_t s = 0; s < nseg; s++) {
+        size_t lo = a + s * len, c = 0;
+        for (size_t i = lo; i < lo + len; i++)
+            if (i > 0 && D[i] > 0)
+                tmp[c++] = D[i] / (double)i;
+        if (c == 0)
+            continue;
+        lx[k] = log((double)lo + 0.5 * (double)len);
+        ly[k] = log(quantile(tmp, c, 0.5));
+        k++;
+    }
+    return k;
+}
+
+#define NSEG 64
+#define NZ 512
+
+static double periodicity(const double *D, size_t a, size_t n, double *tmp)
+{
+    double lx[NZ], z[NZ], slope, rms;
+    size_t nz = segment_medians(D, a, n, n - a < NZ ? n - a : NZ, tmp, lx, z);
+    if (nz < 16)
+        return 0;
+    (void)slope;
+    (void)rms;
+    /* Differences remove any slow trend, whatever its shape. */
+    for (size_t i = 0; i + 1 < nz; i++)
+        z[i] = z[i + 1] - z[i];
+    nz--;
+    double mean = 0, var = 0;
+    for (size_t i = 0; i < nz; i++)
+        mean += z[i];
+    mean /= (double)nz;
+    for (size_t i = 0; i < nz; i++) {
+        z[i] -= mean;
+        var += z[i] * z[i];
+    }
+    if (!(var > 0))
+        return 0;
+    double best = 0;
+    bool crossed = false;
+    for (size_t lag = 1; lag <= nz / 2; lag++) {
+        double s = 0;
+        for (size_t i = 0; i + lag < nz; i++)
+            s += z[i] * z[i + lag];
+        double rho = s / var * (double)nz / (double)(nz - lag);
+        if (rho < 0)
+            crossed = true;
+        else if (crossed && rho > best)
+            best = rho;
+    }
+    return fmin(best, 1.0);
+}
+
+emm_status emm_profile_features(const double *D, size_t n, const char *name,
+                                double f[EMM_FEATURES], emm_error *err)
+{
+    if (n < EMM_PROFILE_MIN)
+        return emm_fail(err, EMM_ERR_RANGE,
+                        "%s: a profile of %zu accesses is too short for features (at least %u)",
+                        name, n, EMM_PROFILE_MIN);
+    double *tmp = malloc(n * sizeof *tmp);
+    double *sm = malloc(n * sizeof *sm);
+    if (!tmp || !sm) {
+        free(tmp);
+        free(sm);
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for features", name);
+    }
+    int k = 0;
+    size_t a = n / 8;
+
+    /* Jitter: relative change of m over 4 accesses (about one triangle visit
+     * with its vertices). Large for random access, small for local walks. */
+    size_t c = 0;
+    for (size_t i = a; i + 4 < n; i++) {
+        double m0 = D[i] / (double)i, m1 = D[i + 4] / (double)(i + 4);
+        if (m0 > 0)
+            tmp[c++] = fabs(m1 - m0) / m0;
+    }
+    double med = quantile(tmp, c, 0.5), p90 = tmp[c ? (size_t)(0.9 * (double)(c - 1)) : 0];
+    f[k++] = 0.5 * log10(fmax(med, 1e-5));
+    f[k++] = 0.5 * log10(fmax(p90, 1e-5));
+
+    /* Trend and oscillation of the segment medians, on a log-log scale. */
+    double lx[NSEG], ly[NSEG], slope, rms;
+    size_t ns = segment_medians(D, a, n, NSEG, tmp, lx, ly);
+    fit_line(lx, ly, ns, &slope, &rms);
+    f[k++] = slope;
+    f[k++] = 2 * rms;
+    size_t ns2 = segment_medians(D, n / 64 > 0 ? n / 64 : 1, a, NSEG / 2, tmp, lx, ly);
+    double slope2, rms2;
+    fit_line(lx, ly, ns2, &slope2, &rms2);
+    f[k++] = slope2;
+    f[k++] = 2 * rms2;
+
+    /* Jumps against glides: m smoothed by a running median of 9, then the share
+     * of its total variation that happens in steps of more than 5%. Curves
+     * start anew with a jump; scan lines and growing regions glide. */
+    for (size_t i = 0; i < n; i++) {
+        size_t lo = i >= 4 ? i - 4 : 0, hi = i + 5 < n ? i + 5 : n, w = 0;
+        double win[9];
+        for (size_t j = lo; j < hi; j++)
+            win[w++] = j ? D[j] / (double)j : 0;
+        sm[i] = quantile(win, w, 0.5);
+    }
+    double tv = 0, jv = 0;
+    size_t steps = 0, big = 0;
+    for (size_t i = a; i + 4 < n; i += 4) {
+        double d = fabs(sm[i + 4] - sm[i]);
+        tv += d;
+        steps++;
+        if (d > 0.05 * sm[i]) {
+            jv += d;
+            big++;
+        }
+    }
+    f[k++] = tv > 0 ? jv / tv : 0;
+    f[k++] = steps ? sqrt((double)big / (double)steps) : 0;
+
+    /* Level: the end value, in bounding-box diagonals. */
+    double end = mean_m(D, n - n / 32, n);
+    f[k++] = 0.5 * log10(fmax(end, 1e-6));
+
+    /* Periodicity: scan lines repeat one row after another, walks of curves
+     * vary in length. The highest autocorrelation of the detrended log m
+     * (in NZ segment medians) past its first zero crossing. */
+    f[k++] = periodicity(D, a, n, tmp);
+
+    /* Shape: log2 of m at n/64 ... n/2 against its end value. */
+    for (int j = 6; j >= 1; j--) {
+        size_t cc = n >> j, w = cc / 16 + 1;
+        double mj = mean_m(D, cc > w ? cc - w : 1, cc + w);
+        f[k++] = 0.125 * log2(fmax(mj, 1e-12) / fmax(end, 1e-12));
+    }
+    /* Locality across scales (thesis Fig. 5.3): how the typical change of m
+     * over a lag of L accesses grows with L, as an exponent between lags 4,
+     * 16, 64 and 256. m_i follows the mean-distance function of the earlier
+     * accesses at p_i, which changes slowly, so |m_{i+L} − m_i| tracks how
+     * far the traversal moves in L accesses. Hierarchical space-filling
+     * orders (Z-order, Gray code, Hilbert: grouped by four at every level)
+     * stay within a block of about √L cells: exponent ½ at every lag,
+     * whatever the order within a group. Scan lines and curves sweep rows and
+     * lines (exponent ≈ 1 below a row's length); random access does not
+     * move in a measurable way (≈ 0); region growing depends on its
+     * frontier. A lag too long for the window repeats the previous exponent. */
+    static const size_t lag[] = {4, 16, 64, 256};
+    double prev = 0, alpha = 0.5;
+    for (int l = 0; l < 4; l++) {
+        size_t cc = 0;
+        if (n - a > lag[l] + 64)
+            for (size_t i = a; i + lag[l] < n; i++) {
+                double m0 = D[i] / (double)i, m1 = D[i + lag[l]] / (double)(i + lag[l]);
+                if (m0 > 0)
+                    tmp[cc++] = fabs(m1 - m0) / m0;
+            }
+        double s = cc ? fmax(quantile(tmp, cc, 0.5), 1e-12) : 0;
+        if (l > 0) {
+            if (s > 0 && prev > 0)
+                alpha = log(s / prev) / log((double)lag[l] / (double)lag[l - 1]);
+            f[k++] = alpha;
+        }
+        prev = s;
+    }
+    free(tmp);
+    free(sm);
+    return EMM_OK;
+}

@@ -1,0 +1,397 @@
+/* Synthetic traces of canonical traversals (thesis §5: Table 5.1's shapes —
+ * random access, region growing, curves and scan lines — and the Z-order and
+ * Gray-code curves of Figs. 5.2 and 5.3). Each pattern is an order of
+ * triangle visits; a visit reads the triangle record and its three vertices,
+ * as the thesis' workloads do. */
+#include "emm/synth.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "emm/trace.h"
+#include "error.h"
+
+static const char *const pattern_names[EMM_PATTERN_COUNT] = {
+    "region", "curve", "scanline", "zorder", "gray", "hilbert", "random", "spiral"};
+
+const char *emm_pattern_name(emm_pattern p)
+{
+    return (unsigned)p < EMM_PATTERN_COUNT ? pattern_names[p] : "?";
+}
+
+emm_status emm_pattern_parse(const char *name, emm_pattern *out, emm_error *err)
+{
+    for (int i = 0; i < EMM_PATTERN_COUNT; i++)
+        if (name && strcmp(name, pattern_names[i]) == 0) {
+            *out = (emm_pattern)i;
+            return EMM_OK;
+        }
+    return emm_fail(err, EMM_ERR_INVALID,
+                    "pattern '%s' is unknown; accepted: region, curve, scanline, zorder, gray, "
+                    "hilbert, random, spiral",
+                    name ? name : "");
+}
+
+/* splitmix64: small, fast and good enough to pick seeds and directions. */
+static uint64_t rng_next(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+static double rng_unit(uint64_t *s)
+{
+    return (double)(rng_next(s) >> 11) * 0x1.0p-53;
+}
+
+/* The traversal state: the mesh seen in 2D over its two largest extents. */
+struct synth {
+    const emm_mesh *m;
+    size_t nv, nt;
+    int ax, ay;          /* the two axes used */
+    double lo[2], hi[2]; /* bounding box over them */
+    double *cx, *cy;     /* triangle centroids */
+};
+
+static void synth_init_axes(struct synth *s)
+{
+    double lo[3], hi[3], ext[3];
+    emm_mesh_bbox(s->m, lo, hi);
+    for (int i = 0; i < 3; i++)
+        ext[i] = hi[i] - lo[i];
+    /* The axis with the smallest extent is dropped. */
+    int drop = 2;
+    if (ext[0] < ext[drop])
+        drop = 0;
+    if (ext[1] < ext[drop])
+        drop = 1;
+    s->ax = drop == 0 ? 1 : 0;
+    s->ay = drop == 2 ? 1 : 2;
+    s->lo[0] = lo[s->ax];
+    s->hi[0] = hi[s->ax];
+    s->lo[1] = lo[s->ay];
+    s->hi[1] = hi[s->ay];
+}
+
+static void vertex_2d(const struct synth *s, int32_t v, double *x, double *y)
+{
+    const emm_vertex *p = emm_mesh_vertex(s->m, (uint32_t)v);
+    *x = p->xyz[s->ax];
+    *y = p->xyz[s->ay];
+}
+
+/* Quantises a centroid to 16 bits per axis. */
+static void quantise(const struct synth *s, size_t t, uint32_t *qx, uint32_t *qy)
+{
+    double w = s->hi[0] - s->lo[0], h = s->hi[1] - s->lo[1];
+    double fx = w > 0 ? (s->cx[t] - s->lo[0]) / w : 0.0;
+    double fy = h > 0 ? (s->cy[t] - s->lo[1]) / h : 0.0;
+    *qx = (uint32_t)fmin(65535.0, fmax(0.0, fx * 65536.0));
+    *qy = (uint32_t)fmin(65535.0, fmax(0.0, fy * 65536.0));
+}
+
+static uint64_t spread_bits(uint32_t v)
+{
+    uint64_t x = v & 0xffff;
+    x = (x | (x << 8)) & 0x00ff00ffull;
+    x = (x | (x << 4)) & 0x0f0f0f0full;
+    x = (x | (x << 2)) & 0x33333333ull;
+    x = (x | (x << 1)) & 0x55555555ull;
+    return x;
+}
+
+static uint64_t morton(uint32_t x, uint32_t y)
+{
+    return spread_bits(x) | (spread_bits(y) << 1);
+}
+
+/* The rank of a code in the reflected binary Gray sequence. */
+static uint64_t gray_rank(uint64_t g)
+{
+    for (uint64_t shift = 1; shift < 64; shift <<= 1)
+        g ^= g >> shift;
+    return g;
+}
+
+/* Position along a Hilbert curve of order 16 (the classic xy → d walk). */
+static uint64_t hilbert(uint32_t x, uint32_t y)
+{
+    uint64_t d = 0;
+    for (uint32_t sbit = 1u << 15; sbit > 0; sbit >>= 1) {
+        uint32_t rx = (x & sbit) > 0, ry = (y & sbit) > 0;
+        d += (uint64_t)sbit * sbit * ((3 * rx) ^ ry);
+        if (ry == 0) {
+            if (rx == 1) {
+                x = 65535 - x;
+                y = 65535 - y;
+            }
+            uint32_t t = x;
+            x = y;
+            y = t;
+        }
+    }
+    return d;
+}
+
+struct keyed {
+    uint64_t key;
+    uint32_t t;
+};
+
+static int cmp_keyed(const void *a, const void *b)
+{
+    const struct keyed *x = a, *y = b;
+    if (x->key != y->key)
+        return x->key < y->key ? -1 : 1;
+    return x->t < y->t ? -1 : x->t > y->t;
+}
+
+/* Orders all triangles by a key computed from their centroids. */
+static void order_by_key(const struct synth *s, emm_pattern p, double band, uint32_t *order)
+{
+    struct keyed *k = malloc(s->nt * sizeof *k);
+    double mx = 0.5 * (s->lo[0] + s->hi[0]), my = 0.5 * (s->lo[1] + s->hi[1]);
+    for (size_t t = 0; t < s->nt; t++) {
+        uint32_t qx, qy;
+        quantise(s, t, &qx, &qy);
+        uint64_t key = 0;
+        switch (p) {
+        case EMM_PATTERN_ZORDER: key = morton(qx, qy); break;
+        case EMM_PATTERN_GRAY: key = gray_rank(morton(qx, qy)); break;
+        case EMM_PATTERN_HILBERT: key = hilbert(qx, qy); break;
+        case EMM_PATTERN_SCANLINE: {
+            uint64_t row = (uint64_t)((s->cy[t] - s->lo[1]) / band);
+            key = (row << 16) | qx;
+            break;
+        }
+        case EMM_PATTERN_SPIRAL: {
+            double dx = s->cx[t] - mx, dy = s->cy[t] - my;
+            uint64_t ring = (uint64_t)(sqrt(dx * dx + dy * dy) / band);
+            double a = atan2(dy, dx) + M_PI; /* 0 .. 2π */
+            key = (ring << 20) | (uint64_t)(a / (2 * M_PI) * 1048575.0);
+            break;
+        }
+        default: break;
+        }
+        k[t].key = key;
+        k[t].t = (uint32_t)t;
+    }
+    qsort(k, s->nt, sizeof *k, cmp_keyed);
+    for (size_t t = 0; t < s->nt; t++)
+        order[t] = k[t].t;
+    free(k);
+}
+
+/* Breadth-first growth over edge neighbours from `seed`, then from the
+ * lowest-numbered unreached triangle of each further component. */
+static size_t order_region(const struct synth *s, uint32_t seed, uint32_t *order)
+{
+    unsigned char *seen = calloc(s->nt, 1);
+    size_t head = 0, tail = 0, next_start = 0;
+    order[tail++] = seed;
+    seen[seed] = 1;
+    while (tail < s->nt || head < tail) {
+        if (head == tail) {
+            while (seen[next_start])
+                next_start++;
+            order[tail++] = (uint32_t)next_start;
+            seen[next_start] = 1;
+        }
+        const emm_triangle *tr = emm_mesh_triangle(s->m, order[head++]);
+        for (int i = 0; i < 3; i++) {
+            int32_t n = tr->n[i];
+            if (n >= 0 && !seen[n]) {
+                seen[n] = 1;
+                order[tail++] = (uint32_t)n;
+            }
+        }
+    }
+    free(seen);
+    return tail;
+}
+
+/* One straight walk: from the centroid of `t` in direction (dx, dy), crossing
+ * into the edge neighbour of the edge the ray leaves through, until the
+ * boundary or `max` triangles. Appends the visited triangles to out. */
+static size_t walk(const struct synth *s, uint32_t t, double dx, double dy, size_t max,
+                   uint32_t *out)
+{
+    double px = s->cx[t], py = s->cy[t];
+    int32_t from = -1;
+    size_t n = 0;
+    while (n < max) {
+        out[n++] = t;
+        const emm_triangle *tr = emm_mesh_triangle(s->m, t);
+        double best = INFINITY;
+        int exit_edge = -1;
+        for (int i = 0; i < 3; i++) {
+            if (tr->n[i] == from && from >= 0)
+                continue;
+            double ax, ay, bx, by;
+            vertex_2d(s, tr->v[i], &ax, &ay);
+            vertex_2d(s, tr->v[(i + 1) % 3], &bx, &by);
+            /* Solve p + r·d = a + u·(b − a) for r > 0, 0 ≤ u ≤ 1. */
+            double ex = bx - ax, ey = by - ay;
+            double den = dx * ey - dy * ex;
+            if (fabs(den) < 1e-300)
+                continue;
+            double r = ((ax - px) * ey - (ay - py) * ex) / den;
+            double u = ((ax - px) * dy - (ay - py) * dx) / den;
+            if (r > 0 && u >= -1e-12 && u <= 1 + 1e-12 && r < best) {
+                best = r;
+                exit_edge = i;
+            }
+        }
+        if (exit_edge < 0 || tr->n[exit_edge] < 0)
+            break;
+        px += best * dx;
+        py += best * dy;
+        from = (int32_t)t;
+        t = (uint32_t)tr->n[exit_edge];
+    }
+    return n;
+}
+
+static size_t order_curves(const struct synth *s, uint64_t *rng, uint64_t visits,
+                           uint64_t length, uint32_t *order)
+{
+    size_t n = 0;
+    while (n < visits) {
+        uint32_t t = (uint32_t)(rng_next(rng) % s->nt);
+        double a = rng_unit(rng) * 2 * M_PI;
+        size_t room = (size_t)(visits - n);
+        size_t max = length && length < room ? (size_t)length : room;
+        n += walk(s, t, cos(a), sin(a), max, order + n);
+    }
+    return n;
+}
+
+#define VERTEX_BYTES EMM_THESIS_VERTEX_BYTES
+#define TRIANGLE_BYTES EMM_THESIS_TRIANGLE_BYTES
+
+emm_status emm_synth_trace(const emm_mesh *m, const emm_synth_options *opt, const char *path,
+                           uint64_t *records, emm_error *err)
+{
+    struct synth s = {.m = m, .nv = emm_mesh_vertex_count(m), .nt = emm_mesh_triangle_count(m)};
+    uint64_t rng = opt->seed;
+    emm_status st = EMM_OK;
+    uint64_t visits = opt->visits ? opt->visits : s.nt;
+    size_t order_cap = (size_t)(visits > s.nt ? visits : s.nt);
+
+    if (s.nt == 0)
+        return emm_fail(err, EMM_ERR_INVALID, "%s: the mesh has no triangles", path);
+    if ((unsigned)opt->pattern >= EMM_PATTERN_COUNT)
+        return emm_fail(err, EMM_ERR_INVALID, "%s: unknown pattern", path);
+    synth_init_axes(&s);
+
+    double *xyz = malloc(s.nv * 3 * sizeof *xyz);
+    int32_t *tri = malloc(s.nt * 3 * sizeof *tri);
+    s.cx = malloc(s.nt * sizeof *s.cx);
+    s.cy = malloc(s.nt * sizeof *s.cy);
+    uint32_t *order = malloc(order_cap * sizeof *order);
+    if (!xyz || !tri || !s.cx || !s.cy || !order) {
+        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for a %zu-triangle mesh", path, s.nt);
+        goto done;
+    }
+    for (size_t v = 0; v < s.nv; v++)
+        memcpy(xyz + 3 * v, emm_mesh_vertex(m, (uint32_t)v)->xyz, 3 * sizeof *xyz);
+    for (size_t t = 0; t < s.nt; t++) {
+        const emm_triangle *tr = emm_mesh_triangle(m, (uint32_t)t);
+        double sx = 0, sy = 0;
+        for (int i = 0; i < 3; i++) {
+            double x, y;
+            tri[3 * t + i] = tr->v[i];
+            vertex_2d(&s, tr->v[i], &x, &y);
+            sx += x;
+            sy += y;
+        }
+        s.cx[t] = sx / 3;
+        s.cy[t] = sy / 3;
+    }
+
+    /* Scan-line rows and spiral rings are one mean edge length apart. */
+    double band = emm_mesh_mean_edge_length(m);
+    if (!(band > 0))
+        band = 1;
+
+    size_t n;
+    switch (opt->pattern) {
+    case EMM_PATTERN_REGION: {
+        uint32_t seed = (uint32_t)(rng_next(&rng) % s.nt);
+        if (opt->corner_seed) {
+            seed = 0;
+            for (size_t t = 1; t < s.nt; t++)
+                if (s.cx[t] + s.cy[t] < s.cx[seed] + s.cy[seed])
+                    seed = (uint32_t)t;
+        }
+        n = order_region(&s, seed, order);
+        break;
+    }
+    case EMM_PATTERN_CURVE:
+        n = order_curves(&s, &rng, visits, opt->length, order);
+        break;
+    case EMM_PATTERN_RANDOM:
+        for (size_t t = 0; t < s.nt; t++)
+            order[t] = (uint32_t)t;
+        for (size_t t = s.nt; t > 1; t--) {
+            size_t j = (size_t)(rng_next(&rng) % t);
+            uint32_t x = order[t - 1];
+            order[t - 1] = order[j];
+            order[j] = x;
+        }
+        n = s.nt;
+        break;
+    default:
+        order_by_key(&s, opt->pattern, band, order);
+        n = s.nt;
+        break;
+    }
+    if (n > visits)
+        n = (size_t)visits;
+
+    emm_trace_array arrays[2] = {
+        {EMM_ARRAY_VERTICES, VERTEX_BYTES, s.nv, 0x10000000u},
+        {EMM_ARRAY_TRIANGLES, TRIANGLE_BYTES, s.nt, 0},
+    };
+    /* The triangle array follows the vertex array, 4 KiB aligned, as malloc
+     * would place two large blocks. */
+    arrays[1].base = (arrays[0].base + s.nv * VERTEX_BYTES + 8191) & ~(uint64_t)4095;
+    emm_trace_geometry geo = {s.nv, s.nt, xyz, tri};
+    emm_trace_writer *w;
+    st = emm_trace_writer_open(path, arrays, 2, &geo, opt->compress, &w, err);
+    if (st != EMM_OK)
+        goto done;
+
+    enum { CHUNK = 4096 };
+    emm_trace_record buf[CHUNK];
+    size_t nb = 0;
+    for (size_t i = 0; i < n && st == EMM_OK; i++) {
+        const emm_triangle *tr = emm_mesh_triangle(m, order[i]);
+        buf[nb++] = (emm_trace_record){order[i], 1, 4, 24, opt->work, 0};
+        for (int k = 0; k < 3; k++)
+            buf[nb++] = (emm_trace_record){(uint64_t)tr->v[k], 0, 8, 24, opt->work, 0};
+        if (nb + 4 > CHUNK) {
+            st = emm_trace_write(w, buf, nb, err);
+            nb = 0;
+        }
+    }
+    if (st == EMM_OK && nb)
+        st = emm_trace_write(w, buf, nb, err);
+    if (st != EMM_OK) {
+        emm_trace_writer_abort(w);
+        goto done;
+    }
+    st = emm_trace_writer_close(w, err);
+    if (st == EMM_OK && records)
+        *records = (uint64_t)n * 4;
+done:
+    free(xyz);
+    free(tri);
+    free(s.cx);
+    free(s.cy);
+    free(order);
+    return st;
+}

@@ -1,0 +1,466 @@
+/* The strategy table and the nearest-neighbour decision (thesis §5, Table
+ * 5.1: a space of distance-profile samples mapped to EMM strategies; a new
+ * profile takes the strategy of its nearest sample, and one far from every
+ * sample is novel). The file format is described in include/emm/table.h and
+ * docs/profile.md. */
+#include "emm/table.h"
+
+#include <ctype.h>
+#include <dlfcn.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "error.h"
+#include "parse.h"
+
+#ifndef EMM_SOURCE_DIR
+#define EMM_SOURCE_DIR "."
+#endif
+#ifndef EMM_BINARY_DIR
+#define EMM_BINARY_DIR "./build"
+#endif
+#ifndef EMM_INSTALL_DATADIR
+#define EMM_INSTALL_DATADIR "/usr/local/share"
+#endif
+
+struct emm_table {
+    emm_table_sample *s;
+    char **source; /* per sample, "" or a strdup'd path */
+    size_t n, cap;
+};
+
+emm_table *emm_table_new(void)
+{
+    return calloc(1, sizeof(emm_table));
+}
+
+void emm_table_free(emm_table *t)
+{
+    if (!t)
+        return;
+    for (size_t i = 0; i < t->n; i++)
+        free(t->source[i]);
+    free(t->source);
+    free(t->s);
+    free(t);
+}
+
+size_t emm_table_count(const emm_table *t)
+{
+    return t->n;
+}
+
+const emm_table_sample *emm_table_at(const emm_table *t, size_t i)
+{
+    return i < t->n ? &t->s[i] : NULL;
+}
+
+const char *emm_table_source(const emm_table *t, size_t i)
+{
+    return i < t->n ? t->source[i] : "";
+}
+
+static bool name_ok(const char *s)
+{
+    if (!*s || strlen(s) >= EMM_TABLE_NAME_MAX)
+        return false;
+    for (; *s; s++)
+        if (!isalnum((unsigned char)*s) && !strchr("-_.@+", *s))
+            return false;
+    return true;
+}
+
+static ptrdiff_t find(const emm_table *t, const char *name)
+{
+    for (size_t i = 0; i < t->n; i++)
+        if (strcmp(t->s[i].name, name) == 0)
+            return (ptrdiff_t)i;
+    return -1;
+}
+
+static emm_status push(emm_table *t, const emm_table_sample *s, const char *source,
+                       emm_error *err)
+{
+    if (t->n == t->cap) {
+        size_t cap = t->cap ? 2 * t->cap : 32;
+        emm_table_sample *ns = realloc(t->s, cap * sizeof *ns);
+        if (!ns)
+            return emm_fail(err, EMM_ERR_NOMEM, "strategy table: out of memory");
+        t->s = ns;
+        char **nsrc = realloc(t->source, cap * sizeof *nsrc);
+        if (!nsrc)
+            return emm_fail(err, EMM_ERR_NOMEM, "strategy table: out of memory");
+        t->source = nsrc;
+        t->cap = cap;
+    }
+    char *src = strdup(source ? source : "");
+    if (!src)
+        return emm_fail(err, EMM_ERR_NOMEM, "strategy table: out of memory");
+    t->s[t->n] = *s;
+    t->source[t->n] = src;
+    t->n++;
+    return EMM_OK;
+}
+
+emm_status emm_table_add(emm_table *t, const emm_table_sample *s, emm_error *err)
+{
+    if (!name_ok(s->name))
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "sample name '%s': use 1 to %d letters, digits and - _ . @ +", s->name,
+                        EMM_TABLE_NAME_MAX - 1);
+    if (!name_ok(s->pattern))
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "pattern class '%s': use 1 to %d letters, digits and - _ . @ +",
+                        s->pattern, EMM_TABLE_NAME_MAX - 1);
+    for (int k = 0; k < EMM_FEATURES; k++)
+        if (!isfinite(s->f[k]))
+            return emm_fail(err, EMM_ERR_INVALID, "sample '%s': feature %d is not finite",
+                            s->name, k + 1);
+    if (find(t, s->name) >= 0)
+        return emm_fail(err, EMM_ERR_INVALID, "sample '%s' is already in the table", s->name);
+    return push(t, s, "", err);
+}
+
+/* Splits a line into whitespace-separated fields after dropping a comment;
+ * returns the count (at most cap; one more means "too many"). */
+static int split(char *line, char **field, int cap)
+{
+    char *hash = strchr(line, '#');
+    if (hash)
+        *hash = '\0';
+    int n = 0;
+    for (char *p = line; *p;) {
+        while (*p && isspace((unsigned char)*p))
+            p++;
+        if (!*p)
+            break;
+        if (n == cap)
+            return cap + 1;
+        field[n++] = p;
+        while (*p && !isspace((unsigned char)*p))
+            p++;
+        if (*p)
+            *p++ = '\0';
+    }
+    return n;
+}
+
+emm_status emm_table_load(emm_table *t, const char *path, emm_error *err)
+{
+    FILE *fp = fopen(path, "r");
+    if (!fp)
+        return emm_fail(err, EMM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    size_t first = t->n;
+    emm_status st = EMM_OK;
+    char *line = NULL;
+    size_t cap = 0;
+    long lineno = 0;
+    bool header = false;
+    enum { MAXF = EMM_FEATURES + 3 };
+    char *field[MAXF];
+    while (st == EMM_OK && getline(&line, &cap, fp) >= 0) {
+        lineno++;
+        if (strlen(line) > 0 && line[strlen(line) - 1] != '\n' && !feof(fp)) {
+            st = emm_fail(err, EMM_ERR_FORMAT, "%s:%ld: malformed line", path, lineno);
+            break;
+        }
+        int nf = split(line, field, MAXF);
+        if (nf == 0)
+            continue;
+        if (!header) {
+            uint64_t ver, nfeat;
+            if (nf != 3 || strcmp(field[0], "emm-table") != 0 ||
+                strncmp(field[2], "features=", 9) != 0) {
+                st = emm_fail(err, EMM_ERR_FORMAT,
+                              "%s:%ld: expected the header 'emm-table %d features=%d'", path,
+                              lineno, EMM_TABLE_VERSION, EMM_FEATURES);
+            } else if (!emm_parse_u64(field[1], &ver) || ver != EMM_TABLE_VERSION) {
+                st = emm_fail(err, EMM_ERR_FORMAT,
+                              "%s:%ld: table version '%s' is not supported (this is version %d)",
+                              path, lineno, field[1], EMM_TABLE_VERSION);
+            } else if (!emm_parse_u64(field[2] + 9, &nfeat) || nfeat != EMM_FEATURES) {
+                st = emm_fail(err, EMM_ERR_FORMAT,
+                              "%s:%ld: the table has '%s' but this build computes %d features",
+                              path, lineno, field[2] + 9, EMM_FEATURES);
+            }
+            header = true;
+            continue;
+        }
+        if (nf != EMM_FEATURES + 3) {
+            st = emm_fail(err, EMM_ERR_FORMAT,
+                          "%s:%ld: expected name, pattern, strategy and %d features, found %s%d "
+                          "fields",
+                          path, lineno, EMM_FEATURES, nf > EMM_FEATURES + 3 ? "more than " : "",
+                          nf > EMM_FEATURES + 3 ? EMM_FEATURES + 3 : nf);
+            break;
+        }
+        emm_table_sample s;
+        memset(&s, 0, sizeof s);
+        if (!name_ok(field[0])) {
+            st = emm_fail(err, EMM_ERR_FORMAT,
+                          "%s:%ld: bad sample name '%s' (1 to %d letters, digits, - _ . @ +)",
+                          path, lineno, field[0], EMM_TABLE_NAME_MAX - 1);
+            break;
+        }
+        if (!name_ok(field[1])) {
+            st = emm_fail(err, EMM_ERR_FORMAT,
+                          "%s:%ld: bad pattern class '%s' (1 to %d letters, digits, - _ . @ +)",
+                          path, lineno, field[1], EMM_TABLE_NAME_MAX - 1);
+            break;
+        }
+        snprintf(s.name, sizeof s.name, "%s", field[0]);
+        snprintf(s.pattern, sizeof s.pattern, "%s", field[1]);
+        emm_error serr;
+        if (emm_strategy_parse(field[2], &s.strategy, &serr) != EMM_OK) {
+            st = emm_fail(err, EMM_ERR_FORMAT, "%s:%ld: %s", path, lineno, serr.message);
+            break;
+        }
+        for (int k = 0; k < EMM_FEATURES && st == EMM_OK; k++)
+            if (!emm_parse_double(field[3 + k], &s.f[k]))
+                st = emm_fail(err, EMM_ERR_FORMAT, "%s:%ld: feature %d: '%s' is not a number",
+                              path, lineno, k + 1, field[3 + k]);
+        if (st != EMM_OK)
+            break;
+        ptrdiff_t dup = find(t, s.name);
+        if (dup >= 0) {
+            const char *where = t->source[dup];
+            st = emm_fail(err, EMM_ERR_FORMAT, "%s:%ld: sample '%s' is already defined%s%s",
+                          path, lineno, s.name, where[0] ? " in " : "", where);
+            break;
+        }
+        char src[600];
+        snprintf(src, sizeof src, "%s:%ld", path, lineno);
+        st = push(t, &s, src, err);
+    }
+    if (st == EMM_OK && ferror(fp))
+        st = emm_fail(err, EMM_ERR_IO, "%s: read error", path);
+    if (st == EMM_OK && !header)
+        st = emm_fail(err, EMM_ERR_FORMAT, "%s: empty file: no 'emm-table %d features=%d' header",
+                      path, EMM_TABLE_VERSION, EMM_FEATURES);
+    free(line);
+    fclose(fp);
+    if (st != EMM_OK) {
+        for (size_t i = first; i < t->n; i++)
+            free(t->source[i]);
+        t->n = first;
+    }
+    return st;
+}
+
+static void write_sample(FILE *fp, const emm_table_sample *s)
+{
+    char strat[96];
+    emm_strategy_format(&s->strategy, strat, sizeof strat);
+    fprintf(fp, "%-24s %-9s %-24s", s->name, s->pattern, strat);
+    for (int k = 0; k < EMM_FEATURES; k++)
+        fprintf(fp, " %.9g", s->f[k]);
+    fputc('\n', fp);
+}
+
+static void write_header(FILE *fp, const char *comment)
+{
+    fprintf(fp, "# emm strategy table: distance-profile samples and their strategies.\n"
+                "# See docs/profile.md for the format and the meaning of the features.\n"
+                "emm-table %d features=%d\n",
+            EMM_TABLE_VERSION, EMM_FEATURES);
+    if (comment) {
+        const char *p = comment;
+        while (*p) {
+            const char *nl = strchr(p, '\n');
+            size_t len = nl ? (size_t)(nl - p) : strlen(p);
+            fprintf(fp, "# %.*s\n", (int)len, p);
+            p += len + (nl ? 1 : 0);
+        }
+    }
+    fprintf(fp, "# name                   pattern   strategy                 features 1..%d\n",
+            EMM_FEATURES);
+}
+
+/* Writes through a temporary file beside path, renamed into place. */
+static emm_status write_whole(const emm_table *t, const char *path, const char *comment,
+                              const emm_table_sample *extra, emm_error *err)
+{
+    size_t len = strlen(path) + 32;
+    char *tmp = malloc(len);
+    if (!tmp)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
+    snprintf(tmp, len, "%s.tmp.%ld", path, (long)getpid());
+    FILE *fp = fopen(tmp, "w");
+    if (!fp) {
+        emm_status st = emm_fail(err, EMM_ERR_IO, "%s: cannot write: %s", path, strerror(errno));
+        free(tmp);
+        return st;
+    }
+    write_header(fp, comment);
+    for (size_t i = 0; i < t->n; i++)
+        write_sample(fp, &t->s[i]);
+    if (extra)
+        write_sample(fp, extra);
+    bool bad = ferror(fp) != 0;
+    bad |= fclose(fp) != 0;
+    if (bad || rename(tmp, path) != 0) {
+        emm_status st = emm_fail(err, EMM_ERR_IO, "%s: cannot write: %s", path, strerror(errno));
+        remove(tmp);
+        free(tmp);
+        return st;
+    }
+    free(tmp);
+    return EMM_OK;
+}
+
+emm_status emm_table_write(const emm_table *t, const char *path, const char *comment,
+                           emm_error *err)
+{
+    return write_whole(t, path, comment, NULL, err);
+}
+
+/* Copies the file as it is (comments and all) and adds one sample line,
+ * through a temporary file renamed into place. */
+static emm_status append_line(const char *path, const emm_table_sample *s, emm_error *err)
+{
+    size_t len = strlen(path) + 32;
+    char *tmp = malloc(len);
+    if (!tmp)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
+    snprintf(tmp, len, "%s.tmp.%ld", path, (long)getpid());
+    FILE *in = fopen(path, "r");
+    FILE *out = in ? fopen(tmp, "w") : NULL;
+    emm_status st = EMM_OK;
+    if (!in || !out) {
+        st = emm_fail(err, EMM_ERR_IO, "%s: cannot rewrite: %s", path, strerror(errno));
+    } else {
+        char buf[8192];
+        size_t got, last = 0;
+        int tail = '\n';
+        while ((got = fread(buf, 1, sizeof buf, in)) > 0) {
+            fwrite(buf, 1, got, out);
+            last = got;
+            tail = buf[got - 1];
+        }
+        (void)last;
+        if (tail != '\n')
+            fputc('\n', out);
+        write_sample(out, s);
+        if (ferror(in) || ferror(out))
+            st = emm_fail(err, EMM_ERR_IO, "%s: cannot rewrite", path);
+    }
+    if (in)
+        fclose(in);
+    if (out && fclose(out) != 0 && st == EMM_OK)
+        st = emm_fail(err, EMM_ERR_IO, "%s: cannot rewrite: %s", path, strerror(errno));
+    if (st == EMM_OK && rename(tmp, path) != 0)
+        st = emm_fail(err, EMM_ERR_IO, "%s: cannot rewrite: %s", path, strerror(errno));
+    if (st != EMM_OK && out)
+        remove(tmp);
+    free(tmp);
+    return st;
+}
+
+emm_status emm_table_append(const char *path, const emm_table_sample *s, emm_error *err)
+{
+    emm_table *t = emm_table_new();
+    if (!t)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
+    emm_status st = EMM_OK;
+    bool exists = access(path, F_OK) == 0;
+    if (exists)
+        st = emm_table_load(t, path, err);
+    if (st == EMM_OK) {
+        /* Checks the name and the values as the parser would. */
+        emm_table *probe = emm_table_new();
+        st = probe ? emm_table_add(probe, s, err) : emm_fail(err, EMM_ERR_NOMEM, "out of memory");
+        emm_table_free(probe);
+    }
+    if (st == EMM_OK && find(t, s->name) >= 0)
+        st = emm_fail(err, EMM_ERR_INVALID, "%s: sample '%s' is already in this table", path,
+                      s->name);
+    if (st == EMM_OK)
+        st = exists ? append_line(path, s, err) : write_whole(t, path, NULL, s, err);
+    emm_table_free(t);
+    return st;
+}
+
+const char *emm_table_default_path(void)
+{
+    /* Where the code that runs lives decides: a module under the build tree
+     * uses the source tree's table, anything else the installed one. */
+    Dl_info info;
+    static const char bin[] = EMM_BINARY_DIR "/";
+    if (dladdr((void *)emm_table_default_path, &info) && info.dli_fname) {
+        char real[4096];
+        const char *p = realpath(info.dli_fname, real) ? real : info.dli_fname;
+        if (strncmp(p, bin, sizeof bin - 1) == 0)
+            return EMM_SOURCE_DIR "/data/table.txt";
+    }
+    return EMM_INSTALL_DATADIR "/emm/table.txt";
+}
+
+emm_status emm_table_load_standard(emm_table *t, const char *user, emm_error *err)
+{
+    const char *def = emm_table_default_path();
+    char tried[1024];
+    emm_status st;
+    if (access(def, F_OK) == 0) {
+        st = emm_table_load(t, def, err);
+        if (st != EMM_OK)
+            return st;
+    }
+    snprintf(tried, sizeof tried, "%s", def);
+    const char *env = getenv("EMM_TABLE");
+    const char *path = user ? user : (env && *env ? env : NULL);
+    if (path) {
+        st = emm_table_load(t, path, err);
+        if (st != EMM_OK)
+            return st;
+    }
+    if (t->n == 0) {
+        if (path)
+            return emm_fail(err, EMM_ERR_IO,
+                            "no strategy table with samples: %s does not exist and %s has none",
+                            tried, path);
+        return emm_fail(err, EMM_ERR_IO,
+                        "no strategy table found: tried %s (the default; `emm table build` "
+                        "makes it) and no user table was given (--table FILE or EMM_TABLE)",
+                        tried);
+    }
+    return EMM_OK;
+}
+
+double emm_feature_distance(const double a[EMM_FEATURES], const double b[EMM_FEATURES])
+{
+    double d = 0;
+    for (int k = 0; k < EMM_FEATURES; k++) {
+        double e = fmin(fabs(a[k] - b[k]), EMM_FEATURE_CLIP);
+        d += e * e;
+    }
+    return sqrt(d);
+}
+
+emm_status emm_table_decide(const emm_table *t, const double f[EMM_FEATURES], double threshold,
+                            emm_decision *out, emm_error *err)
+{
+    if (t->n == 0)
+        return emm_fail(err, EMM_ERR_INVALID, "strategy table: no samples to compare with");
+    if (threshold <= 0)
+        threshold = EMM_NOVELTY_THRESHOLD;
+    size_t best = 0;
+    double bd = INFINITY;
+    for (size_t i = 0; i < t->n; i++) {
+        double d = emm_feature_distance(f, t->s[i].f);
+        if (d < bd) {
+            bd = d;
+            best = i;
+        }
+    }
+    memset(out, 0, sizeof *out);
+    snprintf(out->pattern, sizeof out->pattern, "%s", t->s[best].pattern);
+    snprintf(out->nearest, sizeof out->nearest, "%s", t->s[best].name);
+    out->strategy = t->s[best].strategy;
+    out->distance = bd;
+    out->novel = out->distance > threshold;
+    return EMM_OK;
+}

@@ -1,0 +1,241 @@
+/* The hardware cache on a reordered layout, `cache@LAYOUT` (thesis §6.3:
+ * "Cache(Grid) runs on the grid layout same as in EMM(Grid)"; layouts of
+ * §4.1). The program's element accesses are replayed against the addresses
+ * the elements have in the layout's remote image (docs/layouts.md "Bytes"),
+ * through the same Dinero-exact cache as the plain `cache` model.
+ *
+ * Which copy of a vertex an access reads: the copy in the cell of the most
+ * recent triangle access when the vertex has one there, else its home copy
+ * (the lowest-numbered cell holding it). That is how the thesis' triangles
+ * point at their own cell's vertex copies (§4.1.1, Fig. 4.4), and it is the
+ * rule the EMM models use too (docs/fetch.md, docs/layouts.md). Accesses
+ * to arrays other than the mesh's first vertex and triangle arrays keep
+ * their original addresses.
+ *
+ * No cells move, so the local-store size check of the EMM strategies does
+ * not apply. Everything the loop needs is precomputed into flat arrays and
+ * the layout itself is freed after construction. */
+#include "cache_layout.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "cache.h"
+#include "emm/layout.h"
+#include "error.h"
+#include "model.h"
+
+#define NO_ARRAY UINT32_MAX
+
+typedef struct cache_layout_model {
+    struct emm_model base;
+    emm_addr_map map;          /* original addresses, for the other arrays */
+    uint32_t varray, tarray;   /* the mesh's vertex and triangle arrays, or NO_ARRAY */
+    uint64_t *tri_addr;        /* triangle t's record in the image */
+    uint32_t *tri_cell;        /* triangle t's cell */
+    uint32_t *vcopy_start;     /* vertex v's copies: [vcopy_start[v], vcopy_start[v + 1]) */
+    uint32_t *vcopy_cell;      /* by ascending cell */
+    uint64_t *vcopy_addr;
+    uint64_t *vhome_addr;      /* the home copy (an unused vertex's own record) */
+    uint32_t cur_cell;         /* cell of the most recent triangle access */
+    emm_cache cache;
+} cache_layout_model;
+
+static inline uint64_t vertex_addr(const cache_layout_model *m, uint64_t v)
+{
+    uint32_t i = m->vcopy_start[v], end = m->vcopy_start[v + 1], cell = m->cur_cell;
+    /* A vertex has copies in a handful of cells, sorted by cell. */
+    for (; i < end && m->vcopy_cell[i] <= cell; i++)
+        if (m->vcopy_cell[i] == cell)
+            return m->vcopy_addr[i];
+    return m->vhome_addr[v];
+}
+
+static void cl_run(emm_model *model, const emm_trace_record *recs, size_t n)
+{
+    cache_layout_model *m = (cache_layout_model *)model;
+    const uint32_t varray = m->varray, tarray = m->tarray;
+    for (size_t i = 0; i < n; i++) {
+        const emm_trace_record *r = &recs[i];
+        uint64_t addr;
+        if (r->array == tarray) {
+            m->cur_cell = m->tri_cell[r->element];
+            addr = m->tri_addr[r->element] + r->offset;
+        } else if (r->array == varray) {
+            addr = vertex_addr(m, r->element) + r->offset;
+        } else {
+            addr = emm_addr_of(&m->map, r);
+        }
+        emm_cache_access(&m->cache, addr, r->bytes, r->write, r->work);
+    }
+}
+
+static void cl_reset(emm_model *model)
+{
+    cache_layout_model *m = (cache_layout_model *)model;
+    m->cur_cell = EMM_LAYOUT_NONE;
+    emm_cache_reset(&m->cache);
+}
+
+static void cl_result(const emm_model *model, emm_result *out)
+{
+    emm_cache_result(&((const cache_layout_model *)model)->cache, out);
+}
+
+static void cl_destroy(emm_model *model)
+{
+    cache_layout_model *m = (cache_layout_model *)model;
+    if (!m)
+        return;
+    emm_cache_free(&m->cache);
+    emm_addr_map_free(&m->map);
+    free(m->tri_addr);
+    free(m->tri_cell);
+    free(m->vcopy_start);
+    free(m->vcopy_cell);
+    free(m->vcopy_addr);
+    free(m->vhome_addr);
+    free(m);
+}
+
+static const struct emm_model_ops cache_layout_ops = {cl_run, cl_reset, cl_result, cl_destroy};
+
+/* Where the image starts: where the program's mesh arrays started, unless
+ * that overlaps another array, then past every array (4 KiB aligned, as a
+ * fresh allocation would be). */
+static uint64_t image_base(const emm_trace_info *trace, uint32_t varray, uint32_t tarray,
+                           uint64_t image_bytes)
+{
+    uint64_t base = UINT64_MAX, end_all = 0;
+    if (varray != NO_ARRAY)
+        base = trace->arrays[varray].base;
+    if (tarray != NO_ARRAY && trace->arrays[tarray].base < base)
+        base = trace->arrays[tarray].base;
+    base &= ~(uint64_t)4095;
+    int clash = 0;
+    for (uint32_t a = 0; a < trace->narrays; a++) {
+        const emm_trace_array *x = &trace->arrays[a];
+        uint64_t end = x->base + x->count * x->record_size;
+        if (end > end_all)
+            end_all = end;
+        if (a == varray || a == tarray || x->count == 0)
+            continue;
+        if (x->base < base + image_bytes && base < end)
+            clash = 1;
+    }
+    return clash ? (end_all + 4095) & ~(uint64_t)4095 : base;
+}
+
+emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_strategy *s,
+                                      const emm_trace_info *trace, emm_model **out,
+                                      emm_error *err)
+{
+    const emm_trace_geometry *g = &trace->geometry;
+    emm_layout_options opt;
+    emm_layout *l = NULL;
+    cache_layout_model *m;
+    char name[64];
+    emm_status st;
+
+    emm_strategy_format(s, name, sizeof name);
+    if (g->nv == 0 || g->nt == 0)
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "%s: the trace has no mesh geometry; only direct and cache apply to an "
+                        "address-only trace",
+                        name);
+    if (g->nv > UINT32_MAX || g->nt > UINT32_MAX)
+        return emm_fail(err, EMM_ERR_RANGE, "%s: the trace's mesh is too large", name);
+
+    if (!(m = calloc(1, sizeof *m)))
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+    m->base.ops = &cache_layout_ops;
+    m->varray = m->tarray = NO_ARRAY;
+    for (uint32_t a = 0; a < trace->narrays; a++) {
+        const emm_trace_array *x = &trace->arrays[a];
+        if (x->kind == EMM_ARRAY_VERTICES && m->varray == NO_ARRAY)
+            m->varray = a;
+        else if (x->kind == EMM_ARRAY_TRIANGLES && m->tarray == NO_ARRAY)
+            m->tarray = a;
+    }
+    if (m->varray == NO_ARRAY && m->tarray == NO_ARRAY) {
+        st = emm_fail(err, EMM_ERR_INVALID,
+                      "%s: the trace has no vertex or triangle array to lay out", name);
+        goto fail;
+    }
+    if (m->varray != NO_ARRAY && trace->arrays[m->varray].count > g->nv) {
+        st = emm_fail(err, EMM_ERR_INVALID,
+                      "%s: the vertex array has %llu records but the geometry only "
+                      "%llu vertices",
+                      name, (unsigned long long)trace->arrays[m->varray].count,
+                      (unsigned long long)g->nv);
+        goto fail;
+    }
+    if (m->tarray != NO_ARRAY && trace->arrays[m->tarray].count > g->nt) {
+        st = emm_fail(err, EMM_ERR_INVALID,
+                      "%s: the triangle array has %llu records but the geometry only "
+                      "%llu triangles",
+                      name, (unsigned long long)trace->arrays[m->tarray].count,
+                      (unsigned long long)g->nt);
+        goto fail;
+    }
+
+    memset(&opt, 0, sizeof opt);
+    opt.kind = s->layout;
+    opt.cell = s->cell ? s->cell : EMM_DEFAULT_CELL;
+    opt.vertex_bytes = m->varray != NO_ARRAY ? trace->arrays[m->varray].record_size : 0;
+    opt.triangle_bytes = m->tarray != NO_ARRAY ? trace->arrays[m->tarray].record_size : 0;
+    opt.local_store = 0; /* no cell is moved as a whole */
+    opt.fetch = EMM_FETCH_NONE;
+    if ((st = emm_layout_build(g->xyz, (size_t)g->nv, g->tri, (size_t)g->nt, &opt, name, &l,
+                               err)) != EMM_OK)
+        goto fail;
+
+    size_t nv = (size_t)g->nv, nt = (size_t)g->nt, ncopies = 0;
+    for (size_t v = 0; v < nv; v++) {
+        const emm_layout_index *c;
+        ncopies += emm_layout_vertex_copies(l, (uint32_t)v, &c);
+    }
+    m->tri_addr = malloc(nt * sizeof *m->tri_addr);
+    m->tri_cell = malloc(nt * sizeof *m->tri_cell);
+    m->vcopy_start = malloc((nv + 1) * sizeof *m->vcopy_start);
+    m->vcopy_cell = malloc((ncopies ? ncopies : 1) * sizeof *m->vcopy_cell);
+    m->vcopy_addr = malloc((ncopies ? ncopies : 1) * sizeof *m->vcopy_addr);
+    m->vhome_addr = malloc(nv * sizeof *m->vhome_addr);
+    if (!m->tri_addr || !m->tri_cell || !m->vcopy_start || !m->vcopy_cell || !m->vcopy_addr ||
+        !m->vhome_addr || ncopies > UINT32_MAX) {
+        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the layout's addresses", name);
+        goto fail;
+    }
+
+    uint64_t base = image_base(trace, m->varray, m->tarray, emm_layout_image_bytes(l));
+    for (size_t t = 0; t < nt; t++) {
+        m->tri_addr[t] = base + emm_layout_triangle_address(l, (uint32_t)t, 0);
+        m->tri_cell[t] = emm_layout_triangle_index(l, (uint32_t)t).cell;
+    }
+    uint32_t k = 0;
+    for (size_t v = 0; v < nv; v++) {
+        const emm_layout_index *c;
+        uint32_t nc = emm_layout_vertex_copies(l, (uint32_t)v, &c);
+        m->vcopy_start[v] = k;
+        for (uint32_t i = 0; i < nc; i++, k++) {
+            m->vcopy_cell[k] = c[i].cell;
+            m->vcopy_addr[k] = base + emm_layout_vertex_address(l, (uint32_t)v, c[i].cell, 0);
+        }
+        m->vhome_addr[v] = base + emm_layout_vertex_address(l, (uint32_t)v, EMM_LAYOUT_NONE, 0);
+    }
+    m->vcopy_start[nv] = k;
+    emm_layout_free(l);
+    l = NULL;
+
+    if ((st = emm_addr_map_init(&m->map, trace, err)) != EMM_OK)
+        goto fail;
+    if ((st = emm_cache_init(&m->cache, p, err)) != EMM_OK)
+        goto fail;
+    m->cur_cell = EMM_LAYOUT_NONE;
+    *out = &m->base;
+    return EMM_OK;
+fail:
+    emm_layout_free(l);
+    cl_destroy(&m->base);
+    return st;
+}

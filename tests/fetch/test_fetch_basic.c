@@ -1,0 +1,185 @@
+/* The EMM model on meshes small enough to compute by hand: a naive
+ * strategy's cycles bucket by bucket, a local store that holds one cell
+ * (prefetch dropped, LRU eviction), and the errors. */
+#include <string.h>
+
+#include "check.h"
+#include "emm/sim.h"
+#include "emm_fetch.h"
+
+/* Two triangles of the unit square: with CELL 1 the grid has one column and
+ * two rows, triangle 0 (centroid y = 1/3) in cell 0, triangle 1 in cell 1.
+ * Each cell: 12 + 3 x 80 + 28 = 280 bytes. */
+static const double xyz[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+static const int32_t tri[] = {0, 1, 2, 1, 3, 2};
+static const emm_trace_array arrays[2] = {
+    {EMM_ARRAY_VERTICES, 80, 4, 0x10000},
+    {EMM_ARRAY_TRIANGLES, 28, 2, 0x20000},
+};
+
+static emm_trace_info info_of(int geometry)
+{
+    emm_trace_info t;
+    memset(&t, 0, sizeof t);
+    t.version = 1;
+    t.narrays = 2;
+    t.arrays = arrays;
+    if (geometry) {
+        t.geometry.nv = 4;
+        t.geometry.nt = 2;
+        t.geometry.xyz = xyz;
+        t.geometry.tri = tri;
+    }
+    return t;
+}
+
+static emm_trace_record rec(uint32_t array, uint64_t element)
+{
+    emm_trace_record r;
+    memset(&r, 0, sizeof r);
+    r.array = array;
+    r.element = element;
+    r.offset = array == 1 ? 4 : 8; /* 24 bytes span 6 words either way */
+    r.bytes = 24;
+    return r;
+}
+
+static emm_model *model_of(const emm_machine *m, const char *name, const emm_trace_info *t)
+{
+    emm_strategy s;
+    emm_model *model;
+    emm_error err;
+    REQUIRE(emm_strategy_parse(name, &s, &err) == EMM_OK);
+    if (emm_model_new(m, &s, t, &model, &err) != EMM_OK) {
+        fprintf(stderr, "%s: %s\n", name, err.message);
+        exit(1);
+    }
+    return model;
+}
+
+static void naive_by_hand(void)
+{
+    emm_machine *m;
+    emm_error err;
+    emm_result r;
+    emm_trace_info t = info_of(1);
+    /* triangle 0, its vertex 0, triangle 1, its vertex 3, triangle 0 */
+    emm_trace_record recs[5] = {rec(1, 0), rec(0, 0), rec(1, 1), rec(0, 3), rec(1, 0)};
+    REQUIRE(emm_machine_new(&m, &err) == EMM_OK);
+    emm_model *model = model_of(m, "grid+naive@1", &t);
+    emm_model_run(model, recs, 5);
+    emm_model_result(model, &r);
+    /* Every access: compute 1, look-up 4 + residency 2, local 6 words x 1.
+     * Entering a cell not resident: bookkeeping 20, issue 266, then the
+     * transfer of 280 bytes (2 x 35 = 70 cycles) is waited for. */
+    CHECK(r.cycles[EMM_BUCKET_COMPUTE] == 5);
+    CHECK(r.cycles[EMM_BUCKET_EMM_INSTRUCTIONS] == 5 * 6 + 2 * 20);
+    CHECK(r.cycles[EMM_BUCKET_DMA_ISSUE] == 2 * 266);
+    CHECK(r.cycles[EMM_BUCKET_DMA_STALL] == 2 * 70);
+    CHECK(r.cycles[EMM_BUCKET_LOCAL_ACCESS] == 5 * 6);
+    CHECKF(r.total == 777, "total %llu", (unsigned long long)r.total);
+    CHECK(r.has_dma && r.dma.transfers == 2 && r.dma.bytes == 560);
+    CHECK(r.has_emm && r.emm.cell_changes == 3 && r.emm.demand_fetches == 2);
+    CHECK(r.emm.prefetches == 0 && r.emm.evictions == 0);
+    /* 4 bytes per triangle and vertex, 8 per cell. */
+    CHECK(r.emm.lookup_bytes == 4 * 2 + 4 * 4 + 8 * 2);
+    CHECK(r.emm.local_budget == 256 * 1024 - r.emm.lookup_bytes);
+    CHECK(r.accesses == 5);
+
+    /* Reset, then the same records in two batches: the same result. */
+    emm_model_reset(model);
+    emm_model_result(model, &r);
+    CHECK(r.total == 0 && r.accesses == 0 && r.dma.transfers == 0);
+    emm_model_run(model, recs, 2);
+    emm_model_run(model, recs + 2, 3);
+    emm_model_result(model, &r);
+    CHECK(r.total == 777);
+    emm_model_free(model);
+
+    /* Quadtree look-ups descend: the two leaves sit at depth 1 or deeper. */
+    model = model_of(m, "quadtree+naive@1", &t);
+    emm_model_run(model, recs, 5);
+    emm_model_result(model, &r);
+    CHECK(r.cycles[EMM_BUCKET_EMM_INSTRUCTIONS] >= 5 * (6 + 6) + 2 * 20);
+    emm_model_free(model);
+    emm_machine_free(m);
+}
+
+struct evictions {
+    int count, in_flight;
+};
+
+static void on_evict(void *ctx, uint32_t cell, uint64_t now, uint64_t ready)
+{
+    struct evictions *e = ctx;
+    (void)cell;
+    e->count++;
+    if (ready > now)
+        e->in_flight++;
+}
+
+/* A local store with room for one cell after the look-up tables. */
+static void one_cell_store(void)
+{
+    emm_machine *m;
+    emm_error err;
+    emm_result r;
+    struct evictions ev = {0, 0};
+    emm_trace_info t = info_of(1);
+    emm_trace_record recs[3] = {rec(1, 0), rec(1, 1), rec(1, 0)};
+    REQUIRE(emm_machine_new(&m, &err) == EMM_OK);
+    REQUIRE(emm_machine_set(m, "local.bytes=320", &err) == EMM_OK); /* 40 + 280 */
+    emm_model *model = model_of(m, "grid+convolution@1", &t);
+    CHECK(emm_fetch_budget(model) == 280);
+    emm_fetch_set_evict_hook(model, on_evict, &ev);
+    emm_model_run(model, recs, 3);
+    emm_model_result(model, &r);
+    /* Entering cell 0: its neighbour cell 1 cannot come in beside cell 0
+     * (in flight and in use): dropped. Cell 1, then cell 0 again, each
+     * evict the other once it has landed. */
+    CHECK(r.emm.demand_fetches == 3);
+    CHECK(r.emm.prefetches == 0);
+    CHECK(r.emm.dropped_prefetches == 3);
+    CHECK(r.emm.evictions == 2 && ev.count == 2);
+    CHECK(ev.in_flight == 0);
+    emm_model_free(model);
+
+    /* One byte less and no cell fits: the layout's error names a CELL. */
+    REQUIRE(emm_machine_set(m, "local.bytes=319", &err) == EMM_OK);
+    {
+        emm_strategy s;
+        emm_model *x = NULL;
+        REQUIRE(emm_strategy_parse("grid+naive@1", &s, &err) == EMM_OK);
+        CHECK(emm_model_new(m, &s, &t, &x, &err) == EMM_ERR_RANGE);
+        CHECKF(strstr(err.message, "grid+naive@1") && strstr(err.message, "280"), "%s",
+               err.message);
+    }
+    emm_machine_free(m);
+}
+
+static void errors(void)
+{
+    emm_machine *m;
+    emm_error err;
+    emm_strategy s;
+    emm_model *x = NULL;
+    emm_trace_info bare = info_of(0);
+    REQUIRE(emm_machine_new(&m, &err) == EMM_OK);
+    REQUIRE(emm_strategy_parse("tiles+extrapolated@64", &s, &err) == EMM_OK);
+    CHECK(emm_model_new(m, &s, &bare, &x, &err) == EMM_ERR_INVALID);
+    CHECKF(strstr(err.message, "only direct and cache apply to an address-only trace") != NULL,
+           "%s", err.message);
+    /* The FIFO length is a machine key with a range. */
+    CHECK(emm_machine_set(m, "emm.fifo=0", &err) == EMM_ERR_RANGE);
+    CHECK(emm_machine_set(m, "emm.fifo=8", &err) == EMM_OK);
+    CHECK(emm_machine_get(m, "emm.fifo") == 8);
+    emm_machine_free(m);
+}
+
+int main(void)
+{
+    naive_by_hand();
+    one_cell_store();
+    errors();
+    return check_done();
+}

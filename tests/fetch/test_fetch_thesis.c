@@ -1,0 +1,124 @@
+/* The behaviours thesis §4.1–4.2 and §6.3 predict, on the thesis' mesh
+ * (20,000 clustered faces, emm_mesh_generate's defaults) with synthetic
+ * traces. `ratio`: convolution over interleaving tiles issues about 25%
+ * fewer prefetch DMAs per cell change than over the grid (6 neighbours
+ * instead of 8). `region`: on region growing, convolution fetching beats
+ * naive fetching. `curve`: on long curves, extrapolated fetching beats
+ * naive fetching. Each prints what it measured. */
+#include "fetch_util.h"
+
+static const unsigned cells[] = {16, 32, 64};
+#define NCELLS 3
+
+/* Prefetch DMAs issued per cell change; `wanted` adds the prefetches
+ * dropped for want of room. */
+static double per_change(const emm_result *r, int wanted)
+{
+    uint64_t n = r->emm.prefetches + (wanted ? r->emm.dropped_prefetches : 0);
+    return (double)n / (double)r->emm.cell_changes;
+}
+
+/* Random visits leave most neighbours of a cell not resident: the setting
+ * of the thesis' count, "whenever the EMM optimization requires prefetching
+ * all surrounding cells". */
+static void ratio(const emm_mesh *mesh, const emm_machine *mc)
+{
+    emm_synth_options so = {.pattern = EMM_PATTERN_RANDOM, .seed = 1};
+    loaded_trace t;
+    synth_load(mesh, &so, "fetch_thesis_ratio.emmt", &t);
+    for (int i = 0; i < NCELLS; i++) {
+        char g[64], ti[64];
+        emm_result rg, rt;
+        snprintf(g, sizeof g, "grid+convolution@%u", cells[i]);
+        snprintf(ti, sizeof ti, "tiles+convolution@%u", cells[i]);
+        simulate_ok(mc, g, &t, &rg);
+        simulate_ok(mc, ti, &t, &rt);
+        double q = per_change(&rt, 0) / per_change(&rg, 0);
+        double qw = per_change(&rt, 1) / per_change(&rg, 1);
+        printf("random @%u: prefetch DMAs per cell change: grid %.3f, tiles %.3f, ratio %.3f "
+               "(with dropped ones: %.3f, %.3f, %.3f)\n",
+               cells[i], per_change(&rg, 0), per_change(&rt, 0), q, per_change(&rg, 1),
+               per_change(&rt, 1), qw);
+        CHECKF(q >= 0.6 && q <= 0.9, "@%u: ratio %.3f", cells[i], q);
+    }
+    free_trace(&t);
+}
+
+/* The best of `fetch` over the layouts and cells, and the same for naive. */
+static void compare(const emm_machine *mc, const loaded_trace *t, const char *fetch,
+                    const char *what)
+{
+    static const char *const layouts[] = {"grid", "tiles", "quadtree"};
+    uint64_t best_f = UINT64_MAX, best_n = UINT64_MAX;
+    char bf[64] = "", bn[64] = "";
+    for (int l = 0; l < 3; l++)
+        for (int i = 0; i < NCELLS; i++) {
+            char f[64], n[64];
+            emm_result rf, rn;
+            snprintf(f, sizeof f, "%s+%s@%u", layouts[l], fetch, cells[i]);
+            snprintf(n, sizeof n, "%s+naive@%u", layouts[l], cells[i]);
+            simulate_ok(mc, f, t, &rf);
+            simulate_ok(mc, n, t, &rn);
+            printf("%s: %-26s %12llu   %-20s %12llu  (%.3f)\n", what, f,
+                   (unsigned long long)rf.total, n, (unsigned long long)rn.total,
+                   (double)rf.total / (double)rn.total);
+            if (rf.total < best_f)
+                best_f = rf.total, snprintf(bf, sizeof bf, "%s", f);
+            if (rn.total < best_n)
+                best_n = rn.total, snprintf(bn, sizeof bn, "%s", n);
+        }
+    printf("%s: best %s %llu, best naive %s %llu\n", what, bf, (unsigned long long)best_f, bn,
+           (unsigned long long)best_n);
+    CHECKF(best_f < best_n, "%s: best %s %llu >= best naive %s %llu", what, bf,
+           (unsigned long long)best_f, bn, (unsigned long long)best_n);
+}
+
+/* Breadth-first growth from a seed over the whole mesh. Its active ring
+ * and the cells on either side of it must fit in the local store for
+ * prefetched cells to survive until used (docs/fetch.md, "What the
+ * thesis' behaviours need"): 256 KiB less the 120 KiB of look-up tables
+ * does not hold them, so this runs with a 1 MiB local store. */
+static void region(const emm_mesh *mesh, emm_machine *mc)
+{
+    emm_synth_options so = {.pattern = EMM_PATTERN_REGION, .seed = 1, .work = 10};
+    emm_error err;
+    loaded_trace t;
+    synth_load(mesh, &so, "fetch_thesis_region.emmt", &t);
+    REQUIRE(emm_machine_set(mc, "local.bytes=1M", &err) == EMM_OK);
+    compare(mc, &t, "convolution", "region");
+    free_trace(&t);
+}
+
+/* Straight walks to the boundary from random starts (thesis §6.3, long
+ * curves), 100,000 triangle visits. */
+static void curve(const emm_mesh *mesh, const emm_machine *mc)
+{
+    emm_synth_options so = {.pattern = EMM_PATTERN_CURVE, .seed = 1, .visits = 100000,
+                            .length = 0, .work = 10};
+    loaded_trace t;
+    synth_load(mesh, &so, "fetch_thesis_curve.emmt", &t);
+    compare(mc, &t, "extrapolated", "curve");
+    free_trace(&t);
+}
+
+int main(int argc, char **argv)
+{
+    emm_machine *mc;
+    emm_error err;
+    emm_mesh *mesh;
+    if (argc != 2)
+        return 2;
+    mesh = thesis_mesh(EMM_DEFAULT_FACES);
+    REQUIRE(emm_machine_new(&mc, &err) == EMM_OK);
+    if (strcmp(argv[1], "ratio") == 0)
+        ratio(mesh, mc);
+    else if (strcmp(argv[1], "region") == 0)
+        region(mesh, mc);
+    else if (strcmp(argv[1], "curve") == 0)
+        curve(mesh, mc);
+    else
+        return 2;
+    emm_machine_free(mc);
+    emm_mesh_free(mesh);
+    return check_done();
+}

@@ -1,0 +1,531 @@
+/* The session API driven as the shim drives it: a generated mesh copied
+ * into arrays laid out as a program would hold them, a synthetic region
+ * growth turned into raw addresses, fed in batches. Checks the decision
+ * from a table written here, that the totals cover window and rest (equal
+ * to emm_replay of the same records), that EMM_TRACE replays to the same
+ * numbers and holds the same records, the CSV, a window that never fills,
+ * novelty, iteration windows, bad geometry, bad configuration, and reports
+ * that are whole or absent. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "emm/mesh.h"
+#include "emm/profile.h"
+#include "emm/session.h"
+#include "emm/sim.h"
+#include "emm/synth.h"
+#include "emm/trace.h"
+
+#define VSTRIDE 80
+#define TSTRIDE 28
+#define WINDOW 1000
+
+static unsigned char *vmem, *tmem;
+static size_t nv, nt;
+static emm_trace_record *recs;
+static size_t nrecs;
+static double feat[EMM_FEATURES];
+static emm_result expect_direct, expect_cache;
+static uint64_t vbase, tbase;
+
+static uint64_t addr_of(const emm_trace_record *r)
+{
+    return (r->array == 0 ? vbase : tbase) + r->element * (r->array == 0 ? VSTRIDE : TSTRIDE) +
+           r->offset;
+}
+
+/* The mesh, the program's arrays, the access records, the expected results
+ * (a trace of the same records at the arrays' real addresses, replayed) and
+ * the window's features. */
+static void setup(void)
+{
+    emm_error err;
+    emm_gen_options go = {2000, 7, EMM_DENSITY_CLUSTERED};
+    emm_mesh *m;
+    REQUIRE(emm_mesh_generate(&go, &m, &err) == EMM_OK);
+    emm_synth_options so = {.pattern = EMM_PATTERN_REGION, .seed = 3, .work = 3};
+    REQUIRE(emm_synth_trace(m, &so, "synth.emmt", NULL, &err) == EMM_OK);
+    nv = emm_mesh_vertex_count(m);
+    nt = emm_mesh_triangle_count(m);
+    vmem = calloc(nv, VSTRIDE);
+    tmem = calloc(nt, TSTRIDE);
+    REQUIRE(vmem && tmem);
+    const double *xyz = emm_mesh_positions(m);
+    const int32_t *tri = emm_mesh_indices(m);
+    for (size_t v = 0; v < nv; v++)
+        memcpy(vmem + v * VSTRIDE + 8, xyz + 3 * v, 24);
+    for (size_t t = 0; t < nt; t++)
+        memcpy(tmem + t * TSTRIDE + 4, tri + 3 * t, 12);
+    vbase = (uint64_t)(uintptr_t)vmem;
+    tbase = (uint64_t)(uintptr_t)tmem;
+
+    emm_trace_reader *r;
+    REQUIRE(emm_trace_reader_open("synth.emmt", &r, &err) == EMM_OK);
+    const emm_trace_info *info = emm_trace_reader_info(r);
+    REQUIRE(info->narrays == 2 && info->arrays[0].kind == EMM_ARRAY_VERTICES);
+    REQUIRE(info->arrays[0].record_size == VSTRIDE && info->arrays[1].record_size == TSTRIDE);
+    recs = malloc(info->accesses * sizeof *recs);
+    REQUIRE(recs);
+    size_t got;
+    while (emm_trace_read(r, recs + nrecs, info->accesses - nrecs, &got, &err) == EMM_OK && got)
+        nrecs += got;
+    REQUIRE(nrecs == info->accesses && nrecs > 4 * WINDOW);
+    emm_trace_array arrays[2] = {info->arrays[0], info->arrays[1]};
+    arrays[0].base = vbase;
+    arrays[1].base = tbase;
+    emm_trace_writer *w;
+    REQUIRE(emm_trace_writer_open("expect.emmt", arrays, 2, &info->geometry, 0, &w, &err) ==
+            EMM_OK);
+    REQUIRE(emm_trace_write(w, recs, nrecs, &err) == EMM_OK);
+    REQUIRE(emm_trace_writer_close(w, &err) == EMM_OK);
+    emm_trace_reader_close(r);
+    emm_mesh_free(m);
+
+    emm_machine *mach;
+    REQUIRE(emm_machine_new(&mach, &err) == EMM_OK);
+    emm_strategy s[2];
+    emm_strategy_parse("direct", &s[0], NULL);
+    emm_strategy_parse("cache", &s[1], NULL);
+    emm_result res[2];
+    REQUIRE(emm_replay("expect.emmt", mach, s, 2, res, NULL, NULL, NULL, &err) == EMM_OK);
+    expect_direct = res[0];
+    expect_cache = res[1];
+    emm_machine_free(mach);
+
+    REQUIRE(emm_trace_reader_open("expect.emmt", &r, &err) == EMM_OK);
+    double *xy, *D;
+    size_t n;
+    REQUIRE(emm_profile_trace_positions(r, WINDOW, "expect", &xy, &n, &err) == EMM_OK);
+    REQUIRE(n == WINDOW);
+    D = malloc(n * sizeof *D);
+    REQUIRE(D);
+    REQUIRE(emm_profile_compute(xy, n, D, NULL, &err) == EMM_OK);
+    REQUIRE(emm_profile_features(D, n, "expect", feat, &err) == EMM_OK);
+    free(xy);
+    free(D);
+    emm_trace_reader_close(r);
+}
+
+/* A table of two samples: this window's own features (strategy `near`) and
+ * a far one; or, with `only_far`, just far ones. */
+static void write_table(const char *path, const char *near, int only_far)
+{
+    FILE *f = fopen(path, "w");
+    REQUIRE(f);
+    fprintf(f, "emm-table 1 features=%d\n", EMM_FEATURES);
+    if (!only_far) {
+        fprintf(f, "mine region %s", near);
+        for (int k = 0; k < EMM_FEATURES; k++)
+            fprintf(f, " %.17g", feat[k]);
+        fputc('\n', f);
+    }
+    fprintf(f, "far random cache");
+    for (int k = 0; k < EMM_FEATURES; k++)
+        fprintf(f, " %.17g", feat[k] + 5.0);
+    fputc('\n', f);
+    fclose(f);
+}
+
+static emm_session_config base_config(void)
+{
+    emm_session_config c = {0};
+    c.window_accesses = WINDOW;
+    c.compare = EMM_COMPARE_BASELINES;
+    c.table_path = "table.txt";
+    c.capture = "test";
+    c.program = "test_session";
+    c.log = 1;
+    return c;
+}
+
+static void tag_all(emm_session *s)
+{
+    CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_F64) >= 0);
+    CHECK(emm_session_tag(s, EMM_ARRAY_TRIANGLES, tmem, nt, TSTRIDE, 4, EMM_I32) >= 0);
+}
+
+/* Feeds every record as raw accesses in batches of `batch`, deciding when
+ * asked; between two records, an access outside the arrays carries some of
+ * the work (the session must hand it to the next record). Returns how many
+ * times DECIDE came back. */
+static int feed(emm_session *s, size_t batch, int iterations_every)
+{
+    emm_raw_access *raw = malloc(2 * batch * sizeof *raw);
+    static uint64_t stray;
+    int decides = 0;
+    REQUIRE(raw);
+    for (size_t i = 0; i < nrecs; i += batch) {
+        size_t n = 0;
+        for (size_t k = i; k < nrecs && k < i + batch; k++) {
+            uint32_t w = recs[k].work;
+            if (w > 0 && k % 5 == 0) {
+                raw[n++] = (emm_raw_access){(uint64_t)(uintptr_t)&stray, 8, 1};
+                w -= 1;
+            }
+            raw[n++] = (emm_raw_access){addr_of(&recs[k]),
+                                        recs[k].bytes | (recs[k].write ? EMM_RAW_WRITE : 0), w};
+        }
+        emm_session_state st = emm_session_access(s, raw, n);
+        if (iterations_every && (i / batch) % (size_t)iterations_every == 0)
+            st = emm_session_iteration(s);
+        if (st == EMM_SESSION_DECIDE) {
+            emm_error err;
+            decides++;
+            CHECKF(emm_session_decide(s, &err) == EMM_OK, "%s", err.message);
+        }
+    }
+    free(raw);
+    return decides;
+}
+
+static char *slurp(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    char *buf = calloc(1, 1 << 20);
+    REQUIRE(buf);
+    size_t n = fread(buf, 1, (1 << 20) - 1, f);
+    buf[n] = '\0';
+    fclose(f);
+    return buf;
+}
+
+static int has(const char *text, const char *needle)
+{
+    return text && strstr(text, needle) != NULL;
+}
+
+static int has_u64(const char *text, const char *key, uint64_t v)
+{
+    char needle[96];
+    snprintf(needle, sizeof needle, "\"%s\": %llu", key, (unsigned long long)v);
+    return has(text, needle);
+}
+
+static void same_result(const emm_result *a, const emm_result *b)
+{
+    CHECKF(a->total == b->total, "total %llu vs %llu", (unsigned long long)a->total,
+           (unsigned long long)b->total);
+    CHECK(a->accesses == b->accesses);
+    for (int k = 0; k < EMM_BUCKET_COUNT; k++)
+        CHECK(a->cycles[k] == b->cycles[k]);
+    CHECK(a->cache.demand_misses == b->cache.demand_misses);
+}
+
+static void test_decide_from_table(void)
+{
+    emm_error err;
+    emm_session *s;
+    write_table("table.txt", "direct", 0);
+    emm_session_config c = base_config();
+    c.report_path = "run.json";
+    c.profile_dump = "run.csv";
+    c.trace_path = "run.emmt";
+    remove("run.json");
+    remove("run.csv");
+    remove("run.emmt");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    uint64_t lo[4], hi[4];
+    CHECK(emm_session_ranges(s, lo, hi, 4) == 2);
+    CHECK(lo[0] == vbase && hi[0] == vbase + nv * VSTRIDE);
+    CHECK(feed(s, 777, 0) == 1);
+    FILE *sum = tmpfile();
+    REQUIRE(sum);
+    CHECKF(emm_session_finish(s, sum, &err) == EMM_OK, "%s", err.message);
+    rewind(sum);
+    char text[4096] = {0};
+    CHECK(fread(text, 1, sizeof text - 1, sum) > 0);
+    fclose(sum);
+    printf("%s", text);
+    CHECK(has(text, "emm: test_session: pattern region (nearest mine, distance 0.00)"));
+    CHECK(has(text, "emm: strategy direct (from the table)"));
+    CHECK(has(text, "emm:   cache"));
+    CHECK(has(text, "faster)"));
+    emm_session_free(s);
+
+    /* The report: the session's keys and the totals of the whole run. */
+    char *json = slurp("run.json");
+    CHECK(json != NULL);
+    CHECK(has(json, "\"pattern\": \"region\""));
+    CHECK(has(json, "\"strategy\": \"direct\""));
+    CHECK(has(json, "\"nearest\": \"mine\""));
+    CHECK(has(json, "\"novel\": false"));
+    CHECK(has(json, "\"source\": \"table\""));
+    CHECK(has(json, "\"capture\": \"test\""));
+    CHECK(has_u64(json, "element_accesses", WINDOW));
+    CHECK(has_u64(json, "accesses", nrecs));
+    CHECK(has_u64(json, "total", expect_direct.total));
+    CHECK(has_u64(json, "total", expect_cache.total));
+    free(json);
+
+    /* The CSV: i,D for the window's element accesses. */
+    char *csv = slurp("run.csv");
+    CHECK(has(csv, "i,D\n0,0\n1,"));
+    size_t lines = 0;
+    for (const char *p = csv; p && *p; p++)
+        lines += *p == '\n';
+    CHECK(lines == WINDOW + 1);
+    free(csv);
+
+    /* EMM_TRACE: the same records, and replay gives the same numbers. */
+    emm_trace_reader *r;
+    REQUIRE(emm_trace_reader_open("run.emmt", &r, &err) == EMM_OK);
+    const emm_trace_info *info = emm_trace_reader_info(r);
+    CHECK(info->accesses == nrecs);
+    CHECK(info->narrays == 2 && info->arrays[0].base == vbase && info->arrays[1].base == tbase);
+    CHECK(info->geometry.nv == nv && info->geometry.nt == nt);
+    emm_trace_record buf[512];
+    size_t got, at = 0, same = 0;
+    while (emm_trace_read(r, buf, 512, &got, &err) == EMM_OK && got) {
+        for (size_t k = 0; k < got && at + k < nrecs; k++) {
+            const emm_trace_record *a = &buf[k], *b = &recs[at + k];
+            same += a->array == b->array && a->element == b->element && a->offset == b->offset &&
+                    a->bytes == b->bytes && a->work == b->work && a->write == b->write;
+        }
+        at += got;
+    }
+    CHECKF(same == nrecs, "%zu of %zu records equal", same, nrecs);
+    emm_trace_reader_close(r);
+    emm_machine *mach;
+    REQUIRE(emm_machine_new(&mach, &err) == EMM_OK);
+    emm_result res[2];
+    emm_strategy st[2] = {expect_direct.strategy, expect_cache.strategy};
+    REQUIRE(emm_replay("run.emmt", mach, st, 2, res, NULL, NULL, NULL, &err) == EMM_OK);
+    same_result(&res[0], &expect_direct);
+    same_result(&res[1], &expect_cache);
+    emm_machine_free(mach);
+}
+
+/* A short program: the window never fills, the decision comes at finish,
+ * after the program has freed its arrays. */
+static void test_window_not_filled(void)
+{
+    emm_error err;
+    emm_session *s;
+    write_table("table.txt", "direct", 0);
+    emm_session_config c = base_config();
+    c.window_accesses = 1000000000;
+    c.report_path = "short.json";
+    c.strategy = "cache";
+    c.compare = EMM_COMPARE_NONE;
+    remove("short.json");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    CHECK(feed(s, 4096, 0) == 0);
+    /* The program frees its mesh before exit: the session keeps what the
+     * decision needs (the memory is scribbled over to prove it). */
+    emm_session_untag(s, vmem);
+    emm_session_untag(s, tmem);
+    unsigned char *save_v = malloc(nv * VSTRIDE), *save_t = malloc(nt * TSTRIDE);
+    REQUIRE(save_v && save_t);
+    memcpy(save_v, vmem, nv * VSTRIDE);
+    memcpy(save_t, tmem, nt * TSTRIDE);
+    memset(vmem, 0xff, nv * VSTRIDE);
+    memset(tmem, 0xff, nt * TSTRIDE);
+    CHECKF(emm_session_finish(s, NULL, &err) == EMM_OK, "%s", err.message);
+    memcpy(vmem, save_v, nv * VSTRIDE);
+    memcpy(tmem, save_t, nt * TSTRIDE);
+    free(save_v);
+    free(save_t);
+    CHECK(emm_session_finish(s, NULL, &err) == EMM_OK); /* a second call does nothing */
+    emm_session_free(s);
+    char *json = slurp("short.json");
+    CHECK(has(json, "\"strategy\": \"cache\""));
+    CHECK(has(json, "\"source\": \"configured\""));
+    CHECK(has(json, "\"pattern\": \"region\"")); /* the table still names the nearest */
+    CHECK(has_u64(json, "total", expect_cache.total));
+    CHECK(!has_u64(json, "total", expect_direct.total)); /* compare none */
+    free(json);
+}
+
+/* A profile far from every sample: the candidates are simulated on the
+ * window and the best is taken. */
+static void test_novel(void)
+{
+    emm_error err;
+    emm_session *s;
+    write_table("far.txt", NULL, 1);
+    emm_session_config c = base_config();
+    c.table_path = "far.txt";
+    c.report_path = "novel.json";
+    remove("novel.json");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    CHECK(feed(s, 1000, 0) == 1);
+    CHECKF(emm_session_finish(s, NULL, &err) == EMM_OK, "%s", err.message);
+    emm_session_free(s);
+    char *json = slurp("novel.json");
+    CHECK(has(json, "\"novel\": true"));
+    CHECK(has(json, "\"source\": \"simulated\""));
+    CHECK(has(json, "\"nearest\": \"far\""));
+    CHECK(has(json, "\"pattern\": \"novel\""));
+    CHECK(has(json, "\"nearest_pattern\": \"random\""));
+    free(json);
+}
+
+/* The whole sweep (run on two threads): the baselines' totals are still
+ * those of a replay, and every strategy is in the report. */
+static void test_compare_all(void)
+{
+    emm_error err;
+    emm_session *s;
+    emm_session_config c = base_config();
+    c.strategy = "direct";
+    c.compare = EMM_COMPARE_ALL;
+    c.report_path = "all.json";
+    remove("all.json");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    CHECK(feed(s, 300, 0) == 1);
+    CHECKF(emm_session_finish(s, NULL, &err) == EMM_OK, "%s", err.message);
+    emm_session_free(s);
+    char *json = slurp("all.json");
+    CHECK(has_u64(json, "total", expect_direct.total));
+    CHECK(has_u64(json, "total", expect_cache.total));
+    size_t results = 0;
+    for (const char *p = json; p && (p = strstr(p, "\"seconds\"")); p++)
+        results++;
+    emm_strategy sweep[64];
+    size_t n = emm_strategy_sweep(sweep, 64);
+    CHECKF(results >= 2 && results <= n, "%zu results", results);
+    printf("compare all: %zu of %zu strategies simulated\n", results, n);
+    free(json);
+}
+
+/* The window counted in emm_iteration() calls. */
+static void test_iterations(void)
+{
+    emm_error err;
+    emm_session *s;
+    emm_session_config c = base_config();
+    c.window_accesses = 0;
+    c.window_iterations = 3;
+    c.strategy = "direct";
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    CHECK(feed(s, 500, 1) == 1);
+    CHECK(emm_session_finish(s, NULL, &err) == EMM_OK);
+    emm_session_free(s);
+}
+
+/* A report whose directory disappears is absent, not half written; one
+ * whose directory does not exist is refused at the start. */
+static void test_report_whole_or_absent(void)
+{
+    emm_error err;
+    emm_session *s;
+    emm_session_config c = base_config();
+    c.report_path = "no-such-dir/r.json";
+    CHECK(emm_session_new(&c, &s, &err) == EMM_ERR_IO);
+    CHECKF(has(err.message, "EMM_REPORT") && has(err.message, "no-such-dir"), "%s", err.message);
+
+    mkdir("gone", 0755);
+    c.report_path = "gone/r.json";
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    feed(s, 2048, 0);
+    REQUIRE(rmdir("gone") == 0);
+    CHECK(emm_session_finish(s, NULL, &err) == EMM_ERR_IO);
+    CHECKF(has(err.message, "EMM_REPORT"), "%s", err.message);
+    CHECK(access("gone/r.json", F_OK) != 0);
+    emm_session_free(s);
+}
+
+static void test_bad_config(void)
+{
+    emm_error err;
+    emm_session *s;
+    emm_session_config c = base_config();
+    c.strategy = "grid+sideways";
+    CHECK(emm_session_new(&c, &s, &err) == EMM_ERR_INVALID);
+    CHECKF(has(err.message, "EMM_STRATEGY"), "%s", err.message);
+    c = base_config();
+    c.machine_path = "no-such-machine.ini";
+    CHECK(emm_session_new(&c, &s, &err) != EMM_OK);
+    CHECKF(has(err.message, "EMM_MACHINE"), "%s", err.message);
+    c = base_config();
+    c.table_path = "no-such-table.txt";
+    CHECK(emm_session_new(&c, &s, &err) != EMM_OK);
+    CHECKF(has(err.message, "EMM_TABLE"), "%s", err.message);
+}
+
+/* Wrong vertex indices (a rule with the wrong offset): the session reports
+ * it and steps aside; no report is written. */
+static void test_bad_geometry(void)
+{
+    emm_error err;
+    emm_session *s;
+    emm_session_config c = base_config();
+    c.report_path = "bad.json";
+    remove("bad.json");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_F64) >= 0);
+    CHECK(emm_session_tag(s, EMM_ARRAY_TRIANGLES, tmem, nt, TSTRIDE, 0, EMM_I64) >= 0);
+    emm_raw_access a[WINDOW];
+    for (size_t i = 0; i < WINDOW; i++)
+        a[i] = (emm_raw_access){vbase + (i % nv) * VSTRIDE + 8, 8, 0};
+    CHECK(emm_session_access(s, a, WINDOW) == EMM_SESSION_DECIDE);
+    CHECK(emm_session_decide(s, &err) == EMM_ERR_MESH);
+    CHECKF(has(err.message, "vertex index"), "%s", err.message);
+    CHECK(emm_session_access(s, a, 1) == EMM_SESSION_OFF);
+    FILE *sum = tmpfile();
+    CHECK(emm_session_finish(s, sum, &err) == EMM_ERR_MESH);
+    rewind(sum);
+    char text[1024] = {0};
+    CHECK(fread(text, 1, sizeof text - 1, sum) > 0);
+    fclose(sum);
+    CHECKF(has(text, "no simulation") && has(text, "vertex index"), "%s", text);
+    CHECK(access("bad.json", F_OK) != 0);
+    emm_session_free(s);
+}
+
+/* Tags: re-tagging a range replaces it; an untagged array's accesses are
+ * dropped; nonsense is refused. */
+static void test_tags(void)
+{
+    emm_error err;
+    emm_session *s;
+    emm_session_config c = base_config();
+    c.strategy = "direct";
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 78, EMM_F64) < 0);
+    CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_I32) < 0);
+    CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, 0, VSTRIDE, 8, EMM_F64) < 0);
+    int a = emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv / 2, VSTRIDE, 8, EMM_F64);
+    int b = emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_F64);
+    CHECK(a >= 0 && b >= 0);
+    uint64_t lo[4], hi[4];
+    CHECK(emm_session_ranges(s, lo, hi, 4) == 1 && hi[0] == vbase + nv * VSTRIDE);
+    emm_session_untag(s, vmem);
+    CHECK(emm_session_ranges(s, lo, hi, 4) == 0);
+    emm_raw_access x = {vbase + 8, 8, 0};
+    emm_session_access(s, &x, 1);
+    CHECK(emm_session_finish(s, NULL, &err) != EMM_OK); /* nothing tagged at the decision */
+    CHECKF(has(err.message, "no vertex array was tagged"), "%s", err.message);
+    emm_session_free(s);
+}
+
+int main(void)
+{
+    setup();
+    test_decide_from_table();
+    test_window_not_filled();
+    test_novel();
+    test_compare_all();
+    test_iterations();
+    test_report_whole_or_absent();
+    test_bad_config();
+    test_bad_geometry();
+    test_tags();
+    free(recs);
+    free(vmem);
+    free(tmem);
+    return check_done();
+}
