@@ -17,6 +17,7 @@
 #include "emm/mesh.h"
 #include "emm/profile.h"
 #include "emm/session.h"
+#include "emm/table.h"
 #include "emm/sim.h"
 #include "emm/synth.h"
 #include "emm/trace.h"
@@ -117,7 +118,7 @@ static void write_table(const char *path, const char *near, int only_far)
 {
     FILE *f = fopen(path, "w");
     REQUIRE(f);
-    fprintf(f, "emm-table 1 features=%d\n", EMM_FEATURES);
+    fprintf(f, "emm-table %d features=%d\n", EMM_TABLE_VERSION, EMM_FEATURES);
     if (!only_far) {
         fprintf(f, "mine region %s", near);
         for (int k = 0; k < EMM_FEATURES; k++)
