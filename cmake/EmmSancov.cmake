@@ -1,0 +1,70 @@
+# emm_sancov_executable(TARGET name SOURCES src... [OUTPUT_NAME name]
+#                       [INCLUDE_DIRECTORIES dir...] [COMPILE_DEFINITIONS def...]
+#                       [COMPILE_OPTIONS opt...] [LINK_LIBRARIES lib...])
+#
+# Builds a program for EMM_CAPTURE=sancov (DESIGN.md "The shim"): its sources
+# are compiled by clang with sanitizer-coverage callbacks on every load,
+# store and edge, and vectorisation off (wider-than-16-byte vector accesses
+# are not reported). The flags go on the compile step only: on the link line
+# they would pull in a static runtime whose callbacks the preloaded shim
+# cannot override. The program links libemmhooks.so (no-op callbacks), so it
+# runs with or without the shim.
+#
+# clang 14's `edge` alone emits no callback: trace-pc-guard is edge coverage
+# with one, which the shim counts as work between accesses.
+#
+# When the project's C compiler is not clang, the sources are compiled by a
+# clang found on the PATH (include directories, definitions and options must
+# then be given here); without clang the target is skipped with a message.
+function(emm_sancov_executable)
+  # Set here, not at file scope: the function is called from other directories.
+  set(EMM_SANCOV_FLAGS -fsanitize-coverage=trace-pc-guard,trace-loads,trace-stores
+      -fno-vectorize -fno-slp-vectorize)
+  cmake_parse_arguments(S "" "TARGET;OUTPUT_NAME"
+    "SOURCES;INCLUDE_DIRECTORIES;COMPILE_DEFINITIONS;COMPILE_OPTIONS;LINK_LIBRARIES" ${ARGN})
+  if(NOT S_TARGET OR NOT S_SOURCES)
+    message(FATAL_ERROR "emm_sancov_executable: TARGET and SOURCES are required")
+  endif()
+  if(NOT TARGET emmhooks)
+    message(STATUS "emm: ${S_TARGET} not built (no libemmhooks in this configuration)")
+    return()
+  endif()
+  if(CMAKE_C_COMPILER_ID MATCHES "Clang")
+    add_executable(${S_TARGET} ${S_SOURCES})
+    target_compile_options(${S_TARGET} PRIVATE ${EMM_SANCOV_FLAGS} ${S_COMPILE_OPTIONS})
+    target_include_directories(${S_TARGET} PRIVATE ${S_INCLUDE_DIRECTORIES})
+    target_compile_definitions(${S_TARGET} PRIVATE ${S_COMPILE_DEFINITIONS})
+  else()
+    find_program(EMM_CLANG NAMES clang clang-19 clang-18 clang-17 clang-16 clang-15 clang-14)
+    if(NOT EMM_CLANG)
+      message(STATUS "emm: no clang found: ${S_TARGET} (EMM_CAPTURE=sancov build) not built")
+      return()
+    endif()
+    set(flags -std=c11 -O2 -g -fPIE)
+    foreach(d ${S_INCLUDE_DIRECTORIES})
+      list(APPEND flags -I${d})
+    endforeach()
+    foreach(d ${S_COMPILE_DEFINITIONS})
+      list(APPEND flags -D${d})
+    endforeach()
+    set(objects)
+    file(MAKE_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR}/${S_TARGET}.sancov)
+    foreach(src ${S_SOURCES})
+      get_filename_component(abs ${src} ABSOLUTE)
+      get_filename_component(stem ${src} NAME_WE)
+      set(obj ${CMAKE_CURRENT_BINARY_DIR}/${S_TARGET}.sancov/${stem}.o)
+      add_custom_command(OUTPUT ${obj}
+        COMMAND ${EMM_CLANG} ${flags} ${EMM_SANCOV_FLAGS} ${S_COMPILE_OPTIONS}
+                -MD -MF ${obj}.d -c ${abs} -o ${obj}
+        DEPENDS ${abs} DEPFILE ${obj}.d
+        COMMENT "Compiling ${src} with sanitizer coverage (${S_TARGET})" VERBATIM)
+      list(APPEND objects ${obj})
+    endforeach()
+    add_executable(${S_TARGET} ${objects})
+    set_target_properties(${S_TARGET} PROPERTIES LINKER_LANGUAGE C)
+  endif()
+  target_link_libraries(${S_TARGET} PRIVATE emmhooks ${S_LINK_LIBRARIES})
+  if(S_OUTPUT_NAME)
+    set_target_properties(${S_TARGET} PROPERTIES OUTPUT_NAME ${S_OUTPUT_NAME})
+  endif()
+endfunction()

@@ -1,0 +1,398 @@
+/* The fault capture backend (DESIGN.md "The shim", Capture backends: fault):
+ * an unmodified binary's accesses to the tagged arrays, seen by protecting
+ * their pages and single-stepping each access.
+ *
+ * - Arrays that EMM_TAG rules select get pages of their own (the allocator
+ *   serves them with mmap); the whole mapping is protected. An array tagged
+ *   after its allocation (emm_tag_*) shares its first and last pages with
+ *   other heap data: only the pages wholly inside it are protected, so the
+ *   C library never meets a protected page in its own data (a stdio buffer
+ *   beside the array would make the kernel's write fail with EFAULT). The
+ *   records on those edge pages are not seen.
+ * - SIGSEGV on a protected page: record the access (address from si_addr;
+ *   8 bytes, the size of a coordinate or a pointer, since decoding the
+ *   instruction is not worth it; write from the page-fault error code),
+ *   unprotect the page, set the trap flag so that SIGTRAP follows the one
+ *   instruction, then protect the page again and clear the flag.
+ * - Costs tens of microseconds per access, so it covers the profiling window
+ *   only: when the session wants to decide, every protection is lifted and
+ *   capture stops (the report says capture "fault").
+ * - Threads other than the faulting one may slip through a page while it is
+ *   open: capture is exact single-threaded, approximate otherwise.
+ * - System calls that pass protected memory to the kernel would fail with
+ *   EFAULT instead of faulting: read, write, pread, pwrite, recv, send,
+ *   fread and fwrite open the pages they touch for the call.
+ * - The program's own SIGSEGV and SIGTRAP handlers are kept (sigaction and
+ *   signal are interposed) and called for every fault that is not ours. */
+#include <dlfcn.h>
+#include <signal.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <sys/socket.h>
+#include <ucontext.h>
+#include <unistd.h>
+
+#include "shim.h"
+
+#define TRAP_FLAG 0x100
+
+/* The protected pages of tag slot i; plo == phi: none. Read by the signal
+ * handlers without the lock. */
+static struct {
+    uintptr_t plo, phi;   /* protected pages */
+    uintptr_t lo, hi;     /* the array's bytes */
+    int io;               /* system calls that have the pages open */
+} reg[SHIM_MAX_TAGS];
+
+static bool watching;     /* profiling: protect new arrays, reprotect pages */
+static bool installed;    /* our SIGSEGV/SIGTRAP handlers are in place */
+static struct sigaction saved_segv, saved_trap;  /* the program's */
+
+static __thread uintptr_t pending[4] SHIM_TLS;
+static __thread int npending SHIM_TLS;
+
+static size_t page_size(void)
+{
+    static size_t ps;
+    if (!ps)
+        ps = (size_t)sysconf(_SC_PAGESIZE);
+    return ps;
+}
+
+int shim_real_sigaction(int sig, const struct sigaction *act, struct sigaction *old)
+{
+    static int (*real)(int, const struct sigaction *, struct sigaction *);
+    if (!real)
+        real = (int (*)(int, const struct sigaction *, struct sigaction *))dlsym(RTLD_NEXT, "sigaction");
+    return real(sig, act, old);
+}
+
+bool shim_fault_watching(void)
+{
+    return __atomic_load_n(&watching, __ATOMIC_RELAXED);
+}
+
+void *shim_fault_map(size_t size, size_t *map_len)
+{
+    size_t ps = page_size();
+    size_t len = (size + ps - 1) & ~(ps - 1);
+    if (len < size)
+        return NULL;
+    void *p = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED)
+        return NULL;
+    *map_len = len;
+    return p;
+}
+
+void shim_fault_protect(struct shim_tag *t)
+{
+    size_t i = (size_t)(t - shim.tags), ps = page_size();
+    uintptr_t plo, phi;
+    if (t->map) {
+        plo = (uintptr_t)t->map;
+        phi = plo + t->map_len;
+    } else {
+        plo = (t->base + ps - 1) & ~(uintptr_t)(ps - 1);
+        phi = (t->base + t->bytes) & ~(uintptr_t)(ps - 1);
+    }
+    if (plo >= phi)
+        return;
+    __atomic_store_n(&reg[i].lo, t->base, __ATOMIC_RELAXED);
+    __atomic_store_n(&reg[i].hi, t->base + t->bytes, __ATOMIC_RELAXED);
+    __atomic_store_n(&reg[i].plo, plo, __ATOMIC_RELAXED);
+    __atomic_store_n(&reg[i].phi, phi, __ATOMIC_RELEASE);
+    if (reg[i].io == 0)
+        mprotect((void *)plo, phi - plo, PROT_NONE);
+    t->protected_ = true;
+}
+
+void shim_fault_unprotect(struct shim_tag *t)
+{
+    size_t i = (size_t)(t - shim.tags);
+    uintptr_t plo = reg[i].plo, phi = reg[i].phi;
+    __atomic_store_n(&reg[i].phi, 0, __ATOMIC_RELEASE);
+    __atomic_store_n(&reg[i].plo, 0, __ATOMIC_RELAXED);
+    if (plo < phi)
+        mprotect((void *)plo, phi - plo, PROT_READ | PROT_WRITE);
+    reg[i].io = 0;
+    t->protected_ = false;
+}
+
+void shim_fault_lift(void)
+{
+    __atomic_store_n(&watching, false, __ATOMIC_RELAXED);
+    for (size_t i = 0; i < SHIM_MAX_TAGS; i++)
+        if (shim.tags[i].base && shim.tags[i].protected_)
+            shim_fault_unprotect(&shim.tags[i]);
+}
+
+void shim_fault_child(void)
+{
+    shim_fault_lift();
+    npending = 0;
+}
+
+static int region_of(uintptr_t a)
+{
+    for (int i = 0; i < SHIM_MAX_TAGS; i++) {
+        uintptr_t plo = __atomic_load_n(&reg[i].plo, __ATOMIC_RELAXED);
+        uintptr_t phi = __atomic_load_n(&reg[i].phi, __ATOMIC_ACQUIRE);
+        if (a >= plo && a < phi)
+            return i;
+    }
+    return -1;
+}
+
+/* A signal that is not ours goes to the program's handler, or gets the
+ * default action. */
+static void chain(int sig, siginfo_t *si, void *uctx)
+{
+    struct sigaction *pa = sig == SIGSEGV ? &saved_segv : &saved_trap;
+    if (pa->sa_flags & SA_SIGINFO) {
+        void (*h)(int, siginfo_t *, void *) = pa->sa_sigaction;
+        if (pa->sa_flags & SA_RESETHAND)
+            pa->sa_handler = SIG_DFL, pa->sa_flags &= ~SA_SIGINFO;
+        h(sig, si, uctx);
+        return;
+    }
+    void (*h)(int) = pa->sa_handler;
+    if (h == SIG_IGN && sig == SIGTRAP)
+        return;
+    if (h == SIG_DFL || h == SIG_IGN) {
+        /* The default action: for a real fault, returning re-runs the
+         * instruction, which faults again without us; a sent or trap-made
+         * signal is raised again. */
+        struct sigaction dfl;
+        memset(&dfl, 0, sizeof dfl);
+        dfl.sa_handler = SIG_DFL;
+        shim_real_sigaction(sig, &dfl, NULL);
+        if (sig == SIGTRAP || si->si_code <= 0)
+            raise(sig);
+        return;
+    }
+    if (pa->sa_flags & SA_RESETHAND)
+        pa->sa_handler = SIG_DFL;
+    h(sig);
+}
+
+static void on_segv(int sig, siginfo_t *si, void *uctx)
+{
+    uintptr_t a = (uintptr_t)si->si_addr;
+    int r = si->si_code == SEGV_ACCERR ? region_of(a) : -1;
+    if (r < 0) {
+        chain(sig, si, uctx);
+        return;
+    }
+    ucontext_t *uc = uctx;
+    uintptr_t page = a & ~(uintptr_t)(page_size() - 1);
+    bool write = (uc->uc_mcontext.gregs[REG_ERR] & 2) != 0;
+    if (shim_fault_watching() && !shim_busy && a >= reg[r].lo && a < reg[r].hi)
+        shim_record(a, 8, write);
+    mprotect((void *)page, page_size(), PROT_READ | PROT_WRITE);
+    if (npending < 4)
+        pending[npending++] = page;
+    uc->uc_mcontext.gregs[REG_EFL] |= TRAP_FLAG;
+}
+
+static void on_trap(int sig, siginfo_t *si, void *uctx)
+{
+    ucontext_t *uc = uctx;
+    if (npending == 0 || !(uc->uc_mcontext.gregs[REG_EFL] & TRAP_FLAG)) {
+        chain(sig, si, uctx);
+        return;
+    }
+    for (int i = 0; i < npending; i++) {
+        int r = region_of(pending[i]);
+        if (r >= 0 && shim_fault_watching() && __atomic_load_n(&reg[r].io, __ATOMIC_RELAXED) == 0)
+            mprotect((void *)pending[i], page_size(), PROT_NONE);
+    }
+    npending = 0;
+    uc->uc_mcontext.gregs[REG_EFL] &= ~(greg_t)TRAP_FLAG;
+}
+
+bool shim_fault_init(void)
+{
+    if (shim_real_sigaction(SIGSEGV, NULL, &saved_segv) != 0
+        || shim_real_sigaction(SIGTRAP, NULL, &saved_trap) != 0)
+        return false;
+    struct sigaction act;
+    memset(&act, 0, sizeof act);
+    sigemptyset(&act.sa_mask);
+    act.sa_flags = SA_SIGINFO;
+    act.sa_sigaction = on_segv;
+    if (shim_real_sigaction(SIGSEGV, &act, NULL) != 0)
+        return false;
+    act.sa_sigaction = on_trap;
+    if (shim_real_sigaction(SIGTRAP, &act, NULL) != 0)
+        return false;
+    __atomic_store_n(&installed, true, __ATOMIC_RELEASE);
+    __atomic_store_n(&watching, true, __ATOMIC_RELEASE);
+    return true;
+}
+
+/* --- the program's signal handlers ------------------------------------- */
+
+EMM_API int sigaction(int sig, const struct sigaction *act, struct sigaction *old);
+EMM_API sighandler_t signal(int sig, sighandler_t handler);
+
+int sigaction(int sig, const struct sigaction *act, struct sigaction *old)
+{
+    if (__atomic_load_n(&installed, __ATOMIC_ACQUIRE) && (sig == SIGSEGV || sig == SIGTRAP)) {
+        struct sigaction *pa = sig == SIGSEGV ? &saved_segv : &saved_trap;
+        if (old)
+            *old = *pa;
+        if (act)
+            *pa = *act;
+        return 0;
+    }
+    return shim_real_sigaction(sig, act, old);
+}
+
+sighandler_t signal(int sig, sighandler_t handler)
+{
+    static sighandler_t (*real)(int, sighandler_t);
+    if (!__atomic_load_n(&installed, __ATOMIC_ACQUIRE) || (sig != SIGSEGV && sig != SIGTRAP)) {
+        if (!real)
+            real = (sighandler_t (*)(int, sighandler_t))dlsym(RTLD_NEXT, "signal");
+        return real(sig, handler);
+    }
+    struct sigaction act, old;
+    memset(&act, 0, sizeof act);
+    act.sa_handler = handler;
+    sigemptyset(&act.sa_mask);
+    act.sa_flags = SA_RESTART;
+    sigaction(sig, &act, &old);
+    return (old.sa_flags & SA_SIGINFO) ? (sighandler_t)(void (*)(void))old.sa_sigaction : old.sa_handler;
+}
+
+/* --- system calls on protected memory ---------------------------------- */
+
+/* Opens the protected pages that [p, p + n) touches; returns which. */
+static uint64_t io_begin(const void *p, size_t n)
+{
+    if (!__atomic_load_n(&installed, __ATOMIC_RELAXED) || !shim_fault_watching() || shim_busy || n == 0)
+        return 0;
+    uintptr_t a = (uintptr_t)p, b = a + n;
+    uint64_t mask = 0;
+    for (int i = 0; i < SHIM_MAX_TAGS; i++)
+        if (__atomic_load_n(&reg[i].phi, __ATOMIC_RELAXED) > a
+            && __atomic_load_n(&reg[i].plo, __ATOMIC_RELAXED) < b)
+            mask |= 1ull << i;
+    if (!mask)
+        return 0;
+    shim_busy++;
+    pthread_mutex_lock(&shim.lock);
+    for (int i = 0; i < SHIM_MAX_TAGS; i++)
+        if ((mask >> i & 1) && reg[i].plo < reg[i].phi) {
+            if (reg[i].io++ == 0)
+                mprotect((void *)reg[i].plo, reg[i].phi - reg[i].plo, PROT_READ | PROT_WRITE);
+        } else {
+            mask &= ~(1ull << i);
+        }
+    pthread_mutex_unlock(&shim.lock);
+    shim_busy--;
+    return mask;
+}
+
+static void io_end(uint64_t mask)
+{
+    if (!mask)
+        return;
+    shim_busy++;
+    pthread_mutex_lock(&shim.lock);
+    for (int i = 0; i < SHIM_MAX_TAGS; i++)
+        if ((mask >> i & 1) && reg[i].io > 0 && --reg[i].io == 0 && reg[i].plo < reg[i].phi
+            && shim_fault_watching())
+            mprotect((void *)reg[i].plo, reg[i].phi - reg[i].plo, PROT_NONE);
+    pthread_mutex_unlock(&shim.lock);
+    shim_busy--;
+}
+
+/* The next definition of `name` (the C library's, or libemm's). */
+#define REAL(name)                                        \
+    static __typeof__(name) *real_##name;                 \
+    if (!real_##name)                                     \
+        real_##name = (__typeof__(name) *)dlsym(RTLD_NEXT, #name)
+
+EMM_API ssize_t read(int fd, void *buf, size_t n);
+EMM_API ssize_t write(int fd, const void *buf, size_t n);
+EMM_API ssize_t pread(int fd, void *buf, size_t n, off_t off);
+EMM_API ssize_t pwrite(int fd, const void *buf, size_t n, off_t off);
+EMM_API ssize_t recv(int fd, void *buf, size_t n, int flags);
+EMM_API ssize_t send(int fd, const void *buf, size_t n, int flags);
+EMM_API size_t fread(void *buf, size_t size, size_t n, FILE *f);
+EMM_API size_t fwrite(const void *buf, size_t size, size_t n, FILE *f);
+
+ssize_t read(int fd, void *buf, size_t n)
+{
+    REAL(read);
+    uint64_t m = io_begin(buf, n);
+    ssize_t r = real_read(fd, buf, n);
+    io_end(m);
+    return r;
+}
+
+ssize_t write(int fd, const void *buf, size_t n)
+{
+    REAL(write);
+    uint64_t m = io_begin(buf, n);
+    ssize_t r = real_write(fd, buf, n);
+    io_end(m);
+    return r;
+}
+
+ssize_t pread(int fd, void *buf, size_t n, off_t off)
+{
+    REAL(pread);
+    uint64_t m = io_begin(buf, n);
+    ssize_t r = real_pread(fd, buf, n, off);
+    io_end(m);
+    return r;
+}
+
+ssize_t pwrite(int fd, const void *buf, size_t n, off_t off)
+{
+    REAL(pwrite);
+    uint64_t m = io_begin(buf, n);
+    ssize_t r = real_pwrite(fd, buf, n, off);
+    io_end(m);
+    return r;
+}
+
+ssize_t recv(int fd, void *buf, size_t n, int flags)
+{
+    REAL(recv);
+    uint64_t m = io_begin(buf, n);
+    ssize_t r = real_recv(fd, buf, n, flags);
+    io_end(m);
+    return r;
+}
+
+ssize_t send(int fd, const void *buf, size_t n, int flags)
+{
+    REAL(send);
+    uint64_t m = io_begin(buf, n);
+    ssize_t r = real_send(fd, buf, n, flags);
+    io_end(m);
+    return r;
+}
+
+size_t fread(void *buf, size_t size, size_t n, FILE *f)
+{
+    REAL(fread);
+    uint64_t m = size && n <= SIZE_MAX / size ? io_begin(buf, size * n) : 0;
+    size_t r = real_fread(buf, size, n, f);
+    io_end(m);
+    return r;
+}
+
+size_t fwrite(const void *buf, size_t size, size_t n, FILE *f)
+{
+    REAL(fwrite);
+    uint64_t m = size && n <= SIZE_MAX / size ? io_begin(buf, size * n) : 0;
+    size_t r = real_fwrite(buf, size, n, f);
+    io_end(m);
+    return r;
+}
