@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "env.h"
 #include "emm/strategy.h"
 #include "parse.h"
 
@@ -49,7 +50,9 @@ static void usage(FILE *out)
             "%%p in a FILE becomes the process id. EMM_* variables already in the\n"
             "environment apply unless an option sets them. The shim is looked for beside\n"
             "this executable: <bindir>/../lib/" SHIM_NAME " (build tree and install), and\n"
-            "<bindir>/../lib64 and <bindir>/../lib/<multiarch>/ when installed there.\n");
+            "<bindir>/../lib64 and <bindir>/../lib/<multiarch>/ when installed there.\n"
+            "\n");
+    shim_env_help(out);
 }
 
 /* out = a + b + c; false when it does not fit. */
