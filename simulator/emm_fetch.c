@@ -16,6 +16,7 @@
 #include "emm_fetch.h"
 
 #include <assert.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,8 +30,10 @@
 
 enum { ARR_VERTICES = 0, ARR_TRIANGLES = 1, ARR_OTHER = 2 };
 
-/* Per-cell flags. */
-enum { CELL_PRESENT = 1u, CELL_PREFETCHED = 2u };
+/* Per-cell flags. CELL_USELESS: the cell's last prefetch was evicted
+ * unused; it is not prefetched again until the program enters it
+ * (docs/fetch.md, "Prefetch filter"). */
+enum { CELL_PRESENT = 1u, CELL_PREFETCHED = 2u, CELL_USELESS = 4u };
 
 typedef struct fetch_model {
     struct emm_model base;
@@ -54,6 +57,7 @@ typedef struct fetch_model {
     uint64_t compute_per_access, compute_per_work;
     uint64_t direct_read, direct_write;
     uint32_t word_shift, fifo_cap;
+    bool filter; /* emm.prefetch_filter */
     uint64_t budget, lookup_bytes;
 
     /* The run. */
@@ -71,7 +75,8 @@ typedef struct fetch_model {
     uint32_t fifo_len, fifo_pos;
     uint64_t accesses;
     uint64_t cell_changes, demand_fetches, demand_bytes, prefetches, prefetch_bytes;
-    uint64_t useful_prefetches, dropped_prefetches, evictions, other_accesses;
+    uint64_t useful_prefetches, dropped_prefetches, filtered_prefetches, evictions;
+    uint64_t other_accesses;
 
     emm_fetch_evict_hook hook;
     void *hook_ctx;
@@ -109,7 +114,7 @@ static void evict(fetch_model *m, uint32_t c)
     if (m->hook)
         m->hook(m->hook_ctx, c, m->now, m->ready[c]);
     lru_unlink(m, c);
-    m->flags[c] = 0;
+    m->flags[c] = m->flags[c] & CELL_PREFETCHED ? CELL_USELESS : 0;
     m->used -= m->cell_bytes[c];
     m->evictions++;
 }
@@ -186,9 +191,13 @@ static void demand_fetch(fetch_model *m, uint32_t c)
 
 /* A cell the scheme expects the program to need soon (`entered` is the cell
  * being worked on, which stays). Finding the cell is a look-up; an empty
- * cell holds nothing to fetch; a present one needs nothing. A prefetch that
- * finds no room without evicting a cell in flight is dropped: waiting would
- * stall the core for a guess. */
+ * cell holds nothing to fetch; a present one needs nothing. Nor does a cell
+ * whose last prefetch was evicted unused, until the program enters it: the
+ * prefetch pollution filter of Zhuang & Lee (ICPP 2003), one bit per cell
+ * beside the residency bit, so a guess that already failed once cannot
+ * keep pushing the cells in use out. A prefetch that finds no room without
+ * evicting a cell in flight is dropped: waiting would stall the core for a
+ * guess. */
 static void prefetch(fetch_model *m, uint32_t c, uint32_t entered)
 {
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->lookup_cost[c]);
@@ -197,6 +206,10 @@ static void prefetch(fetch_model *m, uint32_t c, uint32_t entered)
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->residency);
     if (m->flags[c] & CELL_PRESENT)
         return;
+    if ((m->flags[c] & CELL_USELESS) && m->filter) {
+        m->filtered_prefetches++;
+        return;
+    }
     if (!make_room(m, m->cell_bytes[c], entered)) {
         m->dropped_prefetches++;
         return;
@@ -279,7 +292,6 @@ static void direct_access(fetch_model *m, const emm_trace_record *r)
 static void access_one(fetch_model *m, const emm_trace_record *r)
 {
     uint32_t c;
-    uint64_t words;
     charge(m, EMM_BUCKET_COMPUTE, m->compute_per_access + (uint64_t)r->work * m->compute_per_work);
     switch (m->array_kind[r->array]) {
     case ARR_TRIANGLES:
@@ -321,8 +333,10 @@ static void access_one(fetch_model *m, const emm_trace_record *r)
         lru_unlink(m, c);
         lru_push_front(m, c);
     }
-    words = ((r->offset + r->bytes - 1) >> m->word_shift) - (r->offset >> m->word_shift) + 1;
-    charge(m, EMM_BUCKET_LOCAL_ACCESS, words * m->local_cycles);
+    /* One local access per record, whatever its size: the cache model
+     * charges a hit once per line reference, "as if the data was in local
+     * memory" (thesis §3.2), and the same local store must cost the same. */
+    charge(m, EMM_BUCKET_LOCAL_ACCESS, m->local_cycles);
 }
 
 static void fetch_run(emm_model *model, const emm_trace_record *recs, size_t n)
@@ -347,7 +361,8 @@ static void fetch_reset(emm_model *model)
     m->accesses = 0;
     m->cell_changes = m->demand_fetches = m->demand_bytes = 0;
     m->prefetches = m->prefetch_bytes = 0;
-    m->useful_prefetches = m->dropped_prefetches = m->evictions = m->other_accesses = 0;
+    m->useful_prefetches = m->dropped_prefetches = m->filtered_prefetches = 0;
+    m->evictions = m->other_accesses = 0;
 }
 
 static void fetch_result(const emm_model *model, emm_result *out)
@@ -371,6 +386,7 @@ static void fetch_result(const emm_model *model, emm_result *out)
     out->emm.prefetch_bytes = m->prefetch_bytes;
     out->emm.useful_prefetches = m->useful_prefetches;
     out->emm.dropped_prefetches = m->dropped_prefetches;
+    out->emm.filtered_prefetches = m->filtered_prefetches;
     out->emm.evictions = m->evictions;
     out->emm.other_accesses = m->other_accesses;
     out->emm.local_budget = m->budget;
@@ -578,6 +594,7 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
     m->direct_write = p->direct_write_cycles;
     while ((1ull << m->word_shift) < p->word_bytes)
         m->word_shift++;
+    m->filter = p->emm_prefetch_filter != 0;
     m->fifo_cap = p->emm_fifo >= 1 && p->emm_fifo <= MAX_FIFO ? (uint32_t)p->emm_fifo : 4;
     emm_dma_init(&m->dma, p);
     fetch_reset(&m->base);

@@ -81,6 +81,8 @@ static const struct key_desc keys[] = {
      KEY_COUNT, P(emm_dma_issue_instr), 20, 0, 1000000},
     {{"emm.fifo", "moves", "extrapolated fetching: moves between cells kept to predict the next (thesis 4.2.2)", "4"},
      KEY_COUNT, P(emm_fifo), 4, 1, 64},
+    {{"emm.prefetch_filter", "0|1", "1: do not prefetch a cell whose last prefetch was evicted unused until the program enters it (docs/fetch.md); 0: the thesis' plain schemes", "1"},
+     KEY_COUNT, P(emm_prefetch_filter), 1, 0, 1},
 };
 
 #define NKEYS (sizeof keys / sizeof keys[0])

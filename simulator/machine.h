@@ -30,6 +30,7 @@ typedef struct emm_machine_params {
     uint64_t emm_predict;
     uint64_t emm_dma_issue_instr;
     uint64_t emm_fifo; /* extrapolated fetching: moves remembered */
+    uint64_t emm_prefetch_filter; /* 1: the prefetch pollution filter is on */
 } emm_machine_params;
 
 struct emm_machine {

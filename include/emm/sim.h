@@ -135,6 +135,8 @@ typedef struct emm_result {
                                             vertices), read directly from remote memory */
         uint64_t local_budget;           /* local store bytes for cells: local.bytes minus look-up bytes */
         uint64_t lookup_bytes;           /* the layout's look-up tables in the local store */
+        uint64_t filtered_prefetches;    /* prefetches skipped: the cell's last prefetch was
+                                            evicted unused (docs/fetch.md, "Prefetch filter") */
     } emm;
 } emm_result;
 

@@ -57,7 +57,11 @@ static void sweep(const emm_machine *mc, const loaded_trace *t, const char *what
         CHECK(r.emm.demand_fetches <= r.emm.cell_changes);
         CHECK(r.cycles[EMM_BUCKET_DMA_ISSUE] == 266 * r.dma.transfers);
         if (s[i].fetch == EMM_FETCH_NAIVE)
-            CHECK(r.emm.prefetches == 0 && r.emm.dropped_prefetches == 0);
+            CHECK(r.emm.prefetches == 0 && r.emm.dropped_prefetches == 0 &&
+                  r.emm.filtered_prefetches == 0);
+        /* A filtered cell is one whose prefetch was evicted unused. */
+        CHECK(r.emm.filtered_prefetches == 0 ||
+              r.emm.useful_prefetches < r.emm.prefetches);
         CHECKF(ev.in_flight == 0, "%s %s: %llu evictions of cells in flight", what, name,
                (unsigned long long)ev.in_flight);
         CHECK(ev.count == r.emm.evictions);
@@ -76,7 +80,7 @@ int main(void)
     /* About 40 KiB of look-up tables leaves 24 KiB for cells. */
     REQUIRE(emm_machine_set(small, "local.bytes=64K", &err) == EMM_OK);
     REQUIRE(emm_machine_set(small, "emm.fifo=2", &err) == EMM_OK);
-    uint64_t small_evictions = 0;
+    uint64_t small_evictions = 0, small_filtered = 0;
     for (size_t p = 0; p < sizeof patterns / sizeof patterns[0]; p++) {
         emm_synth_options so;
         loaded_trace t;
@@ -91,11 +95,14 @@ int main(void)
             emm_result r;
             simulate_ok(small, "tiles+convolution@16", &t, &r);
             small_evictions += r.emm.evictions;
+            small_filtered += r.emm.filtered_prefetches;
         }
         free_trace(&t);
     }
     /* The small store did exercise eviction. */
     CHECK(small_evictions > 1000);
+    /* ... and the prefetch filter. */
+    CHECK(small_filtered > 0);
     emm_machine_free(def);
     emm_machine_free(small);
     emm_mesh_free(mesh);
