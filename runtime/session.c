@@ -1097,6 +1097,17 @@ static emm_status write_csv(const emm_session *s, emm_error *err)
     return EMM_OK;
 }
 
+/* An output that could not be written is said on the summary stream: the
+ * program's user would otherwise look for a file that is not there. */
+static void output_failed(const emm_session *s, FILE *summary, const char *prefix,
+                          const emm_error *e)
+{
+    if (summary && s->log >= 1) {
+        fprintf(summary, "emm: %s%s\n", prefix, e->message);
+        fflush(summary);
+    }
+}
+
 emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
 {
     emm_status first = EMM_OK;
@@ -1128,17 +1139,21 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
         emm_status st = emm_report_write_extra(s->report_path, s->trace_path ? s->trace_path : "",
                                                s->machine, s->accesses, res, s->nmodels,
                                                report_extra, &ctx, &e);
-        if (st != EMM_OK && first == EMM_OK) {
-            first = st;
-            emm_fail(err, st, "EMM_REPORT: %s", e.message);
+        if (st != EMM_OK) {
+            output_failed(s, summary, "EMM_REPORT: ", &e);
+            if (first == EMM_OK)
+                first = emm_fail(err, st, "EMM_REPORT: %s", e.message);
         }
     }
     if (s->profile_dump) {
         emm_status st = write_csv(s, &e);
-        if (st != EMM_OK && first == EMM_OK) {
-            first = st;
-            if (err)
-                *err = e;
+        if (st != EMM_OK) {
+            output_failed(s, summary, "", &e);
+            if (first == EMM_OK) {
+                first = st;
+                if (err)
+                    *err = e;
+            }
         }
     }
     if (s->trace) {
@@ -1147,9 +1162,10 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
         if (st != EMM_OK)
             s->trace_failed = true;
     }
-    if (s->trace_failed && first == EMM_OK) {
-        first = s->trace_error.status;
-        emm_fail(err, first, "EMM_TRACE: %s", s->trace_error.message);
+    if (s->trace_failed) {
+        output_failed(s, summary, "EMM_TRACE: ", &s->trace_error);
+        if (first == EMM_OK)
+            first = emm_fail(err, s->trace_error.status, "EMM_TRACE: %s", s->trace_error.message);
     }
     free(res);
     s->phase = PHASE_DONE;

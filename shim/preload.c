@@ -16,7 +16,14 @@
  *   which starts its own session.
  * - The session is finished at exit (a destructor, which runs after the
  *   program's atexit handlers), in _exit/_Exit, and on SIGTERM/SIGINT when
- *   the program has no handler of its own. */
+ *   the program has no handler of its own (deferred while the signalled
+ *   thread is inside the shim or the allocator: on_terminate says why).
+ * - Each thread's buffer is flushed when it fills, when the thread exits and
+ *   before the thread tags, frees or ends an iteration. At finish only the
+ *   finishing thread's buffer is flushed: threads still running then (not
+ *   joined before exit) lose up to SHIM_TBUF_CAP - 1 records each, because
+ *   reading a buffer its owner may be writing would need a lock or atomics
+ *   on every recorded access. */
 #include <dlfcn.h>
 #include <errno.h>
 #include <signal.h>
@@ -36,6 +43,8 @@ struct shim shim = {
 };
 __thread int shim_busy SHIM_TLS;
 __thread struct shim_tbuf shim_tbuf SHIM_TLS;
+__thread int shim_in_alloc SHIM_TLS;
+int shim_pending_signal;
 
 static pthread_key_t thread_key;
 
@@ -200,7 +209,7 @@ void shim_tag_array(emm_array_kind kind, const void *base, size_t bytes, size_t 
         if (shim.env.log >= 1)
             shim_log("more than %d arrays tagged; %s at %p ignored", SHIM_MAX_TAGS,
                      kind_name(kind), base);
-        shim_busy--;
+        shim_leave();
         return;
     }
     struct shim_tag *t = &shim.tags[slot];
@@ -235,7 +244,7 @@ void shim_tag_array(emm_array_kind kind, const void *base, size_t bytes, size_t 
         shim_log("tagged %s at %p: %zu records of %zu bytes (%s)%s", kind_name(kind), base,
                  bytes / stride, stride, from_rule ? "EMM_TAG rule" : "emm_tag call",
                  idx < 0 ? ", not watched" : "");
-    shim_busy--;
+    shim_leave();
 }
 
 /* Removes the entry for base, if any, and hands back a copy of it. */
@@ -247,7 +256,7 @@ static bool take_tag(const void *base, struct shim_tag *out)
     int slot = find_tag_locked((uintptr_t)base);
     if (slot < 0) {
         pthread_mutex_unlock(&shim.lock);
-        shim_busy--;
+        shim_leave();
         return false;
     }
     struct shim_tag *t = &shim.tags[slot];
@@ -278,7 +287,7 @@ static bool take_tag(const void *base, struct shim_tag *out)
     pthread_mutex_unlock(&shim.lock);
     if (shim.env.log >= 2)
         shim_log("untagged %s at %p", kind_name(out->kind), base);
-    shim_busy--;
+    shim_leave();
     return true;
 }
 
@@ -321,7 +330,7 @@ void shim_flush_thread(void)
     }
     b->n = 0;
     pthread_mutex_unlock(&shim.lock);
-    shim_busy--;
+    shim_leave();
 }
 
 static void thread_exit(void *arg)
@@ -336,10 +345,11 @@ void shim_register_thread(void)
     shim_tbuf.registered = true;
     shim_busy++;
     pthread_setspecific(thread_key, (void *)1);
-    shim_busy--;
+    shim_leave();
 }
 
 static int finishing;
+static void terminate_now(int sig);
 
 static void finish_locked(void)
 {
@@ -360,10 +370,9 @@ static void finish_locked(void)
     }
     shim.finished = true;
     emm_error err;
-    /* The summary already says why a session had nothing to simulate. */
-    if (emm_session_finish(shim.session, shim.env.log >= 1 ? stderr : NULL, &err) != EMM_OK
-        && shim.env.log >= 2)
-        shim_log("finish: %s", err.message);
+    /* The summary already says why a session had nothing to simulate, and
+     * names each output that could not be written. */
+    emm_session_finish(shim.session, shim.env.log >= 1 ? stderr : NULL, &err);
 }
 
 void shim_finish(void)
@@ -377,6 +386,11 @@ void shim_finish(void)
         finish_locked();
     pthread_mutex_unlock(&shim.lock);
     shim_busy--;
+    /* A SIGTERM noted inside the shim and not yet acted on: the program
+     * still dies of it, as it would have without the shim. */
+    int sig = __atomic_exchange_n(&shim_pending_signal, 0, __ATOMIC_ACQ_REL);
+    if (sig)
+        terminate_now(sig);
 }
 
 /* --- the allocator ----------------------------------------------------- */
@@ -416,8 +430,16 @@ static void *alloc_end(struct pending *pd, void *p, size_t size)
     } else if (pd->map) {
         munmap(pd->map, pd->map_len);
     }
-    shim_busy--;
+    shim_leave();
     return p;
+}
+
+/* Leaves an allocator function; the outermost acts on a pending signal. */
+static inline void alloc_leave(void)
+{
+    if (--shim_in_alloc == 0 && !shim_busy
+        && __atomic_load_n(&shim_pending_signal, __ATOMIC_RELAXED))
+        shim_deliver_pending();
 }
 
 EMM_API void *malloc(size_t size);
@@ -430,7 +452,7 @@ EMM_API void *memalign(size_t align, size_t size);
 EMM_API void *valloc(size_t size);
 EMM_API size_t malloc_usable_size(void *p);
 
-void *malloc(size_t size)
+static void *malloc_impl(size_t size)
 {
     if (!shim_real.malloc) {
         if (resolving)
@@ -443,7 +465,15 @@ void *malloc(size_t size)
     return alloc_end(&pd, pd.map ? pd.map : shim_real.malloc(size), size);
 }
 
-void *calloc(size_t n, size_t size)
+void *malloc(size_t size)
+{
+    shim_in_alloc++;
+    void *r = malloc_impl(size);
+    alloc_leave();
+    return r;
+}
+
+static void *calloc_impl(size_t n, size_t size)
 {
     if (!shim_real.malloc) {
         if (resolving) {
@@ -462,6 +492,14 @@ void *calloc(size_t n, size_t size)
         return shim_real.calloc(n, size);
     /* Fresh anonymous pages are already zero. */
     return alloc_end(&pd, pd.map ? pd.map : shim_real.calloc(n, size), n * size);
+}
+
+void *calloc(size_t n, size_t size)
+{
+    shim_in_alloc++;
+    void *r = calloc_impl(n, size);
+    alloc_leave();
+    return r;
 }
 
 /* The block behind a mapped tag's base. */
@@ -487,7 +525,7 @@ static void release(const struct shim_tag *t, void *p)
         shim_real.free(p);
 }
 
-void free(void *p)
+static void free_impl(void *p)
 {
     if (!p || in_arena(p))
         return;
@@ -503,7 +541,14 @@ void free(void *p)
     shim_real.free(p);
 }
 
-void *realloc(void *p, size_t size)
+void free(void *p)
+{
+    shim_in_alloc++;
+    free_impl(p);
+    alloc_leave();
+}
+
+static void *realloc_impl(void *p, size_t size)
 {
     if (!shim_real.malloc) {
         if (resolving) {
@@ -538,7 +583,7 @@ void *realloc(void *p, size_t size)
             if (shim.capture == SHIM_CAPTURE_FAULT && shim_fault_watching())
                 map = shim_fault_map(size, &map_len);
             q = map ? map : shim_real.malloc(size);
-            shim_busy--;
+            shim_leave();
             if (!q) {
                 /* The old block stays valid and stays the array. */
                 shim_tag_array(t.kind, p, t.bytes, t.stride, t.offset, t.type, t.from_rule,
@@ -580,6 +625,14 @@ void *realloc(void *p, size_t size)
     return alloc_end(&pd, q, size);
 }
 
+void *realloc(void *p, size_t size)
+{
+    shim_in_alloc++;
+    void *r = realloc_impl(p, size);
+    alloc_leave();
+    return r;
+}
+
 static void *aligned_common(size_t align, size_t size, void *(*real)(size_t, size_t))
 {
     struct pending pd;
@@ -588,7 +641,7 @@ static void *aligned_common(size_t align, size_t size, void *(*real)(size_t, siz
     return alloc_end(&pd, pd.map ? pd.map : real(align, size), size);
 }
 
-int posix_memalign(void **out, size_t align, size_t size)
+static int posix_memalign_impl(void **out, size_t align, size_t size)
 {
     if (!shim_real.malloc) {
         if (resolving) {
@@ -612,7 +665,15 @@ int posix_memalign(void **out, size_t align, size_t size)
     return rc;
 }
 
-void *aligned_alloc(size_t align, size_t size)
+int posix_memalign(void **out, size_t align, size_t size)
+{
+    shim_in_alloc++;
+    int r = posix_memalign_impl(out, align, size);
+    alloc_leave();
+    return r;
+}
+
+static void *aligned_alloc_impl(size_t align, size_t size)
 {
     if (!shim_real.malloc) {
         if (resolving)
@@ -622,7 +683,15 @@ void *aligned_alloc(size_t align, size_t size)
     return aligned_common(align, size, shim_real.aligned_alloc);
 }
 
-void *memalign(size_t align, size_t size)
+void *aligned_alloc(size_t align, size_t size)
+{
+    shim_in_alloc++;
+    void *r = aligned_alloc_impl(align, size);
+    alloc_leave();
+    return r;
+}
+
+static void *memalign_impl(size_t align, size_t size)
 {
     if (!shim_real.malloc) {
         if (resolving)
@@ -632,13 +701,21 @@ void *memalign(size_t align, size_t size)
     return aligned_common(align, size, shim_real.memalign);
 }
 
+void *memalign(size_t align, size_t size)
+{
+    shim_in_alloc++;
+    void *r = memalign_impl(align, size);
+    alloc_leave();
+    return r;
+}
+
 static void *valloc_real(size_t align, size_t size)
 {
     (void)align;
     return shim_real.valloc(size);
 }
 
-void *valloc(size_t size)
+static void *valloc_impl(size_t size)
 {
     if (!shim_real.malloc) {
         if (resolving)
@@ -646,6 +723,14 @@ void *valloc(size_t size)
         shim_resolve();
     }
     return aligned_common((size_t)sysconf(_SC_PAGESIZE), size, valloc_real);
+}
+
+void *valloc(size_t size)
+{
+    shim_in_alloc++;
+    void *r = valloc_impl(size);
+    alloc_leave();
+    return r;
 }
 
 size_t malloc_usable_size(void *p)
@@ -700,7 +785,7 @@ void emm_iteration(void)
             shim.state = st;
     }
     pthread_mutex_unlock(&shim.lock);
-    shim_busy--;
+    shim_leave();
 }
 
 /* --- exit paths -------------------------------------------------------- */
@@ -728,24 +813,56 @@ void _Exit(int status)
     __builtin_unreachable();
 }
 
-/* SIGTERM/SIGINT with the default action: finish (if the lock is free: the
- * signal may have interrupted the shim itself), then die of the signal. */
-static void on_terminate(int sig)
+/* SIGTERM/SIGINT with the default action: finish, then die of the signal.
+ * Finishing allocates and takes the shim's lock, so when the signal lands
+ * in a thread that is inside the shim (perhaps holding the lock) or inside
+ * the allocator, the handler only notes it, and the thread acts on it as it
+ * leaves (shim_leave, alloc_leave); a thread that is not waits for the lock
+ * another thread may hold. Finishing here is still not async-signal-safe
+ * (the interrupted code may hold another library's lock): session.h says
+ * what that trades. */
+static void terminate_now(int sig)
 {
-    if (shim.enabled && !__atomic_exchange_n(&finishing, 1, __ATOMIC_ACQ_REL)) {
+    if (!__atomic_exchange_n(&finishing, 1, __ATOMIC_ACQ_REL)) {
+        /* The thread's own buffer is not flushed: the signal may have landed
+         * in shim_record, between taking a slot and filling it. */
         shim_busy++;
-        if (pthread_mutex_trylock(&shim.lock) == 0) {
-            if (!shim.finished)
-                finish_locked();
-            pthread_mutex_unlock(&shim.lock);
-        }
+        pthread_mutex_lock(&shim.lock);
+        if (!shim.finished)
+            finish_locked();
+        pthread_mutex_unlock(&shim.lock);
         shim_busy--;
     }
     struct sigaction dfl;
     memset(&dfl, 0, sizeof dfl);
     dfl.sa_handler = SIG_DFL;
     shim_real_sigaction(sig, &dfl, NULL);
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, sig);
     raise(sig);
+    pthread_sigmask(SIG_UNBLOCK, &set, NULL); /* in a handler: dies here */
+}
+
+void shim_deliver_pending(void)
+{
+    int sig = __atomic_exchange_n(&shim_pending_signal, 0, __ATOMIC_ACQ_REL);
+    if (sig)
+        terminate_now(sig);
+}
+
+static void on_terminate(int sig)
+{
+    if (!shim.enabled || shim.finished) {
+        __atomic_store_n(&finishing, 1, __ATOMIC_RELEASE);
+        terminate_now(sig);
+        return;
+    }
+    if (shim_busy || shim_in_alloc) {
+        __atomic_store_n(&shim_pending_signal, sig, __ATOMIC_RELEASE);
+        return;
+    }
+    terminate_now(sig);
 }
 
 static void install_terminate(int sig)
@@ -772,7 +889,7 @@ static void fork_prepare(void)
 static void fork_parent(void)
 {
     pthread_mutex_unlock(&shim.lock);
-    shim_busy--;
+    shim_leave();
 }
 
 static void fork_child(void)
@@ -784,7 +901,7 @@ static void fork_child(void)
     shim_tbuf.n = 0;
     if (shim.capture == SHIM_CAPTURE_FAULT)
         shim_fault_child();
-    shim_busy--;
+    shim_leave();
 }
 
 /* --- start-up ---------------------------------------------------------- */
@@ -824,7 +941,7 @@ __attribute__((constructor(101))) static void shim_init(void)
     char msg[1024];
     if (!shim_env_parse(&shim.env, get_env, (long)getpid(), shim_rules_check, msg, sizeof msg)) {
         step_aside(msg);
-        shim_busy--;
+        shim_leave();
         return;
     }
     if (shim.env.tag) {
@@ -833,7 +950,7 @@ __attribute__((constructor(101))) static void shim_init(void)
             char line[1100];
             snprintf(line, sizeof line, "EMM_TAG: %s", msg);
             step_aside(line);
-            shim_busy--;
+            shim_leave();
             return;
         }
     }
@@ -861,14 +978,14 @@ __attribute__((constructor(101))) static void shim_init(void)
     if (emm_session_new(&cfg, &shim.session, &err) != EMM_OK) {
         shim.session = NULL;
         step_aside(err.message);
-        shim_busy--;
+        shim_leave();
         return;
     }
     if (shim.capture == SHIM_CAPTURE_FAULT && !shim_fault_init()) {
         emm_session_free(shim.session);
         shim.session = NULL;
         step_aside("EMM_CAPTURE=fault: cannot install the SIGSEGV/SIGTRAP handlers");
-        shim_busy--;
+        shim_leave();
         return;
     }
     pthread_key_create(&thread_key, thread_exit);
@@ -883,7 +1000,7 @@ __attribute__((constructor(101))) static void shim_init(void)
         shim_env_dump(&shim.env, stderr);
     }
     __atomic_store_n(&shim.enabled, true, __ATOMIC_RELEASE);
-    shim_busy--;
+    shim_leave();
 }
 
 __attribute__((destructor(101))) static void shim_fini(void)

@@ -99,6 +99,25 @@ extern struct shim shim SHIM_HIDDEN;
  * their own allocations are never tagged and never re-enter the session. */
 extern __thread int shim_busy SHIM_TLS SHIM_HIDDEN;
 
+/* Set while the calling thread is inside one of the shim's allocator
+ * functions (and so, maybe, inside the C library's allocator). */
+extern __thread int shim_in_alloc SHIM_TLS SHIM_HIDDEN;
+
+/* A SIGTERM/SIGINT that arrived while its thread was inside the shim or the
+ * allocator, where finishing the session could deadlock: it is acted on
+ * when the thread leaves (shim_leave, the allocator's return). 0: none. */
+extern int shim_pending_signal SHIM_HIDDEN;
+/* Finishes the session for the pending signal and dies of it. */
+void shim_deliver_pending(void) SHIM_HIDDEN;
+
+/* Ends a stretch of shim_busy; the outermost one acts on a pending signal. */
+static inline void shim_leave(void)
+{
+    if (--shim_busy == 0 && !shim_in_alloc
+        && __atomic_load_n(&shim_pending_signal, __ATOMIC_RELAXED))
+        shim_deliver_pending();
+}
+
 /* The calling thread's capture buffer. */
 extern __thread struct shim_tbuf shim_tbuf SHIM_TLS SHIM_HIDDEN;
 

@@ -119,7 +119,9 @@ EMM_API emm_status emm_session_decide(emm_session *s, emm_error *err);
  * the trace, each whole or not at all (a temporary file renamed into place).
  * When the session had stepped aside, the summary says why (so the caller
  * need not print err again) and the failure is returned; no file is
- * written. A second call does nothing and returns EMM_OK.
+ * written. An output that cannot be written is named in one line on
+ * `summary` (log >= 1) and the first such failure is returned. A second call
+ * does nothing and returns EMM_OK.
  *
  * Not async-signal-safe: it allocates and uses stdio. Safe from an atexit
  * handler or a destructor. From a SIGTERM/SIGINT handler it is safe only

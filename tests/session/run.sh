@@ -61,9 +61,24 @@ if [ -f "$bindir/../lib/libemmshim.so" ] && [ -x "$region" ]; then
     if [ -f "$work/run.emmt" ]; then
         "$emm" replay "$work/run.emmt" --strategy cache --strategy direct --json "$work/replay.json" \
             --quiet || fail "replay of EMM_TRACE"
-        a=$(grep '"total"' "$work/run.json" | sort)
-        b=$(grep '"total"' "$work/replay.json" | sort)
-        [ -n "$a" ] && [ "$a" = "$b" ] || fail "replay of EMM_TRACE: totals differ: $a / $b"
+        # Every number of every result (all cycle buckets, cache and DMA
+        # counters), not only the totals.
+        if command -v python3 >/dev/null 2>&1; then
+            python3 - "$work/run.json" "$work/replay.json" <<'PY' || fail "replay of EMM_TRACE: results differ"
+import json, sys
+run, rep = (json.load(open(p)) for p in sys.argv[1:3])
+assert run["accesses"] == rep["accesses"] > 0, (run["accesses"], rep["accesses"])
+by = {r["strategy"]: r for r in rep["results"]}
+assert len(run["results"]) == 2 and sorted(by) == sorted(r["strategy"] for r in run["results"])
+for r in run["results"]:
+    if r != by[r["strategy"]]:
+        sys.exit("%s: run %s, replay %s" % (r["strategy"], r, by[r["strategy"]]))
+PY
+        else
+            a=$(sed -n '/"results"/,/^  \]/p' "$work/run.json" | grep -E '^ *"[a-z_]+": [0-9]' | sort)
+            b=$(sed -n '/"results"/,/^  \]/p' "$work/replay.json" | grep -E '^ *"[a-z_]+": [0-9]' | sort)
+            [ -n "$a" ] && [ "$a" = "$b" ] || fail "replay of EMM_TRACE: results differ"
+        fi
     else
         fail "workload: no EMM_TRACE file"
     fi

@@ -1,0 +1,91 @@
+#!/bin/sh
+# The shim's overhead (issue 6's benchmark; not a test: it times things).
+#
+#   sh bench/shim_overhead.sh BUILD
+#
+# 1. Wall-time ratio of `curve_tracing.sancov --long` on a 1,000,000-face
+#    mesh under libemmshim.so (EMM_COMPARE=baselines: the chosen strategy,
+#    direct and cache simulated over the whole run) to the plain build's
+#    native run. Median of 3 runs each. Target: at most 5x (Cachegrind runs
+#    20-100x slower than native, DynamoRIO's cache simulator 15-100x).
+# 2. The cost of one access captured by EMM_CAPTURE=fault (a page fault and a
+#    single step, then the session): the plain build is run with two profile
+#    windows, and the extra time is divided by the extra accesses the
+#    reports count.
+# The mesh is generated once and cached as BUILD/bench/mesh1m.off.
+# Without a strategy table (data/table.txt) the session cannot decide, so the
+# strategy is fixed (EMM_STRATEGY, default tiles+extrapolated@64) and the
+# output says so.
+set -u
+[ $# -eq 1 ] || { echo "usage: sh bench/shim_overhead.sh BUILD" >&2; exit 2; }
+B=$(cd "$1" && pwd) || exit 1
+SRC=$(cd "$(dirname "$0")/.." && pwd)
+EMM=$B/bin/emm SHIM=$B/lib/libemmshim.so
+PLAIN=$B/bin/curve_tracing SANCOV=$B/bin/curve_tracing.sancov
+for f in "$EMM" "$SHIM" "$PLAIN" "$SANCOV"; do
+  [ -e "$f" ] || { echo "shim_overhead: $f is not built" >&2; exit 1; }
+done
+mkdir -p "$B/bench" || exit 1
+MESH=$B/bench/mesh1m.off
+if [ ! -s "$MESH" ]; then
+  "$EMM" mesh gen --faces 1000000 -o "$MESH.tmp" >/dev/null && mv "$MESH.tmp" "$MESH" || exit 1
+fi
+TMP=$(mktemp -d) || exit 1
+trap 'rm -rf "$TMP"' EXIT
+
+unset EMM_TAG EMM_REPORT EMM_TRACE EMM_PROFILE_DUMP EMM_PROFILE EMM_CAPTURE EMM_LOG
+if [ -n "${EMM_STRATEGY:-}" ]; then
+  echo "strategy: $EMM_STRATEGY (EMM_STRATEGY)"
+elif [ -f "$SRC/data/table.txt" ]; then
+  echo "strategy: decided by the session from the strategy table"
+else
+  EMM_STRATEGY=tiles+extrapolated@64
+  echo "strategy: $EMM_STRATEGY (fixed: no data/table.txt yet, so the session cannot decide)"
+fi
+[ -n "${EMM_STRATEGY:-}" ] && export EMM_STRATEGY
+
+now() { date +%s%N; }
+# median3 CMD...: runs CMD three times (stdout to $TMP/out, stderr to
+# $TMP/err) and prints the median wall time in seconds.
+median3() {
+  for i in 1 2 3; do
+    t0=$(now)
+    "$@" > "$TMP/out" 2> "$TMP/err" || { cat "$TMP/err" >&2; echo "shim_overhead: $* failed" >&2; exit 1; }
+    echo $(( $(now) - t0 ))
+  done | sort -n | sed -n 2p | awk '{ printf "%.3f\n", $1 / 1e9 }'
+}
+
+native=$(median3 env -u LD_PRELOAD "$PLAIN" --long "$MESH") || exit 1
+cp "$TMP/out" "$TMP/native.out"
+hooks=$(median3 env -u LD_PRELOAD "$SANCOV" --long "$MESH") || exit 1
+shim=$(median3 env LD_PRELOAD="$SHIM" EMM_COMPARE=baselines "$SANCOV" --long "$MESH") || exit 1
+cmp -s "$TMP/out" "$TMP/native.out" || echo "WARNING: stdout under the shim differs from the native run"
+echo "the last run's summary:"
+sed 's/^/  /' "$TMP/err"
+echo "curve_tracing --long, 1,000,000 faces (median of 3 wall times):"
+echo "  plain build, native:               ${native} s"
+echo "  instrumented build, native:        ${hooks} s (no-op hooks)"
+echo "  instrumented build under the shim: ${shim} s"
+awk -v s="$shim" -v n="$native" 'BEGIN { r = s / n;
+  printf "shim overhead: %.2fx the plain native run (target <= 5x: %s)\n", r, r <= 5 ? "met" : "NOT met" }'
+
+# fault capture: two windows, the difference per captured access.
+fault_run() { # WINDOW -> wall seconds; the report in $TMP/f$WINDOW.json
+  t0=$(now)
+  env LD_PRELOAD="$SHIM" EMM_CAPTURE=fault EMM_COMPARE=baselines EMM_PROFILE=$1 \
+      EMM_REPORT="$TMP/f$1.json" "$PLAIN" --long "$MESH" > /dev/null 2> "$TMP/ferr" ||
+      { cat "$TMP/ferr" >&2; exit 1; }
+  echo $(( $(now) - t0 ))
+}
+accesses() { sed -n 's/^  "accesses": \([0-9]*\),*$/\1/p' "$1"; }
+small=2000 large=50000
+ts=$(fault_run $small) || exit 1
+tl=$(fault_run $large) || exit 1
+as=$(accesses "$TMP/f$small.json") al=$(accesses "$TMP/f$large.json")
+[ -n "$as" ] && [ -n "$al" ] && [ "$al" -gt "$as" ] ||
+  { echo "shim_overhead: the fault runs' reports count no accesses" >&2; exit 1; }
+awk -v ts="$ts" -v tl="$tl" -v as="$as" -v al="$al" -v ws=$small -v wl=$large 'BEGIN {
+  printf "fault capture: windows of %d and %d element accesses: %d and %d accesses captured, %.3f s and %.3f s\n",
+         ws, wl, as, al, ts / 1e9, tl / 1e9
+  printf "fault capture: %.2f us per captured access (fault, single step, session)\n",
+         (tl - ts) / 1e3 / (al - as) }'
