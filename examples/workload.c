@@ -60,7 +60,7 @@ __attribute__((noinline)) bool read_mesh(const char *prog, const char *path, str
     if (path) {
         st = emm_mesh_open(path, &em, &err);
     } else {
-        emm_gen_options opt = {EMM_DEFAULT_FACES, EMM_DEFAULT_SEED, EMM_DENSITY_CLUSTERED};
+        emm_gen_options opt = {EMM_DEFAULT_FACES, EMM_DEFAULT_SEED, EMM_DENSITY_CLUSTERED, EMM_ORDER_INPUT};
         st = emm_mesh_generate(&opt, &em, &err);
     }
     if (st != EMM_OK) {

@@ -28,11 +28,12 @@
  * each triangle is turned counter-clockwise; a zero-area triangle (which
  * 'Qt' may produce for nearly collinear sites) is dropped and counted.
  *
- * Order. Vertices are numbered along a Hilbert curve and triangles by the
- * Hilbert index of their centroid, as a mesher that renumbers for locality
- * would write them: the "original layout" that the cache baselines run on
- * then has the spatial locality of a real mesh file rather than the
- * randomness of the point stream. */
+ * Order. By default (EMM_ORDER_INPUT) vertices keep the order of the point
+ * stream and triangles qhull's facet order: the unorganised "original
+ * layout" the thesis' cache baseline runs on (§6.3). With EMM_ORDER_HILBERT
+ * vertices are numbered along a Hilbert curve and triangles by the Hilbert
+ * index of their centroid, as a mesher that renumbers for locality would
+ * write them. */
 #include "generate.h"
 
 #include <assert.h>
@@ -343,10 +344,10 @@ static int keyed_cmp(const void *pa, const void *pb)
     return a->index < b->index ? -1 : a->index > b->index;
 }
 
-/* Keeps the used points only, renumbers vertices and triangles along the
- * Hilbert curve, and writes the result into `out`. */
+/* Keeps the used points only, numbers vertices and triangles in `order`,
+ * and writes the result into `out`. */
 static emm_status compact(const double *xy, size_t n, const int32_t *tri, size_t nt,
-                          emm_gen_arrays *out, emm_error *err)
+                          emm_order order, emm_gen_arrays *out, emm_error *err)
 {
     int32_t *map = malloc(n * sizeof *map);
     struct keyed *keys = malloc((n > nt ? n : nt) * sizeof *keys);
@@ -361,7 +362,7 @@ static emm_status compact(const double *xy, size_t n, const int32_t *tri, size_t
     size_t nv = 0;
     for (size_t i = 0; i < n; i++)
         if (map[i] == 0) {
-            keys[nv].key = hilbert_key(xy[2 * i], xy[2 * i + 1]);
+            keys[nv].key = order == EMM_ORDER_HILBERT ? hilbert_key(xy[2 * i], xy[2 * i + 1]) : i;
             keys[nv].index = (uint32_t)i;
             nv++;
         }
@@ -380,7 +381,7 @@ static emm_status compact(const double *xy, size_t n, const int32_t *tri, size_t
         const int32_t *v = tri + 3 * t;
         double cx = (xy[2 * v[0]] + xy[2 * v[1]] + xy[2 * v[2]]) / 3.0;
         double cy = (xy[2 * v[0] + 1] + xy[2 * v[1] + 1] + xy[2 * v[2] + 1]) / 3.0;
-        keys[t].key = hilbert_key(cx, cy);
+        keys[t].key = order == EMM_ORDER_HILBERT ? hilbert_key(cx, cy) : t;
         keys[t].index = (uint32_t)t;
     }
     qsort(keys, nt, sizeof *keys, keyed_cmp);
@@ -504,7 +505,7 @@ emm_status emm_gen_arrays_build(const emm_gen_options *opt, emm_gen_arrays *out,
         st = emm_fail(err, EMM_ERR_RANGE,
                       "generator: could only reach %zu faces of the %zu asked for", best_nt, want);
     if (st == EMM_OK)
-        st = compact(xy, best_n, best, best_nt, out, err);
+        st = compact(xy, best_n, best, best_nt, opt->order, out, err);
     if (st == EMM_OK) {
         out->hull = hull;
         out->attempts = attempt;

@@ -10,7 +10,8 @@
 static void usage_mesh(FILE *out)
 {
     fprintf(out,
-            "usage: emm mesh gen [--faces N] [--seed S] [--density clustered|uniform] -o FILE\n"
+            "usage: emm mesh gen [--faces N] [--seed S] [--density clustered|uniform]\n"
+            "                   [--order input|hilbert] -o FILE\n"
             "       emm mesh info [--json] FILE\n"
             "\n"
             "  gen   make a planar (z = 0) Delaunay triangulation of points in the unit\n"
@@ -26,19 +27,23 @@ static void usage_mesh(FILE *out)
 static void usage_gen(FILE *out)
 {
     fprintf(out,
-            "usage: emm mesh gen [--faces N] [--seed S] [--density clustered|uniform] -o FILE\n"
+            "usage: emm mesh gen [--faces N] [--seed S] [--density clustered|uniform]\n"
+            "                   [--order input|hilbert] -o FILE\n"
             "\n"
             "Writes a planar (z = 0) Delaunay triangulation (libqhull) of points drawn in\n"
             "the unit square, as an ASCII OFF file. The face count is N exactly (within 1%%\n"
             "at worst); the convex hull is the square (4 boundary edges), or the square with\n"
             "one corner cut off (5) when N is odd. The same options give the same file, byte\n"
-            "for byte. Vertices and faces are numbered along a Hilbert curve.\n"
+            "for byte.\n"
             "\n"
             "  --faces N        triangles to make, 8 or more (default %u)\n"
             "  --seed S         seed of the point stream, a non-negative integer (default %u)\n"
             "  --density D      clustered: a few Gaussian clusters over a uniform background,\n"
             "                   their number, places and widths drawn from the seed (default)\n"
             "                   uniform: points spread evenly\n"
+            "  --order O        input: vertices in the order the points were drawn, faces in\n"
+            "                   qhull's order, an unorganised layout like the thesis' (default)\n"
+            "                   hilbert: both numbered along a Hilbert curve, for locality\n"
             "  -o, --output F   the OFF file to write (required); written whole or not at all\n",
             EMM_DEFAULT_FACES, EMM_DEFAULT_SEED);
 }
@@ -59,7 +64,7 @@ static void usage_info(FILE *out)
 static int cmd_gen(int argc, char **argv)
 {
     const char *cmd = "mesh gen";
-    emm_gen_options opt = {EMM_DEFAULT_FACES, EMM_DEFAULT_SEED, EMM_DENSITY_CLUSTERED};
+    emm_gen_options opt = {EMM_DEFAULT_FACES, EMM_DEFAULT_SEED, EMM_DENSITY_CLUSTERED, EMM_ORDER_INPUT};
     const char *output = NULL;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v;
@@ -87,6 +92,15 @@ static int cmd_gen(int argc, char **argv)
                 opt.density = EMM_DENSITY_UNIFORM;
             else
                 return cli_usage_error(cmd, "--density expects clustered or uniform, not '%s'", v);
+        } else if (strcmp(a, "--order") == 0) {
+            if (!(v = cli_value(cmd, argc, argv, &i)))
+                return EMM_EXIT_USAGE;
+            if (strcmp(v, "input") == 0)
+                opt.order = EMM_ORDER_INPUT;
+            else if (strcmp(v, "hilbert") == 0)
+                opt.order = EMM_ORDER_HILBERT;
+            else
+                return cli_usage_error(cmd, "--order expects input or hilbert, not '%s'", v);
         } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) {
             if (!(v = cli_value(cmd, argc, argv, &i)))
                 return EMM_EXIT_USAGE;

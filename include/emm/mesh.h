@@ -102,10 +102,18 @@ EMM_API void *emm_triangle_data(const emm_mesh *m, uint32_t t);
  * the same mesh, bit for bit. */
 typedef enum emm_density { EMM_DENSITY_CLUSTERED = 0, EMM_DENSITY_UNIFORM } emm_density;
 
+/* How the generated mesh's vertices and triangles are numbered: `input`
+ * keeps the order the points were drawn in and qhull's facet order, an
+ * unorganised layout like that of the thesis' original mesh (§3.1: "the
+ * ordering ... is typically arbitrary"); `hilbert` renumbers both along a
+ * Hilbert curve, as a mesher that orders for locality would. */
+typedef enum emm_order { EMM_ORDER_INPUT = 0, EMM_ORDER_HILBERT } emm_order;
+
 typedef struct emm_gen_options {
     size_t faces;        /* wanted triangle count, >= 8 */
     uint64_t seed;
     emm_density density;
+    emm_order order;
 } emm_gen_options;
 
 /* The thesis' mesh: 20,000 faces, clustered, seed 1. */

@@ -18,7 +18,7 @@ static double orient(const emm_mesh *m, const emm_triangle *t)
 
 static void test_one(size_t faces, emm_density density, uint64_t seed)
 {
-    emm_gen_options opt = {faces, seed, density};
+    emm_gen_options opt = {faces, seed, density, EMM_ORDER_INPUT};
     emm_mesh *m;
     emm_error err;
     emm_status st = emm_mesh_generate(&opt, &m, &err);
@@ -78,7 +78,7 @@ int main(void)
         test_one(sizes[i], EMM_DENSITY_CLUSTERED, 1);
         test_one(sizes[i], EMM_DENSITY_UNIFORM, 2);
     }
-    emm_gen_options bad = {3, 1, EMM_DENSITY_CLUSTERED};
+    emm_gen_options bad = {3, 1, EMM_DENSITY_CLUSTERED, EMM_ORDER_INPUT};
     emm_mesh *m = (emm_mesh *)&bad;
     emm_error err;
     CHECK(emm_mesh_generate(&bad, &m, &err) == EMM_ERR_RANGE);

@@ -140,7 +140,7 @@ static void test_delaunay_small(void)
 
 static void test_counts(size_t faces, emm_density density, uint64_t seed)
 {
-    emm_gen_options opt = {faces, seed, density};
+    emm_gen_options opt = {faces, seed, density, EMM_ORDER_INPUT};
     emm_gen_arrays g;
     emm_error err;
     REQUIRE(emm_gen_arrays_build(&opt, &g, &err) == EMM_OK);
@@ -168,7 +168,7 @@ static void test_counts(size_t faces, emm_density density, uint64_t seed)
 
 static void test_determinism(void)
 {
-    emm_gen_options opt = {5000, 7, EMM_DENSITY_CLUSTERED};
+    emm_gen_options opt = {5000, 7, EMM_DENSITY_CLUSTERED, EMM_ORDER_INPUT};
     emm_gen_arrays a, b, c;
     emm_error err;
     REQUIRE(emm_gen_arrays_build(&opt, &a, &err) == EMM_OK);
@@ -205,7 +205,7 @@ static void test_density(void)
 {
     emm_error err;
     for (uint64_t seed = 1; seed <= 3; seed++) {
-        emm_gen_options opt = {20000, seed, EMM_DENSITY_CLUSTERED};
+        emm_gen_options opt = {20000, seed, EMM_DENSITY_CLUSTERED, EMM_ORDER_INPUT};
         emm_gen_arrays g;
         REQUIRE(emm_gen_arrays_build(&opt, &g, &err) == EMM_OK);
         double clustered = bin_ratio(&g);
@@ -225,7 +225,7 @@ static void test_errors(void)
 {
     emm_gen_arrays g;
     emm_error err;
-    emm_gen_options opt = {7, 1, EMM_DENSITY_CLUSTERED};
+    emm_gen_options opt = {7, 1, EMM_DENSITY_CLUSTERED, EMM_ORDER_INPUT};
     CHECK(emm_gen_arrays_build(&opt, &g, &err) == EMM_ERR_RANGE);
     CHECK(strstr(err.message, "7 faces") != NULL);
     opt.faces = (size_t)EMM_GEN_MAX_FACES + 1;

@@ -63,7 +63,7 @@ static mesh grid_mesh(int n, int m, double warp)
 
 static mesh gen_mesh(size_t faces, emm_density density, uint64_t seed)
 {
-    emm_gen_options opt = {faces, seed, density};
+    emm_gen_options opt = {faces, seed, density, EMM_ORDER_INPUT};
     emm_gen_arrays a;
     emm_error err;
     mesh g = {0};

@@ -46,7 +46,7 @@ static uint64_t addr_of(const emm_trace_record *r)
 static void setup(void)
 {
     emm_error err;
-    emm_gen_options go = {2000, 7, EMM_DENSITY_CLUSTERED};
+    emm_gen_options go = {2000, 7, EMM_DENSITY_CLUSTERED, EMM_ORDER_INPUT};
     emm_mesh *m;
     REQUIRE(emm_mesh_generate(&go, &m, &err) == EMM_OK);
     emm_synth_options so = {.pattern = EMM_PATTERN_REGION, .seed = 3, .work = 3};

@@ -11,7 +11,7 @@
 
 int main(int argc, char **argv)
 {
-    emm_gen_options opt = {argc > 1 ? (size_t)atol(argv[1]) : 20000, 7, EMM_DENSITY_CLUSTERED};
+    emm_gen_options opt = {argc > 1 ? (size_t)atol(argv[1]) : 20000, 7, EMM_DENSITY_CLUSTERED, EMM_ORDER_INPUT};
     emm_mesh *m;
     emm_error err;
     if (emm_mesh_generate(&opt, &m, &err) != EMM_OK) {

@@ -6,7 +6,7 @@
 
 int main(void)
 {
-    emm_gen_options opt = {200, 7, EMM_DENSITY_UNIFORM};
+    emm_gen_options opt = {200, 7, EMM_DENSITY_UNIFORM, EMM_ORDER_INPUT};
     emm_mesh *m;
     emm_error err;
     if (emm_mesh_generate(&opt, &m, &err) != EMM_OK) {
