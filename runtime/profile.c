@@ -565,6 +565,54 @@ emm_status emm_profile_trace_positions(emm_trace_reader *r, uint64_t window, con
     return st;
 }
 
+emm_status emm_profile_trace_window(emm_trace_reader *r, uint64_t window, const char *name,
+                                    emm_trace_record **recs, size_t *n, emm_error *err)
+{
+    emm_profiler *p;
+    *recs = NULL;
+    *n = 0;
+    emm_status st = emm_trace_rewind(r, err);
+    if (st == EMM_OK)
+        st = emm_profiler_new(emm_trace_reader_info(r), window, name, &p, err);
+    if (st != EMM_OK)
+        return st;
+    enum { CHUNK = 4096 };
+    emm_trace_record *buf = NULL;
+    size_t len = 0, cap = 0, got;
+    while (st == EMM_OK && !emm_profiler_full(p)) {
+        if (cap - len < CHUNK) {
+            size_t ncap = cap ? 2 * cap : 4 * CHUNK;
+            emm_trace_record *nb = realloc(buf, ncap * sizeof *nb);
+            if (!nb) {
+                st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the window", name);
+                break;
+            }
+            buf = nb;
+            cap = ncap;
+        }
+        /* One record at a time once close, so the window ends exactly where
+         * the profiler fills. */
+        size_t want = CHUNK;
+        size_t have;
+        emm_profiler_positions(p, &have);
+        if (p->window - have < CHUNK)
+            want = 1;
+        st = emm_trace_read(r, buf + len, want, &got, err);
+        if (st != EMM_OK || got == 0)
+            break;
+        st = emm_profiler_add(p, buf + len, got, err);
+        len += got;
+    }
+    emm_profiler_free(p);
+    if (st != EMM_OK) {
+        free(buf);
+        return st;
+    }
+    *recs = buf;
+    *n = len;
+    return EMM_OK;
+}
+
 /* ---- features ----------------------------------------------------------- */
 
 static int cmp_double(const void *a, const void *b)

@@ -217,7 +217,9 @@ emm_status emm_session_new(const emm_session_config *cfg, emm_session **out, emm
         st = emm_fail(err, EMM_ERR_NOMEM, "session: out of memory");
         goto fail;
     }
-    if ((st = emm_table_load_standard(s->table, s->table_path, &e)) != EMM_OK) {
+    st = cfg->table_only && s->table_path ? emm_table_load(s->table, s->table_path, &e)
+                                          : emm_table_load_standard(s->table, s->table_path, &e);
+    if (st != EMM_OK) {
         if (!s->forced || s->table_path) {
             st = emm_fail(err, st, "%s%s", s->table_path ? "EMM_TABLE: " : "", e.message);
             goto fail;

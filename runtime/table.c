@@ -5,10 +5,13 @@
  * docs/profile.md. */
 #include "emm/table.h"
 
+#include <assert.h>
 #include <ctype.h>
+#include <stdbool.h>
 #include <dlfcn.h>
 #include <errno.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -434,7 +437,7 @@ double emm_feature_distance(const double a[EMM_FEATURES], const double b[EMM_FEA
 {
     double d = 0;
     for (int k = 0; k < EMM_FEATURES; k++) {
-        double e = fmin(fabs(a[k] - b[k]), EMM_FEATURE_CLIP);
+        double e = a[k] - b[k];
         d += e * e;
     }
     return sqrt(d);
@@ -463,4 +466,135 @@ emm_status emm_table_decide(const emm_table *t, const double f[EMM_FEATURES], do
     out->distance = bd;
     out->novel = out->distance > threshold;
     return EMM_OK;
+}
+
+/* ---- simulating the candidates ------------------------------------------- */
+
+struct sweep_job {
+    const emm_machine *m;
+    const emm_trace_info *info;
+    const emm_trace_record *recs;
+    size_t n;
+    const emm_strategy *s;
+    emm_sweep *out;
+    size_t first, step; /* strategies first, first + step, ... */
+    bool nomem;
+};
+
+static void *sweep_run(void *arg)
+{
+    struct sweep_job *j = arg;
+    for (size_t i = j->first; i < j->out->count; i += j->step) {
+        emm_model *model;
+        emm_error e;
+        emm_status st = emm_model_new(j->m, &j->s[i], j->info, &model, &e);
+        if (st != EMM_OK) {
+            j->nomem |= st == EMM_ERR_NOMEM;
+            continue;
+        }
+        emm_model_run(model, j->recs, j->n);
+        emm_model_result(model, &j->out->result[i]);
+        emm_model_free(model);
+        j->out->ran[i] = 1;
+    }
+    return NULL;
+}
+
+emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
+                             const emm_trace_record *recs, size_t n, emm_sweep *out,
+                             emm_error *err)
+{
+    emm_strategy s[EMM_SWEEP_MAX];
+    memset(out, 0, sizeof *out);
+    size_t count = emm_strategy_sweep(s, EMM_SWEEP_MAX);
+    assert(count <= EMM_SWEEP_MAX);
+    out->count = count;
+    for (size_t i = 0; i < count; i++) {
+        out->result[i].strategy = s[i];
+        if (s[i].kind == EMM_STRATEGY_CACHE && s[i].layout == EMM_LAYOUT_ORIGINAL)
+            out->cache = i;
+    }
+    /* Strategies alternate between the threads, so both get a mix of the
+     * cheap and the expensive ones; each result depends only on its model. */
+    struct sweep_job jobs[2] = {{m, info, recs, n, s, out, 0, 2, false},
+                                {m, info, recs, n, s, out, 1, 2, false}};
+    pthread_t th;
+    bool threaded = pthread_create(&th, NULL, sweep_run, &jobs[1]) == 0;
+    if (!threaded)
+        jobs[0].step = 1;
+    sweep_run(&jobs[0]);
+    if (threaded)
+        pthread_join(th, NULL);
+    if (jobs[0].nomem || jobs[1].nomem)
+        return emm_fail(err, EMM_ERR_NOMEM, "strategy sweep: out of memory for a model");
+    uint64_t best = UINT64_MAX;
+    for (size_t i = 0; i < count; i++)
+        if (out->ran[i]) {
+            out->simulated++;
+            if (out->result[i].total < best) {
+                best = out->result[i].total;
+                out->best = i;
+            }
+        }
+    if (out->simulated == 0)
+        return emm_fail(err, EMM_ERR_UNSUPPORTED,
+                        "strategy sweep: no strategy of the sweep can be simulated on this trace");
+    return EMM_OK;
+}
+
+emm_status emm_decide_window(const emm_table *t, const emm_machine *m, const emm_trace_info *info,
+                             const emm_trace_record *recs, size_t n, const char *name,
+                             double threshold, int simulate, emm_window_decision *out,
+                             emm_error *err)
+{
+    memset(out, 0, sizeof *out);
+    emm_profiler *p;
+    emm_status st = emm_profiler_new(info, n ? n : 1, name, &p, err);
+    if (st != EMM_OK)
+        return st;
+    if ((st = emm_profiler_add(p, recs, n, err)) != EMM_OK) {
+        emm_profiler_free(p);
+        return st;
+    }
+    size_t np;
+    const double *xy = emm_profiler_positions(p, &np);
+    if (np < EMM_PROFILE_MIN) {
+        emm_profiler_free(p);
+        return emm_fail(err, EMM_ERR_RANGE,
+                        "%s: only %zu element accesses; a profile needs at least %u", name, np,
+                        EMM_PROFILE_MIN);
+    }
+    double *D = malloc(np * sizeof *D);
+    if (!D) {
+        emm_profiler_free(p);
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile", name);
+    }
+    st = emm_profile_compute(xy, np, D, NULL, err);
+    emm_profiler_free(p);
+    if (st == EMM_OK)
+        st = emm_profile_features(D, np, name, out->f, err);
+    free(D);
+    if (st != EMM_OK)
+        return st;
+    out->accesses = np;
+    if (t && t->n > 0) {
+        if ((st = emm_table_decide(t, out->f, threshold, &out->table, err)) != EMM_OK)
+            return st;
+        out->has_table = 1;
+        out->strategy = out->table.strategy;
+    }
+    if (!simulate && out->has_table && !out->table.novel)
+        return EMM_OK;
+    emm_sweep *sw = malloc(sizeof *sw);
+    if (!sw)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+    st = emm_sweep_records(m, info, recs, n, sw, err);
+    if (st == EMM_OK) {
+        out->simulated = 1;
+        out->strategy = sw->result[sw->best].strategy;
+        out->cycles = sw->result[sw->best].total;
+        out->candidates = sw->simulated;
+    }
+    free(sw);
+    return st;
 }

@@ -11,6 +11,7 @@
 #include "emm/table.h"
 #include "emm/trace.h"
 #include "json.h"
+#include "machine_cli.h"
 
 static const char *const CMD = "profile";
 
@@ -18,18 +19,28 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage: emm profile TRACE [--window N] [--table FILE] [--threshold X]\n"
+            "                         [--simulate] [--learn NAME [--pattern CLASS]]\n"
+            "                         [--machine FILE] [--set KEY=VALUE]...\n"
             "                         [--dump FILE.csv] [--json FILE]\n"
             "\n"
             "Computes the distance profile D_i = sum over k<i of |p_i - p_k| (thesis Eq. 5.1)\n"
             "of the trace's first N element accesses (vertex or triangle accesses; consecutive\n"
             "accesses to one element count once; positions scaled by the mesh's bounding-box\n"
             "diagonal), reduces it to features, and prints the pattern class, the nearest\n"
-            "sample of the strategy table with its distance, and the strategy chosen.\n"
+            "sample of the strategy table with its distance, and the strategy chosen. A\n"
+            "profile farther than the threshold from every sample is novel: then the\n"
+            "standard sweep of strategies is simulated on the window and the best is chosen.\n"
             "\n"
             "  --window N      element accesses to profile (default %u); up to %u use\n"
             "                  the exact method, longer windows the fast one\n"
             "  --table FILE    a user table added to the default one (default: $EMM_TABLE)\n"
             "  --threshold X   novelty threshold on the nearest distance (default %g)\n"
+            "  --simulate      simulate the sweep on the window even when not novel\n"
+            "  --learn NAME    when the sweep ran, append the profile as sample NAME with\n"
+            "                  the sweep's best strategy to the user table (--table or\n"
+            "                  $EMM_TABLE, created when missing)\n"
+            "  --pattern CLASS the pattern class of a learnt sample (default 'user')\n"
+            MACHINE_CLI_HELP
             "  --dump FILE     write the profile as CSV with the columns i,D\n"
             "  --json FILE     write pattern, strategy, nearest, distance, novel as JSON\n"
             "\n"
@@ -82,8 +93,8 @@ static int write_dump(const char *path, const double *D, size_t n)
     return finish_temp(fp, tmp, path);
 }
 
-static int write_json(const char *path, const char *trace, size_t n, int exact,
-                      const emm_decision *d, const double *f)
+static int write_json(const char *path, const char *trace, int exact,
+                      const emm_window_decision *w)
 {
     char *tmp;
     FILE *fp = open_temp(path, &tmp);
@@ -91,44 +102,88 @@ static int write_json(const char *path, const char *trace, size_t n, int exact,
         cli_error("%s: cannot write: %s", path, strerror(errno));
         return EMM_EXIT_FAIL;
     }
+    const emm_decision *d = &w->table;
     char strat[96];
-    emm_strategy_format(&d->strategy, strat, sizeof strat);
-    json_writer w;
-    json_init(&w, fp, true);
-    json_begin_object(&w);
-    json_key(&w, "trace");
-    json_string(&w, trace);
-    json_key(&w, "accesses");
-    json_u64(&w, n);
-    json_key(&w, "method");
-    json_string(&w, exact ? "exact" : "fast");
-    json_key(&w, "pattern");
-    json_string(&w, d->pattern);
-    json_key(&w, "strategy");
-    json_string(&w, strat);
-    json_key(&w, "nearest");
-    json_string(&w, d->nearest);
-    json_key(&w, "distance");
-    json_double(&w, d->distance);
-    json_key(&w, "novel");
-    json_bool(&w, d->novel);
-    json_key(&w, "features");
-    json_begin_array(&w);
+    emm_strategy_format(&w->strategy, strat, sizeof strat);
+    json_writer jw;
+    json_init(&jw, fp, true);
+    json_begin_object(&jw);
+    json_key(&jw, "trace");
+    json_string(&jw, trace);
+    json_key(&jw, "accesses");
+    json_u64(&jw, w->accesses);
+    json_key(&jw, "method");
+    json_string(&jw, exact ? "exact" : "fast");
+    json_key(&jw, "pattern");
+    json_string(&jw, d->pattern);
+    json_key(&jw, "strategy");
+    json_string(&jw, strat);
+    json_key(&jw, "nearest");
+    json_string(&jw, d->nearest);
+    json_key(&jw, "distance");
+    json_double(&jw, d->distance);
+    json_key(&jw, "novel");
+    json_bool(&jw, d->novel);
+    json_key(&jw, "simulated");
+    json_bool(&jw, w->simulated);
+    if (w->simulated) {
+        json_key(&jw, "candidates");
+        json_u64(&jw, w->candidates);
+        json_key(&jw, "cycles");
+        json_u64(&jw, w->cycles);
+    }
+    json_key(&jw, "features");
+    json_begin_array(&jw);
     for (int k = 0; k < EMM_FEATURES; k++)
-        json_double(&w, f[k]);
-    json_end_array(&w);
-    json_end_object(&w);
-    json_finish(&w);
+        json_double(&jw, w->f[k]);
+    json_end_array(&jw);
+    json_end_object(&jw);
+    json_finish(&jw);
     return finish_temp(fp, tmp, path);
+}
+
+/* The profile of a window of records, for --dump. */
+static emm_status window_profile(const emm_trace_info *info, const emm_trace_record *recs,
+                                 size_t n, const char *name, double **D, size_t *nD, int *exact,
+                                 emm_error *err)
+{
+    emm_profiler *p = NULL;
+    *D = NULL;
+    *nD = 0;
+    emm_status st = emm_profiler_new(info, n ? n : 1, name, &p, err);
+    if (st == EMM_OK && (st = emm_profiler_add(p, recs, n, err)) == EMM_OK) {
+        size_t np;
+        const double *xy = emm_profiler_positions(p, &np);
+        *D = malloc((np ? np : 1) * sizeof **D);
+        if (!*D) {
+            err->status = st = EMM_ERR_NOMEM;
+            snprintf(err->message, sizeof err->message, "%.300s: out of memory", name);
+        } else if ((st = emm_profile_compute(xy, np, *D, exact, err)) == EMM_OK)
+            *nD = np;
+    }
+    if (st != EMM_OK) {
+        free(*D);
+        *D = NULL;
+    }
+    emm_profiler_free(p);
+    return st;
 }
 
 int emm_cmd_profile(int argc, char **argv)
 {
-    const char *trace = NULL, *table = NULL, *dump = NULL, *json = NULL;
+    const char *trace = NULL, *table = NULL, *dump = NULL, *json = NULL, *learn = NULL;
+    const char *pattern = "user";
     uint64_t window = EMM_PROFILE_DEFAULT_WINDOW;
     double threshold = EMM_NOVELTY_THRESHOLD;
+    int simulate = 0;
+    machine_cli mc = {0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
+        int mo = machine_cli_option(&mc, CMD, argc, argv, &i);
+        if (mo < 0)
+            return EMM_EXIT_USAGE;
+        if (mo > 0)
+            continue;
         if (cli_is_help(a)) {
             usage(stdout);
             return EMM_EXIT_OK;
@@ -149,6 +204,14 @@ int emm_cmd_profile(int argc, char **argv)
             threshold = strtod(v, &end);
             if (*v == '\0' || *end != '\0' || !(threshold > 0))
                 return cli_usage_error(CMD, "--threshold expects a positive number, not '%s'", v);
+        } else if (strcmp(a, "--simulate") == 0) {
+            simulate = 1;
+        } else if (strcmp(a, "--learn") == 0) {
+            if (!(learn = cli_value(CMD, argc, argv, &i)))
+                return EMM_EXIT_USAGE;
+        } else if (strcmp(a, "--pattern") == 0) {
+            if (!(pattern = cli_value(CMD, argc, argv, &i)))
+                return EMM_EXIT_USAGE;
         } else if (strcmp(a, "--dump") == 0) {
             if (!(dump = cli_value(CMD, argc, argv, &i)))
                 return EMM_EXIT_USAGE;
@@ -165,69 +228,108 @@ int emm_cmd_profile(int argc, char **argv)
     }
     if (!trace)
         return cli_usage_error(CMD, "a TRACE file is required");
+    const char *user = table;
+    if (learn) {
+        const char *env = getenv("EMM_TABLE");
+        if (!user && env && *env)
+            user = env;
+        if (!user)
+            return cli_usage_error(CMD, "--learn needs the user table to add to: --table FILE "
+                                        "or EMM_TABLE");
+        if (strlen(learn) >= EMM_TABLE_NAME_MAX || strlen(pattern) >= EMM_TABLE_NAME_MAX)
+            return cli_usage_error(CMD, "--learn and --pattern take at most %d characters",
+                                   EMM_TABLE_NAME_MAX - 1);
+    }
 
+    emm_machine *m = NULL;
+    int rc = machine_cli_build(&mc, CMD, &m);
+    if (rc != 0)
+        return rc;
     emm_error err;
     emm_trace_reader *r;
-    if (emm_trace_reader_open(trace, &r, &err) != EMM_OK)
+    if (emm_trace_reader_open(trace, &r, &err) != EMM_OK) {
+        emm_machine_free(m);
         return cli_fail(&err);
-    double *xy = NULL, *D = NULL;
-    size_t n = 0;
-    int rc = EMM_EXIT_FAIL, exact = 1;
+    }
+    emm_trace_record *recs = NULL;
+    double *D = NULL;
+    size_t n = 0, nD = 0;
+    int exact = 1;
+    rc = EMM_EXIT_FAIL;
     emm_table *t = NULL;
-    if (emm_profile_trace_positions(r, window, trace, &xy, &n, &err) != EMM_OK) {
+    const emm_trace_info *info = emm_trace_reader_info(r);
+    if (emm_profile_trace_window(r, window, trace, &recs, &n, &err) != EMM_OK ||
+        window_profile(info, recs, n, trace, &D, &nD, &exact, &err) != EMM_OK) {
         rc = cli_fail(&err);
         goto done;
     }
-    if (n < EMM_PROFILE_MIN) {
-        cli_error("%s: only %zu element accesses; a profile needs at least %u", trace, n,
+    if (nD < EMM_PROFILE_MIN) {
+        cli_error("%s: only %zu element accesses; a profile needs at least %u", trace, nD,
                   EMM_PROFILE_MIN);
         goto done;
     }
-    D = malloc(n * sizeof *D);
-    if (!D) {
-        cli_error("%s: out of memory", trace);
+    if (dump && write_dump(dump, D, nD) != EMM_EXIT_OK)
         goto done;
-    }
-    if (emm_profile_compute(xy, n, D, &exact, &err) != EMM_OK) {
-        rc = cli_fail(&err);
-        goto done;
-    }
-    if (dump && write_dump(dump, D, n) != EMM_EXIT_OK)
-        goto done;
-    double f[EMM_FEATURES];
-    if (emm_profile_features(D, n, trace, f, &err) != EMM_OK) {
-        rc = cli_fail(&err);
-        goto done;
-    }
     t = emm_table_new();
     if (!t) {
         cli_error("out of memory");
         goto done;
     }
-    if (emm_table_load_standard(t, table, &err) != EMM_OK) {
+    if (learn && access(user, F_OK) != 0) {
+        /* The table to learn into does not exist yet: the default table
+         * alone, or none (then the sweep decides). */
+        const char *def = emm_table_default_path();
+        if (access(def, F_OK) == 0 && emm_table_load(t, def, &err) != EMM_OK) {
+            rc = cli_fail(&err);
+            goto done;
+        }
+    } else if (emm_table_load_standard(t, table, &err) != EMM_OK) {
         rc = cli_fail(&err);
         goto done;
     }
-    emm_decision d;
-    if (emm_table_decide(t, f, threshold, &d, &err) != EMM_OK) {
+    emm_window_decision w;
+    if (emm_decide_window(t, m, info, recs, n, trace, threshold, simulate, &w, &err) != EMM_OK) {
         rc = cli_fail(&err);
         goto done;
     }
     char strat[96];
-    emm_strategy_format(&d.strategy, strat, sizeof strat);
+    emm_strategy_format(&w.strategy, strat, sizeof strat);
     printf("trace:     %s\n", trace);
-    printf("window:    %zu element accesses (%s method)\n", n, exact ? "exact" : "fast");
-    printf("pattern:   %s\n", d.pattern);
-    printf("nearest:   %s (distance %.4f)\n", d.nearest, d.distance);
-    printf("novel:     %s (threshold %g)\n", d.novel ? "yes" : "no", threshold);
+    printf("window:    %zu element accesses (%s method)\n", w.accesses, exact ? "exact" : "fast");
+    if (w.has_table) {
+        printf("pattern:   %s\n", w.table.pattern);
+        printf("nearest:   %s (distance %.4f)\n", w.table.nearest, w.table.distance);
+        printf("novel:     %s (threshold %g)\n", w.table.novel ? "yes" : "no", threshold);
+    } else {
+        printf("pattern:   unknown (no table yet)\n");
+    }
+    if (w.simulated)
+        printf("simulated: %zu strategies on the window; best %llu cycles\n", w.candidates,
+               (unsigned long long)w.cycles);
     printf("strategy:  %s\n", strat);
     rc = EMM_EXIT_OK;
+    if (learn && w.simulated) {
+        emm_table_sample s;
+        memset(&s, 0, sizeof s);
+        snprintf(s.name, sizeof s.name, "%s", learn);
+        snprintf(s.pattern, sizeof s.pattern, "%s", pattern);
+        s.strategy = w.strategy;
+        memcpy(s.f, w.f, sizeof s.f);
+        if (emm_table_append(user, &s, &err) != EMM_OK) {
+            rc = cli_fail(&err);
+            goto done;
+        }
+        printf("learnt:    %s (%s, %s) added to %s\n", s.name, s.pattern, strat, user);
+    } else if (learn) {
+        printf("learnt:    nothing (not novel; --simulate learns anyway)\n");
+    }
     if (json)
-        rc = write_json(json, trace, n, exact, &d, f);
+        rc = write_json(json, trace, exact, &w);
 done:
     emm_table_free(t);
-    free(xy);
+    free(recs);
     free(D);
     emm_trace_reader_close(r);
+    emm_machine_free(m);
     return rc;
 }

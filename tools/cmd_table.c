@@ -1,22 +1,28 @@
 /* emm table: list the strategy table's samples, add a trace's profile as a
- * sample (thesis §5: the table grows with new applications). `emm table
- * build`, which generates the shipped default table by simulating the
- * standard sweep, comes with the strategy simulation. */
+ * sample (thesis §5: the table grows with new applications), and build the
+ * shipped default table from canonical patterns over generated meshes, each
+ * sample's strategy chosen by simulating the standard sweep. */
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cli.h"
+#include "emm/mesh.h"
 #include "emm/profile.h"
+#include "emm/synth.h"
 #include "emm/table.h"
 #include "emm/trace.h"
+#include "machine_cli.h"
 
 static void usage(FILE *out)
 {
     fprintf(out,
             "usage: emm table list [--table FILE]\n"
-            "       emm table add PROFILE --name NAME --strategy S [--pattern CLASS]\n"
-            "                     [--window N] [--table FILE]\n"
+            "       emm table add PROFILE --name NAME [--strategy S] [--pattern CLASS]\n"
+            "                     [--window N] [--table FILE] [--machine FILE] [--set K=V]...\n"
+            "       emm table build [-o FILE] [--quick] [--machine FILE] [--set K=V]...\n"
             "\n"
             "The strategy table maps distance-profile samples to strategies. The default\n"
             "table is %s; a user table\n"
@@ -25,8 +31,17 @@ static void usage(FILE *out)
             "  list   print every sample: name, pattern class, strategy, source file\n"
             "  add    profile the trace PROFILE (its first N element accesses, default %u)\n"
             "         and append it to the user table (created when missing) as NAME with\n"
-            "         strategy S (required for now: choosing the best of the standard sweep\n"
-            "         needs the strategy simulation) and pattern CLASS (default 'user')\n",
+            "         strategy S, or without --strategy the best of the standard sweep\n"
+            "         simulated on that window; pattern CLASS (default 'user')\n"
+            "  build  generate the default table: canonical patterns (random, region from a\n"
+            "         random and from a corner seed, short and long curves, scan lines,\n"
+            "         Z-order, Gray code, Hilbert, spiral) over generated meshes, profiled\n"
+            "         at windows of 4096, 16384 and 65536 element accesses, each sample's\n"
+            "         strategy the best of the standard sweep simulated on the whole\n"
+            "         traversal (the run a decision on the window is for).\n"
+            "         Deterministic. -o FILE (default: the default table above); --quick:\n"
+            "         two meshes and two windows, for tests\n"
+            MACHINE_CLI_HELP,
             emm_table_default_path(), EMM_PROFILE_DEFAULT_WINDOW);
 }
 
@@ -66,13 +81,60 @@ static int table_list(int argc, char **argv)
     return EMM_EXIT_OK;
 }
 
+/* table add without --strategy: the best of the sweep on the window. */
+static int table_add_swept(const char *trace, const char *table, uint64_t window,
+                           const machine_cli *mc, emm_table_sample *s)
+{
+    emm_machine *m = NULL;
+    int rc = machine_cli_build(mc, "table add", &m);
+    if (rc != 0)
+        return rc;
+    emm_error err;
+    emm_trace_reader *r;
+    if (emm_trace_reader_open(trace, &r, &err) != EMM_OK) {
+        emm_machine_free(m);
+        return cli_fail(&err);
+    }
+    emm_trace_record *recs = NULL;
+    size_t n = 0;
+    emm_window_decision w;
+    rc = EMM_EXIT_OK;
+    if (emm_profile_trace_window(r, window, trace, &recs, &n, &err) != EMM_OK ||
+        emm_decide_window(NULL, m, emm_trace_reader_info(r), recs, n, trace, 0, 1, &w, &err) !=
+            EMM_OK) {
+        rc = cli_fail(&err);
+    } else {
+        s->strategy = w.strategy;
+        memcpy(s->f, w.f, sizeof s->f);
+        if (emm_table_append(table, s, &err) != EMM_OK) {
+            rc = cli_fail(&err);
+        } else {
+            char strat[96];
+            emm_strategy_format(&s->strategy, strat, sizeof strat);
+            printf("added %s (%s, %s: the best of %zu strategies, %llu cycles on the window) "
+                   "to %s\n",
+                   s->name, s->pattern, strat, w.candidates, (unsigned long long)w.cycles, table);
+        }
+    }
+    free(recs);
+    emm_trace_reader_close(r);
+    emm_machine_free(m);
+    return rc;
+}
+
 static int table_add(int argc, char **argv)
 {
     const char *cmd = "table add", *table = NULL, *trace = NULL, *name = NULL, *strategy = NULL;
     const char *pattern = "user";
     uint64_t window = EMM_PROFILE_DEFAULT_WINDOW;
+    machine_cli mc = {0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
+        int mo = machine_cli_option(&mc, cmd, argc, argv, &i);
+        if (mo < 0)
+            return EMM_EXIT_USAGE;
+        if (mo > 0)
+            continue;
         if (cli_is_help(a)) {
             usage(stdout);
             return EMM_EXIT_OK;
@@ -106,9 +168,6 @@ static int table_add(int argc, char **argv)
         return cli_usage_error(cmd, "a PROFILE trace is required");
     if (!name)
         return cli_usage_error(cmd, "--name is required");
-    if (!strategy)
-        return cli_usage_error(cmd, "--strategy is required (the sweep that would choose one "
-                                    "is not built yet)");
     if (!table) {
         const char *env = getenv("EMM_TABLE");
         if (!env || !*env)
@@ -125,8 +184,10 @@ static int table_add(int argc, char **argv)
                                EMM_TABLE_NAME_MAX - 1);
     snprintf(s.name, sizeof s.name, "%s", name);
     snprintf(s.pattern, sizeof s.pattern, "%s", pattern);
-    if (emm_strategy_parse(strategy, &s.strategy, &err) != EMM_OK)
+    if (strategy && emm_strategy_parse(strategy, &s.strategy, &err) != EMM_OK)
         return cli_usage_error(cmd, "%s", err.message);
+    if (!strategy)
+        return table_add_swept(trace, table, window, &mc, &s);
 
     emm_trace_reader *r;
     if (emm_trace_reader_open(trace, &r, &err) != EMM_OK)
@@ -163,6 +224,216 @@ done:
     return rc;
 }
 
+/* ---- emm table build ----------------------------------------------------- */
+
+/* The canonical patterns (thesis Table 5.1 and Figs. 5.2–5.3). */
+static const struct {
+    const char *name, *cls;
+    emm_pattern pattern;
+    uint64_t length; /* curves: triangles per walk (0: to the boundary) */
+    int corner;
+} build_patterns[] = {
+    {"random", "random", EMM_PATTERN_RANDOM, 0, 0},
+    {"region", "region", EMM_PATTERN_REGION, 0, 0},
+    {"region-corner", "region", EMM_PATTERN_REGION, 0, 1},
+    {"curve", "curve", EMM_PATTERN_CURVE, 0, 0},
+    {"curve-short", "curve", EMM_PATTERN_CURVE, 24, 0},
+    {"scanline", "scanline", EMM_PATTERN_SCANLINE, 0, 0},
+    {"zorder", "zorder", EMM_PATTERN_ZORDER, 0, 0},
+    {"gray", "gray", EMM_PATTERN_GRAY, 0, 0},
+    {"hilbert", "hilbert", EMM_PATTERN_HILBERT, 0, 0},
+    {"spiral", "spiral", EMM_PATTERN_SPIRAL, 0, 0},
+};
+
+static const struct {
+    size_t faces;
+    emm_density density;
+    uint64_t seed;
+} build_meshes[] = {
+    {6000, EMM_DENSITY_UNIFORM, 11},
+    {12000, EMM_DENSITY_CLUSTERED, 12},
+    {24000, EMM_DENSITY_UNIFORM, 13},
+    {20000, EMM_DENSITY_CLUSTERED, 14},
+};
+
+static const uint64_t build_windows[] = {4096, 16384, 65536};
+
+/* The features of a trace's first `window` element accesses; *n receives
+ * how many there were. */
+static emm_status window_features(emm_trace_reader *r, uint64_t window, const char *name,
+                                  double f[EMM_FEATURES], size_t *n, emm_error *err)
+{
+    double *xy = NULL, *D = NULL;
+    emm_status st = emm_profile_trace_positions(r, window, name, &xy, n, err);
+    if (st == EMM_OK && *n < EMM_PROFILE_MIN) {
+        err->status = st = EMM_ERR_RANGE;
+        snprintf(err->message, sizeof err->message,
+                 "%.300s: only %zu element accesses; a profile needs at least %u", name, *n,
+                 EMM_PROFILE_MIN);
+    }
+    if (st == EMM_OK && !(D = malloc(*n * sizeof *D))) {
+        err->status = st = EMM_ERR_NOMEM;
+        snprintf(err->message, sizeof err->message, "%.300s: out of memory", name);
+    }
+    if (st == EMM_OK)
+        st = emm_profile_compute(xy, *n, D, NULL, err);
+    if (st == EMM_OK)
+        st = emm_profile_features(D, *n, name, f, err);
+    free(xy);
+    free(D);
+    return st;
+}
+
+static int table_build(int argc, char **argv)
+{
+    const char *cmd = "table build", *out = NULL;
+    int quick = 0;
+    machine_cli mc = {0};
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        int mo = machine_cli_option(&mc, cmd, argc, argv, &i);
+        if (mo < 0)
+            return EMM_EXIT_USAGE;
+        if (mo > 0)
+            continue;
+        if (cli_is_help(a)) {
+            usage(stdout);
+            return EMM_EXIT_OK;
+        } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) {
+            if (!(out = cli_value(cmd, argc, argv, &i)))
+                return EMM_EXIT_USAGE;
+        } else if (strcmp(a, "--quick") == 0) {
+            quick = 1;
+        } else {
+            return cli_usage_error(cmd, "unexpected argument '%s'", a);
+        }
+    }
+    if (!out)
+        out = emm_table_default_path();
+    emm_machine *m = NULL;
+    int rc = machine_cli_build(&mc, cmd, &m);
+    if (rc != 0)
+        return rc;
+
+    const char *tmpdir = getenv("TMPDIR");
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/emm-table-XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
+    emm_table *t = emm_table_new();
+    if (!t || !mkdtemp(dir)) {
+        cli_error("%s: cannot make a scratch directory: %s", dir, strerror(errno));
+        emm_table_free(t);
+        emm_machine_free(m);
+        return EMM_EXIT_FAIL;
+    }
+    char trace[600];
+    snprintf(trace, sizeof trace, "%s/pattern.emmt", dir);
+    size_t nmesh = quick ? 2 : sizeof build_meshes / sizeof build_meshes[0];
+    size_t nwin = quick ? 2 : sizeof build_windows / sizeof build_windows[0];
+    emm_error err;
+    rc = EMM_EXIT_OK;
+    for (size_t g = 0; g < nmesh && rc == EMM_EXIT_OK; g++) {
+        emm_gen_options go = {build_meshes[g].faces, build_meshes[g].seed,
+                              build_meshes[g].density, EMM_ORDER_INPUT};
+        emm_mesh *mesh;
+        if (emm_mesh_generate(&go, &mesh, &err) != EMM_OK) {
+            rc = cli_fail(&err);
+            break;
+        }
+        for (size_t p = 0; p < sizeof build_patterns / sizeof build_patterns[0]; p++) {
+            emm_synth_options so = {.pattern = build_patterns[p].pattern,
+                                    .seed = 100 + build_meshes[g].seed,
+                                    .length = build_patterns[p].length,
+                                    .corner_seed = build_patterns[p].corner};
+            emm_trace_reader *r = NULL;
+            if (emm_synth_trace(mesh, &so, trace, NULL, &err) != EMM_OK ||
+                emm_trace_reader_open(trace, &r, &err) != EMM_OK) {
+                rc = cli_fail(&err);
+                break;
+            }
+            /* The strategy is the one that serves the whole traversal best:
+             * the run a decision made on the window is for. */
+            emm_trace_record *all = NULL;
+            size_t nall = 0;
+            emm_sweep *sw = malloc(sizeof *sw);
+            if (!sw) {
+                cli_error("out of memory");
+                rc = EMM_EXIT_FAIL;
+            } else if (emm_profile_trace_window(r, UINT64_MAX, trace, &all, &nall, &err) !=
+                           EMM_OK ||
+                       emm_sweep_records(m, emm_trace_reader_info(r), all, nall, sw, &err) !=
+                           EMM_OK) {
+                rc = cli_fail(&err);
+            }
+            free(all);
+            size_t covered = 0;
+            for (size_t w = 0; w < nwin && rc == EMM_EXIT_OK; w++) {
+                emm_table_sample s;
+                memset(&s, 0, sizeof s);
+                size_t np = 0;
+                if (window_features(r, build_windows[w], trace, s.f, &np, &err) != EMM_OK) {
+                    rc = cli_fail(&err);
+                    break;
+                }
+                /* A window past the end of the trace repeats the last sample. */
+                if (np <= covered)
+                    break;
+                covered = np;
+                snprintf(s.name, sizeof s.name, "%s-%zuk%c-w%zu", build_patterns[p].name,
+                         build_meshes[g].faces / 1000,
+                         build_meshes[g].density == EMM_DENSITY_UNIFORM ? 'u' : 'c', np);
+                snprintf(s.pattern, sizeof s.pattern, "%s", build_patterns[p].cls);
+                s.strategy = sw->result[sw->best].strategy;
+                if (emm_table_add(t, &s, &err) != EMM_OK) {
+                    rc = cli_fail(&err);
+                    break;
+                }
+                char strat[96];
+                emm_strategy_format(&s.strategy, strat, sizeof strat);
+                printf("%-28s %-9s %-24s %llu cycles (best of %zu; cache %llu)\n", s.name,
+                       s.pattern, strat, (unsigned long long)sw->result[sw->best].total,
+                       sw->simulated, (unsigned long long)sw->result[sw->cache].total);
+                fflush(stdout);
+            }
+            free(sw);
+            emm_trace_reader_close(r);
+            remove(trace);
+            if (rc != EMM_EXIT_OK)
+                break;
+        }
+        emm_mesh_free(mesh);
+    }
+    rmdir(dir);
+    if (rc == EMM_EXIT_OK) {
+        char comment[1024];
+        int len = snprintf(comment, sizeof comment,
+                           "Generated by `emm table build%s%s%s`; do not edit by hand, rebuild.\n"
+                           "Samples: canonical patterns (emm trace synth, seed 100 + the mesh's)\n"
+                           "over planar Delaunay meshes (emm mesh gen):",
+                           quick ? " --quick" : "", mc.file ? " --machine " : "",
+                           mc.file ? mc.file : "");
+        for (size_t g = 0; g < nmesh && len > 0 && (size_t)len < sizeof comment; g++)
+            len += snprintf(comment + len, sizeof comment - (size_t)len, " %zu %s faces seed %llu%s",
+                            build_meshes[g].faces,
+                            build_meshes[g].density == EMM_DENSITY_UNIFORM ? "uniform"
+                                                                            : "clustered",
+                            (unsigned long long)build_meshes[g].seed, g + 1 < nmesh ? "," : ";");
+        if (len > 0 && (size_t)len < sizeof comment)
+            snprintf(comment + len, sizeof comment - (size_t)len,
+                     "\nwindows of %s element accesses; each strategy is the fewest cycles of\n"
+                     "the standard sweep simulated on the whole traversal (%s machine%s).",
+                     quick ? "4096 and 16384" : "4096, 16384 and 65536",
+                     mc.file || mc.nsets ? "a configured" : "the default",
+                     mc.nsets ? " with --set overrides" : "");
+        if (emm_table_write(t, out, comment, &err) != EMM_OK)
+            rc = cli_fail(&err);
+        else
+            printf("wrote %s: %zu samples\n", out, emm_table_count(t));
+    }
+    emm_table_free(t);
+    emm_machine_free(m);
+    return rc;
+}
+
 int emm_cmd_table(int argc, char **argv)
 {
     if (argc < 2) {
@@ -177,9 +448,7 @@ int emm_cmd_table(int argc, char **argv)
         return table_list(argc - 1, argv + 1);
     if (strcmp(argv[1], "add") == 0)
         return table_add(argc - 1, argv + 1);
-    if (strcmp(argv[1], "build") == 0) {
-        cli_error("'table build' needs the strategy simulation, which is not built yet");
-        return EMM_EXIT_FAIL;
-    }
-    return cli_usage_error("table", "unknown subcommand '%s' (list, add)", argv[1]);
+    if (strcmp(argv[1], "build") == 0)
+        return table_build(argc - 1, argv + 1);
+    return cli_usage_error("table", "unknown subcommand '%s' (list, add, build)", argv[1]);
 }

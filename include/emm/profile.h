@@ -109,6 +109,15 @@ EMM_API emm_status emm_profile_trace_positions(emm_trace_reader *r, uint64_t win
                                                const char *name, double **xy, size_t *n,
                                                emm_error *err);
 
+/* Reads a trace from its first record until `window` element accesses
+ * (0: EMM_PROFILE_DEFAULT_WINDOW) or its end and returns those records
+ * (RAW ones included, as the simulation needs them) in *recs (malloc'd,
+ * the caller frees) and their count in *n: the window the session decides
+ * on. */
+EMM_API emm_status emm_profile_trace_window(emm_trace_reader *r, uint64_t window,
+                                            const char *name, emm_trace_record **recs,
+                                            size_t *n, emm_error *err);
+
 #ifdef __cplusplus
 }
 #endif

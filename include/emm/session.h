@@ -48,6 +48,8 @@ typedef struct emm_session_config {
     emm_compare compare;
     const char *machine_path;    /* NULL: defaults (EMM_MACHINE) */
     const char *table_path;      /* NULL: the shipped table only (EMM_TABLE adds a user table) */
+    int table_only;              /* 1: table_path replaces the shipped table instead of adding
+                                  * to it (for tests and experiments with a table of one's own) */
     const char *report_path;     /* NULL: no JSON report (EMM_REPORT); already %p-expanded */
     const char *profile_dump;    /* NULL: no CSV (EMM_PROFILE_DUMP) */
     const char *trace_path;      /* NULL: no trace (EMM_TRACE) */

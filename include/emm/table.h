@@ -19,7 +19,9 @@
 
 #include "emm/common.h"
 #include "emm/profile.h"
+#include "emm/sim.h"
 #include "emm/strategy.h"
+#include "emm/trace.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -28,14 +30,9 @@ extern "C" {
 /* Version 2: the features 17–19 (locality across scales) were added. */
 #define EMM_TABLE_VERSION 2
 #define EMM_TABLE_NAME_MAX 64
-/* A profile whose nearest sample is farther than this (in the distance
- * below) is novel. See docs/profile.md for how it was chosen. */
+/* A profile whose nearest sample is farther than this (Euclidean, in
+ * feature space) is novel. See docs/profile.md for how it was chosen. */
 #define EMM_NOVELTY_THRESHOLD 1.0
-/* The distance between two feature vectors is Euclidean over the features'
- * differences, each clipped to this much: a feature off by more already says
- * "another shape", and one unstable feature (such as the early growth of a
- * Z-order on a clustered mesh) must not outvote the rest. */
-#define EMM_FEATURE_CLIP 0.3
 
 typedef struct emm_table_sample {
     char name[EMM_TABLE_NAME_MAX];    /* letters, digits, '-', '_', '.', '@', '+' */
@@ -91,15 +88,64 @@ typedef struct emm_decision {
     int novel;       /* distance > threshold */
 } emm_decision;
 
-/* The distance between two feature vectors (EMM_FEATURE_CLIP). */
+/* The Euclidean distance between two feature vectors. */
 EMM_API double emm_feature_distance(const double a[EMM_FEATURES], const double b[EMM_FEATURES]);
 
-/* Nearest sample to f by emm_feature_distance. threshold <= 0 means
+/* Nearest sample to f by Euclidean distance (emm_feature_distance). threshold <= 0 means
  * EMM_NOVELTY_THRESHOLD. A novel profile still reports its nearest sample
  * and that sample's strategy (the session may then simulate the candidates
  * and take the best instead). An empty table is EMM_ERR_INVALID. */
 EMM_API emm_status emm_table_decide(const emm_table *t, const double f[EMM_FEATURES],
                                     double threshold, emm_decision *out, emm_error *err);
+
+/* ---- simulating the candidates (thesis §5: a novel profile) -------------- */
+
+/* The standard sweep's size (emm_strategy_sweep). */
+#define EMM_SWEEP_MAX 64
+
+typedef struct emm_sweep {
+    size_t count;                     /* strategies in the sweep */
+    emm_result result[EMM_SWEEP_MAX]; /* per strategy; meaningful where ran[i] */
+    int ran[EMM_SWEEP_MAX];           /* 0: this build cannot simulate it on this trace */
+    size_t simulated;                 /* how many ran */
+    size_t best;                      /* index of the fewest cycles (ties: the earlier) */
+    size_t cache;                     /* index of plain `cache`, the baseline */
+} emm_sweep;
+
+/* Simulates every strategy of the standard sweep on recs[0..n), records of
+ * a trace described by `info`, on machine m (validated), over two threads;
+ * deterministic. Strategies whose model cannot be built (EMM strategies or
+ * cache@LAYOUT before this build has them; a layout the mesh does not
+ * allow) are skipped. EMM_ERR_UNSUPPORTED when none ran. */
+EMM_API emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
+                                     const emm_trace_record *recs, size_t n, emm_sweep *out,
+                                     emm_error *err);
+
+typedef struct emm_window_decision {
+    emm_decision table;      /* the nearest sample (valid when has_table) */
+    int has_table;           /* a table with samples was given */
+    double f[EMM_FEATURES];  /* the window's features */
+    size_t accesses;         /* element accesses profiled */
+    int simulated;           /* the sweep ran: novel, no table, or asked for */
+    emm_strategy strategy;   /* the choice: the sweep's best when simulated, else the table's */
+    uint64_t cycles;         /* the best strategy's cycles on the window, when simulated */
+    size_t candidates;       /* strategies simulated */
+} emm_window_decision;
+
+/* The session's decision on a window (thesis §5): profiles recs[0..n)
+ * (records of a trace described by `info`; the window is all of them),
+ * takes the nearest sample of t (may be NULL or empty), and when the
+ * profile is novel (distance > threshold; threshold <= 0 means
+ * EMM_NOVELTY_THRESHOLD), when there is no sample, or when `simulate` is
+ * set, simulates the standard sweep on the window with machine m and takes
+ * the best. `name` names the window in messages. Fails with EMM_ERR_RANGE
+ * when the window has fewer than EMM_PROFILE_MIN element accesses. To learn
+ * a novel profile, append a sample made of out->f and out->strategy
+ * (emm_table_append). */
+EMM_API emm_status emm_decide_window(const emm_table *t, const emm_machine *m,
+                                     const emm_trace_info *info, const emm_trace_record *recs,
+                                     size_t n, const char *name, double threshold, int simulate,
+                                     emm_window_decision *out, emm_error *err);
 
 #ifdef __cplusplus
 }

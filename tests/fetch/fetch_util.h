@@ -65,7 +65,7 @@ static inline void synth_load(const emm_mesh *m, const emm_synth_options *so, co
 
 static inline emm_mesh *thesis_mesh(size_t faces)
 {
-    emm_gen_options o = {faces, EMM_DEFAULT_SEED, EMM_DENSITY_CLUSTERED};
+    emm_gen_options o = {faces, EMM_DEFAULT_SEED, EMM_DENSITY_CLUSTERED, EMM_ORDER_INPUT};
     emm_mesh *m;
     emm_error err;
     if (emm_mesh_generate(&o, &m, &err) != EMM_OK) {

@@ -1,0 +1,189 @@
+/* Decision quality of the distance profiler (thesis §5, Table 5.1): on
+ * synthetic traces that are NOT in the strategy table (other meshes, seeds
+ * and window lengths; spiral and corner-seeded region growth; Hilbert
+ * order), how the strategy chosen from the profile window fares over the
+ * whole trace against the best strategy of the standard sweep and against
+ * the cache baseline. Prints each case's regret (chosen / best − 1) and the
+ * summary the issue asks for: mean regret within 5 %, and never more than
+ * 5 % worse than `cache`. A benchmark, not a test.
+ *
+ * usage: decision_quality [--table FILE] [--quick]
+ * (the default table, plus FILE or $EMM_TABLE when given) */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "emm/mesh.h"
+#include "emm/profile.h"
+#include "emm/sim.h"
+#include "emm/synth.h"
+#include "emm/table.h"
+#include "emm/trace.h"
+
+static const struct {
+    const char *name;
+    emm_pattern pattern;
+    uint64_t length;
+    int corner;
+} patterns[] = {
+    {"random", EMM_PATTERN_RANDOM, 0, 0},
+    {"region", EMM_PATTERN_REGION, 0, 0},
+    {"region-corner", EMM_PATTERN_REGION, 0, 1},
+    {"curve", EMM_PATTERN_CURVE, 0, 0},
+    {"curve-40", EMM_PATTERN_CURVE, 40, 0},
+    {"scanline", EMM_PATTERN_SCANLINE, 0, 0},
+    {"zorder", EMM_PATTERN_ZORDER, 0, 0},
+    {"gray", EMM_PATTERN_GRAY, 0, 0},
+    {"hilbert", EMM_PATTERN_HILBERT, 0, 0},
+    {"spiral", EMM_PATTERN_SPIRAL, 0, 0},
+};
+
+/* Meshes and seeds that `emm table build` does not use (it uses 6k, 12k,
+ * 20k and 24k faces, seeds 11–14). */
+static const struct {
+    size_t faces;
+    emm_density density;
+    uint64_t seed;
+} meshes[] = {
+    {9000, EMM_DENSITY_UNIFORM, 21},
+    {16000, EMM_DENSITY_CLUSTERED, 22},
+    {30000, EMM_DENSITY_UNIFORM, 23},
+};
+
+/* Window lengths the table does not sample (it has 4096, 16384, 65536). */
+static const uint64_t windows[] = {8192, 32768};
+
+static void die(const char *what, const emm_error *err)
+{
+    fprintf(stderr, "decision_quality: %s: %s\n", what, err->message);
+    exit(1);
+}
+
+static int same(const emm_strategy *a, const emm_strategy *b)
+{
+    return a->kind == b->kind && a->layout == b->layout && a->fetch == b->fetch &&
+           a->cell == b->cell;
+}
+
+int main(int argc, char **argv)
+{
+    const char *user = NULL;
+    int quick = 0;
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--table") == 0 && i + 1 < argc)
+            user = argv[++i];
+        else if (strcmp(argv[i], "--quick") == 0)
+            quick = 1;
+        else {
+            fprintf(stderr, "usage: decision_quality [--table FILE] [--quick]\n");
+            return 2;
+        }
+    }
+    emm_error err;
+    emm_machine *m;
+    emm_table *t = emm_table_new();
+    if (emm_machine_new(&m, &err) != EMM_OK)
+        die("machine", &err);
+    if (!t || emm_table_load_standard(t, user, &err) != EMM_OK)
+        die("table", &err);
+    const char *path = "decision_quality.emmt";
+    printf("table: %zu samples (%s%s%s)\n", emm_table_count(t), emm_table_default_path(),
+           user ? " + " : "", user ? user : "");
+    printf("%-30s %6s %-6s %-24s %-24s %8s %8s %7s\n", "case", "window", "how", "chosen", "best",
+           "regret", "vs cache", "dist");
+
+    size_t nmesh = quick ? 1 : sizeof meshes / sizeof meshes[0];
+    size_t cases = 0, worse_than_cache = 0, skipped = 0;
+    double sum_regret = 0, max_regret = 0, max_vs_cache = -1;
+    for (size_t g = 0; g < nmesh; g++) {
+        emm_gen_options go = {meshes[g].faces, meshes[g].seed, meshes[g].density, EMM_ORDER_INPUT};
+        emm_mesh *mesh;
+        if (emm_mesh_generate(&go, &mesh, &err) != EMM_OK)
+            die("mesh", &err);
+        for (size_t p = 0; p < sizeof patterns / sizeof patterns[0]; p++) {
+            emm_synth_options so = {.pattern = patterns[p].pattern,
+                                    .seed = 300 + meshes[g].seed,
+                                    .length = patterns[p].length,
+                                    .corner_seed = patterns[p].corner};
+            emm_trace_reader *r = NULL;
+            if (emm_synth_trace(mesh, &so, path, NULL, &err) != EMM_OK ||
+                emm_trace_reader_open(path, &r, &err) != EMM_OK)
+                die(patterns[p].name, &err);
+            const emm_trace_info *info = emm_trace_reader_info(r);
+
+            /* The whole trace under every strategy of the sweep. */
+            emm_trace_record *all;
+            size_t nall;
+            if (emm_profile_trace_window(r, UINT64_MAX, path, &all, &nall, &err) != EMM_OK)
+                die(patterns[p].name, &err);
+            emm_sweep *whole = malloc(sizeof *whole);
+            if (!whole || emm_sweep_records(m, info, all, nall, whole, &err) != EMM_OK)
+                die(patterns[p].name, &err);
+            uint64_t best = whole->result[whole->best].total;
+            uint64_t cache = whole->result[whole->cache].total;
+
+            for (size_t w = 0; w < sizeof windows / sizeof windows[0]; w++) {
+                emm_trace_record *recs;
+                size_t n;
+                emm_window_decision d;
+                if (emm_profile_trace_window(r, windows[w], path, &recs, &n, &err) != EMM_OK)
+                    die(patterns[p].name, &err);
+                if (n >= nall) {
+                    /* The window is the whole trace: not a decision ahead of time. */
+                    free(recs);
+                    skipped++;
+                    continue;
+                }
+                if (emm_decide_window(t, m, info, recs, n, path, 0, 0, &d, &err) != EMM_OK)
+                    die(patterns[p].name, &err);
+                free(recs);
+                size_t k = whole->count;
+                for (size_t i = 0; i < whole->count; i++)
+                    if (same(&whole->result[i].strategy, &d.strategy))
+                        k = i;
+                char cname[64], chosen[96], bestname[96];
+                snprintf(cname, sizeof cname, "%s %zuk%c", patterns[p].name,
+                         meshes[g].faces / 1000,
+                         meshes[g].density == EMM_DENSITY_UNIFORM ? 'u' : 'c');
+                emm_strategy_format(&d.strategy, chosen, sizeof chosen);
+                emm_strategy_format(&whole->result[whole->best].strategy, bestname,
+                                    sizeof bestname);
+                if (k == whole->count || !whole->ran[k]) {
+                    printf("%-30s %6zu %-6s %-24s %-24s %8s %8s %7.3f\n", cname, d.accesses,
+                           d.simulated ? "sweep" : "table", chosen, bestname, "n/a", "n/a",
+                           d.table.distance);
+                    skipped++;
+                    continue;
+                }
+                uint64_t c = whole->result[k].total;
+                double regret = (double)c / (double)best - 1;
+                double vs_cache = (double)c / (double)cache - 1;
+                printf("%-30s %6zu %-6s %-24s %-24s %7.2f%% %7.2f%% %7.3f\n", cname, d.accesses,
+                       d.simulated ? "sweep" : "table", chosen, bestname, 100 * regret,
+                       100 * vs_cache, d.table.distance);
+                cases++;
+                sum_regret += regret;
+                if (regret > max_regret)
+                    max_regret = regret;
+                if (vs_cache > max_vs_cache)
+                    max_vs_cache = vs_cache;
+                worse_than_cache += vs_cache > 0.05;
+            }
+            free(whole);
+            free(all);
+            emm_trace_reader_close(r);
+        }
+        emm_mesh_free(mesh);
+    }
+    remove(path);
+    double mean = cases ? sum_regret / (double)cases : 0;
+    printf("\n%zu cases (%zu skipped: window covers the trace, or strategy not simulated)\n", cases,
+           skipped);
+    printf("mean regret %.2f%% (goal <= 5%%), largest %.2f%%\n", 100 * mean, 100 * max_regret);
+    printf("worst against cache %+.2f%% (goal <= +5%%); %zu cases more than 5%% worse\n",
+           100 * max_vs_cache, worse_than_cache);
+    printf("goals met: %s\n", cases && mean <= 0.05 && worse_than_cache == 0 ? "yes" : "no");
+    emm_table_free(t);
+    emm_machine_free(m);
+    return 0;
+}

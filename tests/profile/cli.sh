@@ -1,0 +1,111 @@
+#!/bin/sh
+# emm profile and emm table as a user runs them: exit statuses, messages,
+# the JSON keys and the CSV columns. Arguments: the emm binary, the
+# make_trace helper, a scratch directory.
+set -u
+EMM=$1 MAKE=$2 DIR=$3
+rm -rf "$DIR" && mkdir -p "$DIR" && cd "$DIR" || exit 1
+fail=0
+check() { # check NAME EXPECTED-STATUS COMMAND...
+    name=$1 want=$2; shift 2
+    "$@" >out.txt 2>err.txt; got=$?
+    if [ "$got" != "$want" ]; then
+        echo "FAIL $name: exit $got, wanted $want"; cat out.txt err.txt; fail=1
+    fi
+}
+has() { # has NAME FILE TEXT
+    if ! grep -q -- "$3" "$2"; then echo "FAIL $1: '$3' not in $2:"; cat "$2"; fail=1; fi
+}
+
+"$MAKE" grid grid.emmt && "$MAKE" walk walk.emmt && "$MAKE" raw raw.emmt || exit 1
+unset EMM_TABLE
+
+check help-profile 0 "$EMM" profile --help
+has help-profile out.txt "usage: emm profile TRACE"
+check help-table 0 "$EMM" table --help
+check help-table-add 0 "$EMM" table add --help
+has help-table-add out.txt "the best of the standard sweep"
+has help-table-add out.txt "emm table build"
+check no-trace 2 "$EMM" profile
+has no-trace err.txt "emm profile: a TRACE file is required"
+check bad-window 2 "$EMM" profile grid.emmt --window ten
+check small-window 2 "$EMM" profile grid.emmt --window 10
+check bad-option 2 "$EMM" profile grid.emmt --fast
+check missing 1 "$EMM" profile nosuch.emmt
+check raw 1 "$EMM" profile raw.emmt
+has raw err.txt "raw.emmt: an address-only trace"
+check table-bad-sub 2 "$EMM" table frob
+check table-add-bad-strategy 2 "$EMM" table add grid.emmt --name g --strategy warp --table user.txt
+check table-add-no-table 2 "$EMM" table add grid.emmt --name g --strategy cache
+
+# Without any table: a clear message naming the default path.
+default=$("$EMM" profile --help | sed -n 's/^The default table is \(.*\)\.$/\1/p')
+if [ ! -e "$default" ]; then
+    check no-table 1 "$EMM" profile grid.emmt --dump nt.csv
+    has no-table err.txt "no strategy table found: tried $default"
+    has no-table-dump nt.csv "^i,D$"
+fi
+
+# Build a user table from the two traces, list it, profile against it.
+check add-grid 0 "$EMM" table add grid.emmt --name rows --pattern scanline --strategy tiles+extrapolated@64 --table user.txt
+check add-walk 0 "$EMM" table add walk.emmt --name shuffled --pattern random --strategy cache --table user.txt
+check add-dup 1 "$EMM" table add walk.emmt --name rows --strategy cache --table user.txt
+has add-dup err.txt "already in this table"
+check list 0 "$EMM" table list --table user.txt
+has list out.txt "rows .*scanline .*tiles+extrapolated@64"
+has list out.txt "shuffled .*random .*cache .*user.txt:"
+EMM_TABLE=user.txt check list-env 0 "$EMM" table list
+has list-env out.txt "shuffled"
+
+check profile 0 "$EMM" profile walk.emmt --table user.txt --dump walk.csv --json walk.json
+has profile out.txt "pattern: *random"
+has profile out.txt "nearest: *shuffled (distance 0.0000)"
+has profile out.txt "strategy: *cache"
+has profile out.txt "novel: *no"
+for key in pattern strategy nearest distance novel; do has json walk.json "\"$key\""; done
+has json walk.json '"pattern": "random"'
+has csv walk.csv "^i,D$"
+lines=$(wc -l < walk.csv)
+# The default window (16384 element accesses) and the header line.
+[ "$lines" -eq 16385 ] || { echo "FAIL csv: $lines lines, wanted 16385"; fail=1; }
+check profile-grid 0 "$EMM" profile grid.emmt --table user.txt --window 4096
+has profile-grid out.txt "pattern: *scanline"
+has profile-grid out.txt "window: *4096 element accesses"
+check profile-novel 0 "$EMM" profile grid.emmt --table user.txt --window 4096 --threshold 1e-9
+has profile-novel out.txt "novel: *yes"
+
+# Without --strategy, the best of the sweep simulated on the window.
+check add-swept 0 "$EMM" table add grid.emmt --name swept --window 4096 --table swept.txt
+has add-swept out.txt "added swept (user, .*: the best of [0-9]* strategies"
+has add-swept-file swept.txt "^swept "
+check add-swept-bad-set 2 "$EMM" table add grid.emmt --name s2 --table swept.txt --set nosuch.key=1
+
+# A novel profile: the sweep decides, and --learn adds it to the user table.
+check simulate 0 "$EMM" profile walk.emmt --table user.txt --simulate --json sim.json
+has simulate out.txt "simulated: [0-9]* strategies on the window; best [0-9]* cycles"
+has simulate-json sim.json '"simulated": true'
+check learn-no-table 2 "$EMM" profile walk.emmt --learn w1
+check learn 0 "$EMM" profile walk.emmt --table learn.txt --threshold 1e-9 --learn w1 --pattern walk
+has learn out.txt "novel: *yes"
+has learn out.txt "learnt: *w1 (walk, "
+has learn-file learn.txt "^w1 *walk "
+check learn-again 0 "$EMM" profile walk.emmt --table learn.txt --window 4096
+has learn-again out.txt "nearest: *"
+
+# emm table build: deterministic, with a header saying how it was made.
+check build-1 0 "$EMM" table build --quick -o built1.txt
+has build-1 out.txt "wrote built1.txt: [0-9]* samples"
+check build-2 0 "$EMM" table build --quick -o built2.txt
+cmp -s built1.txt built2.txt || { echo "FAIL build: two runs differ"; fail=1; }
+has build-header built1.txt "^emm-table 2 features=19$"
+has build-header built1.txt "Generated by .emm table build --quick."
+has build-samples built1.txt "^zorder-6ku-w4096 *zorder "
+check build-bad 2 "$EMM" table build --frob
+
+# A broken table is an error naming the file and the line.
+printf 'emm-table 2 features=19\nx random cache 1 2 3\n' > broken.txt
+check broken 1 "$EMM" profile grid.emmt --table broken.txt
+has broken err.txt "broken.txt:2: expected name, pattern, strategy"
+
+[ $fail = 0 ] && echo "cli: all checks passed"
+exit $fail
