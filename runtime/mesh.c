@@ -24,6 +24,7 @@
 
 #include "error.h"
 #include "mesh_io.h"
+#include "outfile.h"
 
 #include <assert.h>
 #include <errno.h>
@@ -394,47 +395,16 @@ emm_status emm_mesh_open(const char *path, emm_mesh **out, emm_error *err)
 emm_status emm_mesh_write_off(const emm_mesh *m, const char *path, emm_error *err)
 {
     assert(m && path);
-    size_t n = strlen(path);
-    char *tmp = malloc(n + 16);
-    if (!tmp)
-        return out_of_memory(path, err);
-    snprintf(tmp, n + 16, "%s.tmp.XXXXXX", path);
-    int fd = mkstemp(tmp);
-    if (fd < 0) {
-        emm_status st = emm_fail(err, EMM_ERR_IO, "%s: cannot create a temporary file beside it: %s", path,
-                                 strerror(errno));
-        free(tmp);
+    emm_outfile o;
+    emm_status st = emm_outfile_open(&o, path, "the mesh", err);
+    if (st != EMM_OK)
         return st;
-    }
-    /* mkstemp makes the file private; a mesh is an ordinary output file. */
-    (void)fchmod(fd, 0644);
-    FILE *f = fdopen(fd, "w");
-    if (!f) {
-        int e = errno;
-        close(fd);
-        unlink(tmp);
-        free(tmp);
-        return emm_fail(err, EMM_ERR_IO, "%s: %s", path, strerror(e));
-    }
-    fprintf(f, "OFF\n%zu %zu %zu\n", m->nv, m->nt, m->edges);
+    fprintf(o.f, "OFF\n%zu %zu %zu\n", m->nv, m->nt, m->edges);
     for (size_t v = 0; v < m->nv; v++)
-        fprintf(f, "%.17g %.17g %.17g\n", m->xyz[3 * v], m->xyz[3 * v + 1], m->xyz[3 * v + 2]);
+        fprintf(o.f, "%.17g %.17g %.17g\n", m->xyz[3 * v], m->xyz[3 * v + 1], m->xyz[3 * v + 2]);
     for (size_t t = 0; t < m->nt; t++)
-        fprintf(f, "3 %d %d %d\n", m->index[3 * t], m->index[3 * t + 1], m->index[3 * t + 2]);
-    bool failed = ferror(f) != 0;
-    int e = errno;
-    if (fclose(f) != 0 && !failed) {
-        failed = true;
-        e = errno;
-    }
-    if (!failed && rename(tmp, path) != 0) {
-        failed = true;
-        e = errno;
-    }
-    if (failed)
-        unlink(tmp);
-    free(tmp);
-    return failed ? emm_fail(err, EMM_ERR_IO, "%s: %s", path, strerror(e)) : EMM_OK;
+        fprintf(o.f, "3 %d %d %d\n", m->index[3 * t], m->index[3 * t + 1], m->index[3 * t + 2]);
+    return emm_outfile_commit(&o, "the mesh", err);
 }
 
 /* ---- queries ------------------------------------------------------------ */

@@ -33,6 +33,7 @@
 #include "emm/table.h"
 #include "error.h"
 #include "json.h"
+#include "outfile.h"
 #include "report.h"
 
 /* Arrays the session keeps at once (live or still referenced by the window). */
@@ -1066,37 +1067,16 @@ static void print_summary(const emm_session *s, FILE *out, const emm_result *res
 
 static emm_status write_csv(const emm_session *s, emm_error *err)
 {
-    const char *path = s->profile_dump;
-    size_t len = strlen(path);
-    char *tmp = malloc(len + 16);
-    if (!tmp)
-        return emm_fail(err, EMM_ERR_NOMEM, "EMM_PROFILE_DUMP: %s: out of memory", path);
-    memcpy(tmp, path, len);
-    memcpy(tmp + len, ".tmp.XXXXXX", 12);
-    int fd = mkstemp(tmp);
-    FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
-    if (!f) {
-        emm_status st = emm_fail(err, EMM_ERR_IO, "EMM_PROFILE_DUMP: %s: %s", path, strerror(errno));
-        if (fd >= 0) {
-            close(fd);
-            unlink(tmp);
-        }
-        free(tmp);
-        return st;
+    emm_outfile o;
+    emm_error e;
+    emm_status st = emm_outfile_open(&o, s->profile_dump, "the profile", &e);
+    if (st == EMM_OK) {
+        fprintf(o.f, "i,D\n");
+        for (size_t i = 0; i < s->nD; i++)
+            fprintf(o.f, "%zu,%.17g\n", i, s->D[i]);
+        st = emm_outfile_commit(&o, "the profile", &e);
     }
-    bool bad = fprintf(f, "i,D\n") < 0;
-    for (size_t i = 0; i < s->nD && !bad; i++)
-        bad = fprintf(f, "%zu,%.17g\n", i, s->D[i]) < 0;
-    bad = (fclose(f) != 0) || bad;
-    if (bad || rename(tmp, path) != 0) {
-        emm_status st = emm_fail(err, EMM_ERR_IO, "EMM_PROFILE_DUMP: %s: cannot write: %s", path,
-                                 strerror(errno ? errno : EIO));
-        unlink(tmp);
-        free(tmp);
-        return st;
-    }
-    free(tmp);
-    return EMM_OK;
+    return st == EMM_OK ? EMM_OK : emm_fail(err, st, "EMM_PROFILE_DUMP: %s", e.message);
 }
 
 /* An output that could not be written is said on the summary stream: the

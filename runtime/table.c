@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "error.h"
+#include "outfile.h"
 #include "parse.h"
 
 #ifndef EMM_SOURCE_DIR
@@ -283,36 +284,20 @@ static void write_header(FILE *fp, const char *comment)
             EMM_FEATURES);
 }
 
-/* Writes through a temporary file beside path, renamed into place. */
+/* Writes the whole table to a temporary file beside path, renamed into place. */
 static emm_status write_whole(const emm_table *t, const char *path, const char *comment,
                               const emm_table_sample *extra, emm_error *err)
 {
-    size_t len = strlen(path) + 32;
-    char *tmp = malloc(len);
-    if (!tmp)
-        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
-    snprintf(tmp, len, "%s.tmp.%ld", path, (long)getpid());
-    FILE *fp = fopen(tmp, "w");
-    if (!fp) {
-        emm_status st = emm_fail(err, EMM_ERR_IO, "%s: cannot write: %s", path, strerror(errno));
-        free(tmp);
+    emm_outfile o;
+    emm_status st = emm_outfile_open(&o, path, "the table", err);
+    if (st != EMM_OK)
         return st;
-    }
-    write_header(fp, comment);
+    write_header(o.f, comment);
     for (size_t i = 0; i < t->n; i++)
-        write_sample(fp, &t->s[i]);
+        write_sample(o.f, &t->s[i]);
     if (extra)
-        write_sample(fp, extra);
-    bool bad = ferror(fp) != 0;
-    bad |= fclose(fp) != 0;
-    if (bad || rename(tmp, path) != 0) {
-        emm_status st = emm_fail(err, EMM_ERR_IO, "%s: cannot write: %s", path, strerror(errno));
-        remove(tmp);
-        free(tmp);
-        return st;
-    }
-    free(tmp);
-    return EMM_OK;
+        write_sample(o.f, extra);
+    return emm_outfile_commit(&o, "the table", err);
 }
 
 emm_status emm_table_write(const emm_table *t, const char *path, const char *comment,
@@ -325,41 +310,32 @@ emm_status emm_table_write(const emm_table *t, const char *path, const char *com
  * through a temporary file renamed into place. */
 static emm_status append_line(const char *path, const emm_table_sample *s, emm_error *err)
 {
-    size_t len = strlen(path) + 32;
-    char *tmp = malloc(len);
-    if (!tmp)
-        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
-    snprintf(tmp, len, "%s.tmp.%ld", path, (long)getpid());
     FILE *in = fopen(path, "r");
-    FILE *out = in ? fopen(tmp, "w") : NULL;
-    emm_status st = EMM_OK;
-    if (!in || !out) {
-        st = emm_fail(err, EMM_ERR_IO, "%s: cannot rewrite: %s", path, strerror(errno));
-    } else {
-        char buf[8192];
-        size_t got, last = 0;
-        int tail = '\n';
-        while ((got = fread(buf, 1, sizeof buf, in)) > 0) {
-            fwrite(buf, 1, got, out);
-            last = got;
-            tail = buf[got - 1];
-        }
-        (void)last;
-        if (tail != '\n')
-            fputc('\n', out);
-        write_sample(out, s);
-        if (ferror(in) || ferror(out))
-            st = emm_fail(err, EMM_ERR_IO, "%s: cannot rewrite", path);
-    }
-    if (in)
+    if (!in)
+        return emm_fail(err, EMM_ERR_IO, "%s: cannot rewrite: %s", path, strerror(errno));
+    emm_outfile o;
+    emm_status st = emm_outfile_open(&o, path, "the table", err);
+    if (st != EMM_OK) {
         fclose(in);
-    if (out && fclose(out) != 0 && st == EMM_OK)
-        st = emm_fail(err, EMM_ERR_IO, "%s: cannot rewrite: %s", path, strerror(errno));
-    if (st == EMM_OK && rename(tmp, path) != 0)
-        st = emm_fail(err, EMM_ERR_IO, "%s: cannot rewrite: %s", path, strerror(errno));
-    if (st != EMM_OK && out)
-        remove(tmp);
-    free(tmp);
+        return st;
+    }
+    char buf[8192];
+    size_t got;
+    int tail = '\n';
+    while ((got = fread(buf, 1, sizeof buf, in)) > 0) {
+        fwrite(buf, 1, got, o.f);
+        tail = buf[got - 1];
+    }
+    if (tail != '\n')
+        fputc('\n', o.f);
+    write_sample(o.f, s);
+    if (ferror(in)) {
+        st = emm_fail(err, EMM_ERR_IO, "%s: cannot rewrite: cannot read it", path);
+        emm_outfile_abort(&o);
+    } else {
+        st = emm_outfile_commit(&o, "the table", err);
+    }
+    fclose(in);
     return st;
 }
 

@@ -14,6 +14,7 @@
 #include "json.h"
 #include "machine.h"
 #include "model.h"
+#include "outfile.h"
 #include "report.h"
 
 /* Records per batch: large enough that the per-batch dispatch is noise,
@@ -417,32 +418,13 @@ static emm_status report_write(const char *path, const char *trace_name, const e
                                const emm_error *skipped, size_t n, emm_report_extra_fn extra,
                                void *extra_ctx, emm_error *err)
 {
-    size_t len = strlen(path);
-    char *tmp = malloc(len + 16);
-    FILE *f;
-    int fd;
+    emm_outfile o;
     json_writer w;
-    bool bad;
+    emm_status st = emm_outfile_open(&o, path, "the report", err);
 
-    if (!tmp)
-        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
-    memcpy(tmp, path, len);
-    memcpy(tmp + len, ".tmp.XXXXXX", 12);
-    fd = mkstemp(tmp);
-    if (fd < 0) {
-        emm_status st = emm_fail(err, EMM_ERR_IO, "%s: %s", path, strerror(errno));
-        free(tmp);
+    if (st != EMM_OK)
         return st;
-    }
-    f = fdopen(fd, "w");
-    if (!f) {
-        emm_status st = emm_fail(err, EMM_ERR_IO, "%s: %s", path, strerror(errno));
-        close(fd);
-        unlink(tmp);
-        free(tmp);
-        return st;
-    }
-    json_init(&w, f, true);
+    json_init(&w, o.f, true);
     json_begin_object(&w);
     json_key(&w, "emm_report");
     json_u64(&w, 1);
@@ -464,18 +446,11 @@ static emm_status report_write(const char *path, const char *trace_name, const e
         extra(&w, extra_ctx);
     json_end_object(&w);
     json_finish(&w);
-    bad = json_failed(&w);
-    if (fclose(f) != 0)
-        bad = true;
-    if (bad || rename(tmp, path) != 0) {
-        emm_status st = emm_fail(err, EMM_ERR_IO, "%s: cannot write the report: %s", path,
-                                 strerror(errno ? errno : EIO));
-        unlink(tmp);
-        free(tmp);
-        return st;
+    if (w.failed) { /* nesting too deep; a failed write is the commit's to say */
+        emm_outfile_abort(&o);
+        return emm_fail(err, EMM_ERR_IO, "%s: cannot write the report: nested too deep", path);
     }
-    free(tmp);
-    return EMM_OK;
+    return emm_outfile_commit(&o, "the report", err);
 }
 
 emm_status emm_report_write_extra(const char *path, const char *trace_name, const emm_machine *m,

@@ -24,6 +24,7 @@
 #include <zstd.h>
 
 #include "error.h"
+#include "outfile.h"
 #include "trace_format.h"
 
 #define ZSTD_LEVEL 3
@@ -177,8 +178,7 @@ static void encode_geometry(const emm_trace_geometry *g, uint8_t *out)
 
 struct emm_trace_writer {
     char *path;
-    char *tmp_path;
-    FILE *f;
+    emm_outfile out; /* the trace, written whole or not at all */
     int compress;
     uint32_t narrays;
     emm_trace_array *arrays;
@@ -209,7 +209,7 @@ static emm_status writer_io_error(emm_trace_writer *w, emm_error *err, const cha
 
 static emm_status write_bytes(emm_trace_writer *w, const void *p, size_t n, emm_error *err)
 {
-    if (n > 0 && fwrite(p, 1, n, w->f) != n)
+    if (n > 0 && fwrite(p, 1, n, w->out.f) != n)
         return writer_io_error(w, err, "cannot write");
     return EMM_OK;
 }
@@ -225,7 +225,6 @@ static void writer_free(emm_trace_writer *w)
     free(w->limit);
     free(w->prev);
     free(w->path);
-    free(w->tmp_path);
     free(w);
 }
 
@@ -233,9 +232,7 @@ void emm_trace_writer_abort(emm_trace_writer *w)
 {
     if (!w)
         return;
-    if (w->f)
-        fclose(w->f);
-    unlink(w->tmp_path);
+    emm_outfile_abort(&w->out);
     writer_free(w);
 }
 
@@ -374,12 +371,11 @@ emm_status emm_trace_writer_open(const char *path, const emm_trace_array *arrays
     w->narrays = narrays;
     size_t plen = strlen(path);
     w->path = malloc(plen + 1);
-    w->tmp_path = malloc(plen + 32);
     w->arrays = malloc((narrays ? narrays : 1) * sizeof *w->arrays);
     w->limit = malloc((narrays ? narrays : 1) * sizeof *w->limit);
     w->prev = calloc(narrays ? narrays : 1, sizeof *w->prev);
     w->raw = malloc(max_raw_size(EMM_TRACE_BLOCK_RECORDS) + 8);
-    int ok = w->path && w->tmp_path && w->arrays && w->limit && w->prev && w->raw;
+    int ok = w->path && w->arrays && w->limit && w->prev && w->raw;
     for (int c = 0; c < EMM_TRACE_COLUMNS; c++)
         ok = ok && (w->col[c] = malloc(EMM_TRACE_BLOCK_RECORDS * sizeof(uint64_t))) != NULL;
     if (ok && w->compress) {
@@ -393,16 +389,13 @@ emm_status emm_trace_writer_open(const char *path, const emm_trace_array *arrays
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
     }
     memcpy(w->path, path, plen + 1);
-    snprintf(w->tmp_path, plen + 32, "%s.tmp.%ld", path, (long)getpid());
     if (narrays)
         memcpy(w->arrays, arrays, narrays * sizeof *arrays);
     for (uint32_t i = 0; i < narrays; i++)
         w->limit[i] = arrays[i].kind == EMM_ARRAY_RAW ? UINT64_MAX : arrays[i].count;
 
-    w->f = fopen(w->tmp_path, "wb");
-    if (!w->f) {
-        s = emm_fail(err, EMM_ERR_IO, "%s: cannot create %s: %s", path, w->tmp_path,
-                     strerror(errno));
+    s = emm_outfile_open(&w->out, path, "the trace", err);
+    if (s != EMM_OK) {
         writer_free(w);
         return s;
     }
@@ -500,21 +493,13 @@ emm_status emm_trace_writer_close(emm_trace_writer *w, emm_error *err)
         /* The counts are known now: rewrite the header. */
         uint8_t h[EMM_TRACE_HEADER_SIZE];
         put_header(w, h);
-        if (fflush(w->f) != 0 || fseek(w->f, 0, SEEK_SET) != 0)
+        if (fflush(w->out.f) != 0 || fseeko(w->out.f, 0, SEEK_SET) != 0)
             s = writer_io_error(w, err, "cannot seek");
         else
             s = write_bytes(w, h, sizeof h, err);
-        if (s == EMM_OK && (fflush(w->f) != 0 || fsync(fileno(w->f)) != 0))
-            s = writer_io_error(w, err, "cannot write");
     }
-    if (s == EMM_OK) {
-        int rc = fclose(w->f);
-        w->f = NULL;
-        if (rc != 0)
-            s = writer_io_error(w, err, "cannot write");
-        else if (rename(w->tmp_path, w->path) != 0)
-            s = writer_io_error(w, err, "cannot rename the finished trace into place");
-    }
+    if (s == EMM_OK)
+        s = emm_outfile_commit(&w->out, "the trace", err);
     if (s != EMM_OK) {
         emm_trace_writer_abort(w);
         return s;

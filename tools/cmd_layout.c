@@ -13,6 +13,7 @@
 #include "emm/mesh.h"
 #include "emm/sim.h"
 #include "emm/strategy.h"
+#include "outfile.h"
 #include "parse.h"
 
 static void usage(FILE *out)
@@ -204,48 +205,20 @@ static void write_svg_body(FILE *f, const emm_layout *l, const double *xyz, cons
 static int write_svg(const char *out, const emm_layout *l, const double *xyz, const int32_t *tri,
                      const char *path, const emm_strategy *s)
 {
-    emm_error err = {0};
-    size_t n = strlen(out);
-    char *tmp = malloc(n + 16);
+    emm_error err;
     unsigned char *col = colour_cells(l);
-    if (!tmp || !col) {
-        free(tmp);
-        free(col);
+    if (!col) {
         cli_error("%s: out of memory", out);
         return EMM_EXIT_FAIL;
     }
-    snprintf(tmp, n + 16, "%s.tmp.XXXXXX", out);
-    int fd = mkstemp(tmp);
-    FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
-    if (!f) {
-        snprintf(err.message, sizeof err.message, "%s: cannot create a temporary file beside it: %s",
-                 out, strerror(errno));
-        if (fd >= 0) {
-            close(fd);
-            unlink(tmp);
-        }
-        free(tmp);
-        free(col);
-        return cli_fail(&err);
+    emm_outfile o;
+    emm_status st = emm_outfile_open(&o, out, "the SVG", &err);
+    if (st == EMM_OK) {
+        write_svg_body(o.f, l, xyz, tri, path, s, col);
+        st = emm_outfile_commit(&o, "the SVG", &err);
     }
-    (void)fchmod(fd, 0644); /* mkstemp makes files private; this is an ordinary output */
-    write_svg_body(f, l, xyz, tri, path, s, col);
-    int failed = ferror(f) != 0, e = errno;
-    if (fclose(f) != 0 && !failed) {
-        failed = 1;
-        e = errno;
-    }
-    if (!failed && rename(tmp, out) != 0) {
-        failed = 1;
-        e = errno;
-    }
-    if (failed) {
-        unlink(tmp);
-        snprintf(err.message, sizeof err.message, "%s: %s", out, strerror(e));
-    }
-    free(tmp);
     free(col);
-    return failed ? cli_fail(&err) : EMM_EXIT_OK;
+    return st == EMM_OK ? EMM_EXIT_OK : cli_fail(&err);
 }
 
 int emm_cmd_layout(int argc, char **argv)

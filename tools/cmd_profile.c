@@ -12,6 +12,7 @@
 #include "emm/trace.h"
 #include "json.h"
 #include "machine_cli.h"
+#include "outfile.h"
 
 static const char *const CMD = "profile";
 
@@ -49,64 +50,37 @@ static void usage(FILE *out)
             emm_table_default_path());
 }
 
-/* Opens a temporary file beside path; *tmp receives its name (malloc'd). */
-static FILE *open_temp(const char *path, char **tmp)
+/* Commits an output file; the exit status. */
+static int finish_output(emm_outfile *o, const char *what)
 {
-    size_t len = strlen(path) + 32;
-    *tmp = malloc(len);
-    if (!*tmp)
-        return NULL;
-    snprintf(*tmp, len, "%s.tmp.%ld", path, (long)getpid());
-    FILE *fp = fopen(*tmp, "w");
-    if (!fp) {
-        free(*tmp);
-        *tmp = NULL;
-    }
-    return fp;
-}
-
-static int finish_temp(FILE *fp, char *tmp, const char *path)
-{
-    int bad = ferror(fp) != 0;
-    bad |= fclose(fp) != 0;
-    if (bad || rename(tmp, path) != 0) {
-        cli_error("%s: cannot write: %s", path, strerror(errno));
-        remove(tmp);
-        free(tmp);
-        return EMM_EXIT_FAIL;
-    }
-    free(tmp);
-    return EMM_EXIT_OK;
+    emm_error err;
+    return emm_outfile_commit(o, what, &err) == EMM_OK ? EMM_EXIT_OK : cli_fail(&err);
 }
 
 static int write_dump(const char *path, const double *D, size_t n)
 {
-    char *tmp;
-    FILE *fp = open_temp(path, &tmp);
-    if (!fp) {
-        cli_error("%s: cannot write: %s", path, strerror(errno));
-        return EMM_EXIT_FAIL;
-    }
-    fprintf(fp, "i,D\n");
+    emm_error err;
+    emm_outfile o;
+    if (emm_outfile_open(&o, path, "the profile", &err) != EMM_OK)
+        return cli_fail(&err);
+    fprintf(o.f, "i,D\n");
     for (size_t i = 0; i < n; i++)
-        fprintf(fp, "%zu,%.17g\n", i, D[i]);
-    return finish_temp(fp, tmp, path);
+        fprintf(o.f, "%zu,%.17g\n", i, D[i]);
+    return finish_output(&o, "the profile");
 }
 
 static int write_json(const char *path, const char *trace, int exact,
                       const emm_window_decision *w)
 {
-    char *tmp;
-    FILE *fp = open_temp(path, &tmp);
-    if (!fp) {
-        cli_error("%s: cannot write: %s", path, strerror(errno));
-        return EMM_EXIT_FAIL;
-    }
+    emm_error err;
+    emm_outfile o;
+    if (emm_outfile_open(&o, path, "the JSON", &err) != EMM_OK)
+        return cli_fail(&err);
     const emm_decision *d = &w->table;
     char strat[96];
     emm_strategy_format(&w->strategy, strat, sizeof strat);
     json_writer jw;
-    json_init(&jw, fp, true);
+    json_init(&jw, o.f, true);
     json_begin_object(&jw);
     json_key(&jw, "trace");
     json_string(&jw, trace);
@@ -139,7 +113,7 @@ static int write_json(const char *path, const char *trace, int exact,
     json_end_array(&jw);
     json_end_object(&jw);
     json_finish(&jw);
-    return finish_temp(fp, tmp, path);
+    return finish_output(&o, "the JSON");
 }
 
 /* The profile of a window of records, for --dump. */

@@ -14,6 +14,7 @@
 #include "emm/mesh.h"
 #include "emm/synth.h"
 #include "emm/trace.h"
+#include "outfile.h"
 
 #define READ_BATCH 65536
 
@@ -165,54 +166,47 @@ static char *put_din_line(char *p, int label, uint64_t addr)
     return p;
 }
 
-/* An output file written whole or not at all: a temporary file beside it,
- * renamed at the end. */
+/* Standard output, or an output file written whole or not at all. */
 struct out_file {
     FILE *f;
-    const char *path; /* NULL: stdout */
-    char tmp[4096];
+    emm_outfile file; /* file.path NULL: stdout */
 };
 
 static int out_open(struct out_file *o, const char *path)
 {
-    o->path = path;
+    emm_error err;
+    o->file = (emm_outfile){0};
     if (!path) {
         o->f = stdout;
         return 0;
     }
-    snprintf(o->tmp, sizeof o->tmp, "%s.tmp.%ld", path, (long)getpid());
-    o->f = fopen(o->tmp, "wb");
-    if (!o->f) {
-        cli_error("%s: cannot create: %s", o->tmp, strerror(errno));
+    if (emm_outfile_open(&o->file, path, "the export", &err) != EMM_OK) {
+        cli_fail(&err);
         return -1;
     }
+    o->f = o->file.f;
     return 0;
 }
 
 static int out_close(struct out_file *o, int ok)
 {
-    if (!o->path) {
+    emm_error err;
+    if (!o->file.path) {
         if (fflush(stdout) != 0 && ok) {
             cli_error("stdout: cannot write: %s", strerror(errno));
             return -1;
         }
         return ok ? 0 : -1;
     }
-    if (ok && (fflush(o->f) != 0 || fsync(fileno(o->f)) != 0)) {
-        cli_error("%s: cannot write: %s", o->path, strerror(errno));
-        ok = 0;
+    if (!ok) {
+        emm_outfile_abort(&o->file);
+        return -1;
     }
-    if (fclose(o->f) != 0 && ok) {
-        cli_error("%s: cannot write: %s", o->path, strerror(errno));
-        ok = 0;
+    if (emm_outfile_commit(&o->file, "the export", &err) != EMM_OK) {
+        cli_fail(&err);
+        return -1;
     }
-    if (ok && rename(o->tmp, o->path) != 0) {
-        cli_error("%s: cannot rename into place: %s", o->path, strerror(errno));
-        ok = 0;
-    }
-    if (!ok)
-        unlink(o->tmp);
-    return ok ? 0 : -1;
+    return 0;
 }
 
 static int trace_export(int argc, char **argv)
