@@ -59,11 +59,6 @@ static void usage(FILE *out)
             DEFAULT_CURVES);
 }
 
-static int usage_error(const char *msg, const char *arg)
-{
-    fprintf(stderr, PROG ": %s%s%s\nTry '" PROG " --help'.\n", msg, arg ? ": " : "", arg ? arg : "");
-    return 2;
-}
 
 static double cross2(double ax, double ay, double bx, double by)
 {
@@ -225,29 +220,25 @@ int main(int argc, char **argv)
             short_mode = true;
         } else if (strcmp(a, "--long") == 0) {
             short_mode = false;
-        } else if (strcmp(a, "--times") == 0) {
-            args.times = true;
         } else if (strcmp(a, "--curves") == 0 || strcmp(a, "--field") == 0) {
             if (i + 1 >= argc)
-                return usage_error("option needs a value", a);
+                return workload_usage_error(PROG, "option needs a value", a);
             const char *val = argv[++i];
             if (strcmp(a, "--field") == 0) {
                 if (!field_parse(val, &kind))
-                    return usage_error("--field accepts tension or uniform, not", val);
+                    return workload_usage_error(PROG, "--field accepts tension or uniform, not", val);
             } else {
                 char *end;
                 if (val[0] < '0' || val[0] > '9')
-                    return usage_error("--curves needs a positive integer, not", val);
+                    return workload_usage_error(PROG, "--curves needs a positive integer, not", val);
                 ncurves = strtoull(val, &end, 10);
                 if (*end || ncurves == 0 || ncurves > INT32_MAX)
-                    return usage_error("--curves needs a positive integer, not", val);
+                    return workload_usage_error(PROG, "--curves needs a positive integer, not", val);
             }
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return usage_error("unknown option", a);
-        } else if (args.mesh) {
-            return usage_error("more than one mesh file given", a);
         } else {
-            args.mesh = a;
+            int rc = workload_common_arg(&args, PROG, a);
+            if (rc)
+                return rc;
         }
     }
 

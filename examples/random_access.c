@@ -35,11 +35,6 @@ static void usage(FILE *out)
           out);
 }
 
-static int usage_error(const char *msg, const char *arg)
-{
-    fprintf(stderr, PROG ": %s: %s\nTry '" PROG " --help'.\n", msg, arg);
-    return 2;
-}
 
 /* qsort's comparator has no context argument; this program sorts once. */
 static const struct Mesh *sort_mesh;
@@ -74,19 +69,15 @@ int main(int argc, char **argv)
             return 0;
         } else if (strcmp(a, "--print-order") == 0) {
             print = true;
-        } else if (strcmp(a, "--times") == 0) {
-            args.times = true;
         } else if (strcmp(a, "--field") == 0) {
             if (i + 1 >= argc)
-                return usage_error("option needs a value", a);
+                return workload_usage_error(PROG, "option needs a value", a);
             if (!field_parse(argv[++i], &kind))
-                return usage_error("--field accepts tension or uniform, not", argv[i]);
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return usage_error("unknown option", a);
-        } else if (args.mesh) {
-            return usage_error("more than one mesh file given", a);
+                return workload_usage_error(PROG, "--field accepts tension or uniform, not", argv[i]);
         } else {
-            args.mesh = a;
+            int rc = workload_common_arg(&args, PROG, a);
+            if (rc)
+                return rc;
         }
     }
 

@@ -76,11 +76,6 @@ static void usage(FILE *out)
           out);
 }
 
-static int usage_error(const char *msg, const char *arg)
-{
-    fprintf(stderr, PROG ": %s: %s\nTry '" PROG " --help'.\n", msg, arg);
-    return 2;
-}
 
 /* The conquest's state. Triangle ids >= nt are dummy triangles and vertex
  * ids >= nv dummy vertices, both in this program's arrays. */
@@ -507,14 +502,10 @@ int main(int argc, char **argv)
             return 0;
         } else if (strcmp(a, "--print-codes") == 0) {
             print = true;
-        } else if (strcmp(a, "--times") == 0) {
-            args.times = true;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return usage_error("unknown option", a);
-        } else if (args.mesh) {
-            return usage_error("more than one mesh file given", a);
         } else {
-            args.mesh = a;
+            int rc = workload_common_arg(&args, PROG, a);
+            if (rc)
+                return rc;
         }
     }
 

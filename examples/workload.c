@@ -237,6 +237,26 @@ double workload_now(void)
     return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
+int workload_usage_error(const char *prog, const char *msg, const char *arg)
+{
+    fprintf(stderr, "%s: %s%s%s\nTry '%s --help'.\n", prog, msg, arg ? ": " : "", arg ? arg : "",
+            prog);
+    return 2;
+}
+
+int workload_common_arg(struct workload_args *args, const char *prog, const char *a)
+{
+    if (strcmp(a, "--times") == 0)
+        args->times = true;
+    else if (a[0] == '-' && a[1] != '\0')
+        return workload_usage_error(prog, "unknown option", a);
+    else if (args->mesh)
+        return workload_usage_error(prog, "more than one mesh file given", a);
+    else
+        args->mesh = a;
+    return 0;
+}
+
 void workload_report_times(const struct workload_args *args, double t0, double t1, double t2)
 {
     if (args->times)

@@ -79,6 +79,14 @@ struct workload_args {
     bool times;        /* --times: load and traversal seconds on stderr */
 };
 
+/* "PROG: msg: arg" and "Try 'PROG --help'." on stderr; returns 2, the
+ * exit status of bad usage. `arg` may be NULL. */
+int workload_usage_error(const char *prog, const char *msg, const char *arg);
+/* The arguments every program takes: --times, and one MESH. Returns 0 when
+ * `a` was one of them, or the exit status of bad usage (an unknown option,
+ * a second mesh). */
+int workload_common_arg(struct workload_args *args, const char *prog, const char *a);
+
 double workload_now(void);
 /* Prints "load: Xs  run: Ys" on stderr when args->times is set. */
 void workload_report_times(const struct workload_args *args, double t0, double t1, double t2);
