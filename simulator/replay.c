@@ -368,6 +368,7 @@ static void write_result(json_writer *w, const emm_machine *m, const emm_result 
             {"prefetch_bytes", res->emm.prefetch_bytes},
             {"useful_prefetches", res->emm.useful_prefetches},
             {"dropped_prefetches", res->emm.dropped_prefetches},
+            {"filtered_prefetches", res->emm.filtered_prefetches},
             {"evictions", res->emm.evictions},
             {"other_accesses", res->emm.other_accesses},
             {"local_budget", res->emm.local_budget},

@@ -112,6 +112,16 @@ static void print_table(const char *trace, uint64_t accesses, const emm_machine 
         if (res[i].has_dma)
             printf("\n%s: DMA transfers %llu, DMA bytes %llu", name,
                    (unsigned long long)res[i].dma.transfers, (unsigned long long)res[i].dma.bytes);
+        if (res[i].has_emm)
+            printf("\n%s: cell changes %llu, demand fetches %llu, prefetches %llu "
+                   "(useful %llu, dropped %llu, filtered %llu), evictions %llu",
+                   name, (unsigned long long)res[i].emm.cell_changes,
+                   (unsigned long long)res[i].emm.demand_fetches,
+                   (unsigned long long)res[i].emm.prefetches,
+                   (unsigned long long)res[i].emm.useful_prefetches,
+                   (unsigned long long)res[i].emm.dropped_prefetches,
+                   (unsigned long long)res[i].emm.filtered_prefetches,
+                   (unsigned long long)res[i].emm.evictions);
         if (res[i].has_direct)
             printf("\n%s: words read %llu, words written %llu", name,
                    (unsigned long long)res[i].direct.words_read,
