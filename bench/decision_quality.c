@@ -7,7 +7,9 @@
  * summary the issue asks for: mean regret within 5 %, and never more than
  * 5 % worse than `cache`. A benchmark, not a test.
  *
- * usage: decision_quality [--table FILE] [--quick]
+ * usage: decision_quality [--table FILE] [--quick] [--window-only]
+ * (--window-only: decide by the sweep on the window alone, for comparison;
+ * --seed-offset K: other meshes and traversals again — every seed plus K)
  * (the default table, plus FILE or $EMM_TABLE when given) */
 #include <stdio.h>
 #include <stdlib.h>
@@ -68,14 +70,19 @@ static int same(const emm_strategy *a, const emm_strategy *b)
 int main(int argc, char **argv)
 {
     const char *user = NULL;
-    int quick = 0;
+    int quick = 0, simulate = 0;
+    uint64_t offset = 0;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--table") == 0 && i + 1 < argc)
             user = argv[++i];
         else if (strcmp(argv[i], "--quick") == 0)
             quick = 1;
+        else if (strcmp(argv[i], "--window-only") == 0)
+            simulate = 1;
+        else if (strcmp(argv[i], "--seed-offset") == 0 && i + 1 < argc)
+            offset = strtoull(argv[++i], NULL, 10);
         else {
-            fprintf(stderr, "usage: decision_quality [--table FILE] [--quick]\n");
+            fprintf(stderr, "usage: decision_quality [--table FILE] [--quick] [--window-only] [--seed-offset K]\n");
             return 2;
         }
     }
@@ -89,20 +96,21 @@ int main(int argc, char **argv)
     const char *path = "decision_quality.emmt";
     printf("table: %zu samples (%s%s%s)\n", emm_table_count(t), emm_table_default_path(),
            user ? " + " : "", user ? user : "");
-    printf("%-30s %6s %-6s %-24s %-24s %8s %8s %7s\n", "case", "window", "how", "chosen", "best",
-           "regret", "vs cache", "dist");
+    printf("%-30s %6s %-7s %-24s %-24s %8s %8s %7s %s\n", "case", "window", "how", "chosen",
+           "best", "regret", "vs cache", "dist", "nearest");
 
     size_t nmesh = quick ? 1 : sizeof meshes / sizeof meshes[0];
     size_t cases = 0, worse_than_cache = 0, skipped = 0;
     double sum_regret = 0, max_regret = 0, max_vs_cache = -1;
     for (size_t g = 0; g < nmesh; g++) {
-        emm_gen_options go = {meshes[g].faces, meshes[g].seed, meshes[g].density, EMM_ORDER_INPUT};
+        emm_gen_options go = {meshes[g].faces, meshes[g].seed + offset, meshes[g].density,
+                              EMM_ORDER_INPUT};
         emm_mesh *mesh;
         if (emm_mesh_generate(&go, &mesh, &err) != EMM_OK)
             die("mesh", &err);
         for (size_t p = 0; p < sizeof patterns / sizeof patterns[0]; p++) {
             emm_synth_options so = {.pattern = patterns[p].pattern,
-                                    .seed = 300 + meshes[g].seed,
+                                    .seed = 300 + meshes[g].seed + offset,
                                     .length = patterns[p].length,
                                     .corner_seed = patterns[p].corner};
             emm_trace_reader *r = NULL;
@@ -134,7 +142,7 @@ int main(int argc, char **argv)
                     skipped++;
                     continue;
                 }
-                if (emm_decide_window(t, m, info, recs, n, path, 0, 0, &d, &err) != EMM_OK)
+                if (emm_decide_window(t, m, info, recs, n, path, 0, simulate, &d, &err) != EMM_OK)
                     die(patterns[p].name, &err);
                 free(recs);
                 size_t k = whole->count;
@@ -149,8 +157,8 @@ int main(int argc, char **argv)
                 emm_strategy_format(&whole->result[whole->best].strategy, bestname,
                                     sizeof bestname);
                 if (k == whole->count || !whole->ran[k]) {
-                    printf("%-30s %6zu %-6s %-24s %-24s %8s %8s %7.3f\n", cname, d.accesses,
-                           d.simulated ? "sweep" : "table", chosen, bestname, "n/a", "n/a",
+                    printf("%-30s %6zu %-7s %-24s %-24s %8s %8s %7.3f\n", cname, d.accesses,
+                           emm_decided_name(d.how), chosen, bestname, "n/a", "n/a",
                            d.table.distance);
                     skipped++;
                     continue;
@@ -158,9 +166,9 @@ int main(int argc, char **argv)
                 uint64_t c = whole->result[k].total;
                 double regret = (double)c / (double)best - 1;
                 double vs_cache = (double)c / (double)cache - 1;
-                printf("%-30s %6zu %-6s %-24s %-24s %7.2f%% %7.2f%% %7.3f\n", cname, d.accesses,
-                       d.simulated ? "sweep" : "table", chosen, bestname, 100 * regret,
-                       100 * vs_cache, d.table.distance);
+                printf("%-30s %6zu %-7s %-24s %-24s %7.2f%% %7.2f%% %7.3f %s\n", cname,
+                       d.accesses, emm_decided_name(d.how), chosen, bestname, 100 * regret,
+                       100 * vs_cache, d.table.distance, d.table.nearest);
                 cases++;
                 sum_regret += regret;
                 if (regret > max_regret)

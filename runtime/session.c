@@ -48,10 +48,13 @@
  * and in all when the window counts iterations. */
 #define SESSION_RECORDS_PER_ELEMENT 32u
 #define SESSION_ITERATION_RECORDS (1u << 20)
+/* The most element accesses of a leading index-order sweep the profile
+ * leaves out (see window_add). */
+#define SESSION_SWEEP_MAX (1u << 18)
 
 enum session_phase { PHASE_PROFILING, PHASE_DECIDE, PHASE_SIMULATING, PHASE_FAILED, PHASE_DONE };
 
-enum decision_source { FROM_NONE, FROM_CONFIG, FROM_TABLE, FROM_SIMULATION };
+enum decision_source { FROM_NONE, FROM_CONFIG, FROM_TABLE, FROM_CHECKED, FROM_SIMULATION };
 
 typedef struct session_array {
     emm_array_kind kind;
@@ -62,6 +65,7 @@ typedef struct session_array {
     unsigned char *snap; /* the fields, copied when the array went away before the
                             decision while the window named it; else NULL */
     uint64_t refs;       /* window records that name this slot */
+    uint64_t sweep_next; /* the element an index-order sweep touches next */
     int32_t trace_index; /* the trace array it feeds after the decision, or -1 */
 } session_array;
 
@@ -92,6 +96,9 @@ struct emm_session {
     bool wany;
     uint32_t wlast_array;
     uint64_t wlast_element;
+    bool sweep_over;      /* the leading index-order sweep has ended */
+    size_t wskip;         /* window records of that sweep: the profile starts after them */
+    uint64_t swept;       /* element accesses of that sweep */
 
     /* frozen at the decision */
     emm_trace_array *tarrays;
@@ -102,6 +109,7 @@ struct emm_session {
     double *D;        /* the window's distance profile, nD values */
     size_t nD;
     bool has_profile; /* features and a table decision exist */
+    double features[EMM_FEATURES];
     emm_decision decision;
     enum decision_source source;
     char strategy_note[512]; /* why the chosen strategy has no model, or "" */
@@ -471,10 +479,26 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
          * to one element count once. */
         if (s->phase == PHASE_PROFILING &&
             (!s->wany || r.array != s->wlast_array || r.element != s->wlast_element)) {
-            s->welements++;
             s->wany = true;
             s->wlast_array = r.array;
             s->wlast_element = r.element;
+            /* A program that first walks its arrays in index order (reading
+             * the file, initialising per-element data) shows the layout, not
+             * its traversal: the profile starts after such a leading sweep
+             * (bounded by SESSION_SWEEP_MAX), whose records are still
+             * simulated with the rest. */
+            session_array *arr = &s->arrays[r.array];
+            if (!s->sweep_over && r.element == arr->sweep_next && s->swept < SESSION_SWEEP_MAX) {
+                arr->sweep_next++;
+                s->swept++;
+            } else {
+                s->sweep_over = true;
+                s->welements++;
+            }
+        }
+        if (!s->sweep_over) {
+            s->wskip = s->wn;
+            s->wlimit++;
         }
         window_full_check(s);
     }
@@ -698,11 +722,13 @@ static emm_status freeze_arrays(emm_session *s, emm_error *err)
     s->info.version = 1;
     s->info.narrays = s->ntarrays;
     s->info.arrays = s->tarrays;
-    size_t m = 0;
+    size_t m = 0, skip = 0;
     uint64_t work = 0;
     for (size_t k = 0; k < s->wn; k++) {
         emm_trace_record r = s->window[k];
         int32_t t = s->arrays[r.array].trace_index;
+        if (k == s->wskip)
+            skip = m;
         if (t < 0) {
             work += r.work;
             s->dropped++;
@@ -714,6 +740,7 @@ static emm_status freeze_arrays(emm_session *s, emm_error *err)
         r.array = (uint32_t)t;
         s->window[m++] = r;
     }
+    s->wskip = s->wskip >= s->wn ? m : skip;
     s->wn = m;
     return EMM_OK;
 }
@@ -725,7 +752,7 @@ static emm_status profile_window(emm_session *s, emm_error *err)
     emm_status st = emm_profiler_new(&s->info, s->welements ? s->welements : 1, s->program, &p, err);
     if (st != EMM_OK)
         return st;
-    if ((st = emm_profiler_add(p, s->window, s->wn, err)) != EMM_OK) {
+    if ((st = emm_profiler_add(p, s->window + s->wskip, s->wn - s->wskip, err)) != EMM_OK) {
         emm_profiler_free(p);
         return st;
     }
@@ -746,38 +773,30 @@ static emm_status profile_window(emm_session *s, emm_error *err)
     double f[EMM_FEATURES];
     if ((st = emm_profile_features(s->D, s->nD, s->program, f, err)) != EMM_OK)
         return st;
+    /* The nearest sample, also when EMM_STRATEGY decides (the report names it). */
     if ((st = emm_table_decide(s->table, f, 0, &s->decision, err)) != EMM_OK)
         return st;
+    memcpy(s->features, f, sizeof f);
     s->has_profile = true;
     return EMM_OK;
 }
 
-/* A novel profile: the thesis' fallback (§5) is to try the candidates on the
- * window itself and keep the fastest. Strategies this build cannot simulate
- * on this mesh are skipped. */
-static void simulate_candidates(emm_session *s)
+/* The decision (runtime/table.c, docs/profile.md "The decision"): the
+ * nearest sample, its pattern simulated over this mesh and weighed with the
+ * window, or the sweep on the window when the profile is novel. */
+static emm_status choose(emm_session *s, emm_error *err)
 {
-    emm_strategy sweep[64];
-    emm_model *models[64];
-    size_t n = emm_strategy_sweep(sweep, 64), built = 0;
-    if (n > 64)
-        n = 64;
-    for (size_t i = 0; i < n; i++)
-        if (emm_model_new(s->machine, &sweep[i], &s->info, &models[built], NULL) == EMM_OK)
-            built++;
-    run_models(models, built, s->window, s->wn);
-    uint64_t best = UINT64_MAX;
-    for (size_t i = 0; i < built; i++) {
-        emm_result r;
-        emm_model_result(models[i], &r);
-        if (r.total < best) {
-            best = r.total;
-            s->chosen = r.strategy;
-        }
-        emm_model_free(models[i]);
-    }
-    if (best != UINT64_MAX)
-        s->source = FROM_SIMULATION;
+    emm_window_decision wd;
+    emm_status st = emm_decide_features(s->table, s->machine, &s->info, s->window + s->wskip,
+                                        s->wn - s->wskip, s->features, s->nD, s->program, 0, 0, &wd, err);
+    if (st != EMM_OK)
+        return st;
+    s->chosen = wd.strategy;
+    s->has_chosen = true;
+    s->source = wd.how == EMM_DECIDED_WINDOW    ? FROM_SIMULATION
+                : wd.how == EMM_DECIDED_CHECKED ? FROM_CHECKED
+                                                : FROM_TABLE;
+    return EMM_OK;
 }
 
 static bool same_strategy(const emm_strategy *a, const emm_strategy *b)
@@ -841,11 +860,8 @@ static emm_status decide(emm_session *s, emm_error *err)
         s->has_chosen = true;
         s->source = FROM_CONFIG;
     } else if (s->has_profile) {
-        s->chosen = s->decision.strategy;
-        s->has_chosen = true;
-        s->source = FROM_TABLE;
-        if (s->decision.novel)
-            simulate_candidates(s);
+        if ((st = choose(s, err)) != EMM_OK)
+            return st;
     }
     if ((st = build_models(s, err)) != EMM_OK)
         return st;
@@ -896,6 +912,8 @@ static const char *source_name(enum decision_source src)
         return "configured";
     case FROM_TABLE:
         return "table";
+    case FROM_CHECKED:
+        return "checked";
     case FROM_SIMULATION:
         return "simulated";
     default:
@@ -965,6 +983,8 @@ static void report_extra(json_writer *w, void *ctx)
     json_u64(w, s->nD);
     json_key(w, "iterations");
     json_u64(w, s->iterations);
+    json_key(w, "leading_sweep");
+    json_u64(w, s->swept);
     json_end_object(w);
 }
 
@@ -1017,7 +1037,9 @@ static void print_summary(const emm_session *s, FILE *out, const emm_result *res
         emm_strategy_format(&s->chosen, name, sizeof name);
         const char *why = s->source == FROM_CONFIG       ? "EMM_STRATEGY"
                           : s->source == FROM_SIMULATION ? "best of the sweep on the window"
-                                                         : "from the table";
+                          : s->source == FROM_CHECKED
+                              ? "the table's pattern simulated over this mesh, with the window"
+                              : "from the table";
         fprintf(out, "emm: strategy %s (%s)\n", name, why);
     } else if (s->strategy_note[0]) {
         fprintf(out, "emm: strategy not simulated: %s\n", s->strategy_note);

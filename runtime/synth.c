@@ -11,6 +11,8 @@
 
 #include "emm/trace.h"
 #include "error.h"
+#include "parse.h"
+#include "synth_internal.h"
 
 static const char *const pattern_names[EMM_PATTERN_COUNT] = {
     "region", "curve", "scanline", "zorder", "gray", "hilbert", "random", "spiral"};
@@ -31,6 +33,37 @@ emm_status emm_pattern_parse(const char *name, emm_pattern *out, emm_error *err)
                     "pattern '%s' is unknown; accepted: region, curve, scanline, zorder, gray, "
                     "hilbert, random, spiral",
                     name ? name : "");
+}
+
+emm_status emm_synth_recipe_parse(const char *recipe, emm_synth_options *o, emm_error *err)
+{
+    char pat[32];
+    const char *at = strchr(recipe, '@');
+    size_t len = at ? (size_t)(at - recipe) : strlen(recipe);
+    if (len >= sizeof pat)
+        len = sizeof pat - 1;
+    memcpy(pat, recipe, len);
+    pat[len] = '\0';
+    emm_pattern p;
+    emm_status st = emm_pattern_parse(pat, &p, err);
+    if (st != EMM_OK)
+        return st;
+    o->pattern = p;
+    o->length = 0;
+    o->corner_seed = 0;
+    if (!at)
+        return EMM_OK;
+    uint64_t n;
+    if (p == EMM_PATTERN_REGION && strcmp(at + 1, "corner") == 0)
+        o->corner_seed = 1;
+    else if (p == EMM_PATTERN_CURVE && emm_parse_u64(at + 1, &n) && n > 0)
+        o->length = n;
+    else
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "recipe '%s': after '@' comes 'corner' (region) or a curve length "
+                        "(curve)",
+                        recipe);
+    return EMM_OK;
 }
 
 /* splitmix64: small, fast and good enough to pick seeds and directions. */
@@ -272,8 +305,12 @@ static size_t order_curves(const struct synth *s, uint64_t *rng, uint64_t visits
 #define VERTEX_BYTES EMM_THESIS_VERTEX_BYTES
 #define TRIANGLE_BYTES EMM_THESIS_TRIANGLE_BYTES
 
-emm_status emm_synth_trace(const emm_mesh *m, const emm_synth_options *opt, const char *path,
-                           uint64_t *records, emm_error *err)
+/* The pattern's triangle visits over m: *order (malloc'ed, the caller frees)
+ * receives *n triangle indices; the mesh's positions and triangle indices
+ * go to *xyz and *tri when those are not NULL (malloc'ed too). */
+static emm_status synth_order(const emm_mesh *m, const emm_synth_options *opt, const char *name,
+                              uint32_t **order_out, size_t *n_out, double **xyz_out,
+                              int32_t **tri_out, emm_error *err)
 {
     struct synth s = {.m = m, .nv = emm_mesh_vertex_count(m), .nt = emm_mesh_triangle_count(m)};
     uint64_t rng = opt->seed;
@@ -282,28 +319,29 @@ emm_status emm_synth_trace(const emm_mesh *m, const emm_synth_options *opt, cons
     size_t order_cap = (size_t)(visits > s.nt ? visits : s.nt);
 
     if (s.nt == 0)
-        return emm_fail(err, EMM_ERR_INVALID, "%s: the mesh has no triangles", path);
+        return emm_fail(err, EMM_ERR_INVALID, "%s: the mesh has no triangles", name);
     if ((unsigned)opt->pattern >= EMM_PATTERN_COUNT)
-        return emm_fail(err, EMM_ERR_INVALID, "%s: unknown pattern", path);
+        return emm_fail(err, EMM_ERR_INVALID, "%s: unknown pattern", name);
     synth_init_axes(&s);
 
-    double *xyz = malloc(s.nv * 3 * sizeof *xyz);
-    int32_t *tri = malloc(s.nt * 3 * sizeof *tri);
+    double *xyz = xyz_out ? malloc(s.nv * 3 * sizeof *xyz) : NULL;
+    int32_t *tri = tri_out ? malloc(s.nt * 3 * sizeof *tri) : NULL;
     s.cx = malloc(s.nt * sizeof *s.cx);
     s.cy = malloc(s.nt * sizeof *s.cy);
     uint32_t *order = malloc(order_cap * sizeof *order);
-    if (!xyz || !tri || !s.cx || !s.cy || !order) {
-        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for a %zu-triangle mesh", path, s.nt);
+    if ((xyz_out && !xyz) || (tri_out && !tri) || !s.cx || !s.cy || !order) {
+        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for a %zu-triangle mesh", name, s.nt);
         goto done;
     }
-    for (size_t v = 0; v < s.nv; v++)
+    for (size_t v = 0; xyz && v < s.nv; v++)
         memcpy(xyz + 3 * v, emm_mesh_vertex(m, (uint32_t)v)->xyz, 3 * sizeof *xyz);
     for (size_t t = 0; t < s.nt; t++) {
         const emm_triangle *tr = emm_mesh_triangle(m, (uint32_t)t);
         double sx = 0, sy = 0;
         for (int i = 0; i < 3; i++) {
             double x, y;
-            tri[3 * t + i] = tr->v[i];
+            if (tri)
+                tri[3 * t + i] = tr->v[i];
             vertex_2d(&s, tr->v[i], &x, &y);
             sx += x;
             sy += y;
@@ -327,6 +365,8 @@ emm_status emm_synth_trace(const emm_mesh *m, const emm_synth_options *opt, cons
                 if (s.cx[t] + s.cy[t] < s.cx[seed] + s.cy[seed])
                     seed = (uint32_t)t;
         }
+        if (opt->has_start && opt->start < s.nt)
+            seed = opt->start;
         n = order_region(&s, seed, order);
         break;
     }
@@ -351,15 +391,55 @@ emm_status emm_synth_trace(const emm_mesh *m, const emm_synth_options *opt, cons
     }
     if (n > visits)
         n = (size_t)visits;
+    *order_out = order;
+    *n_out = n;
+    order = NULL;
+    if (xyz_out)
+        *xyz_out = xyz, xyz = NULL;
+    if (tri_out)
+        *tri_out = tri, tri = NULL;
+done:
+    free(xyz);
+    free(tri);
+    free(s.cx);
+    free(s.cy);
+    free(order);
+    return st;
+}
 
+/* The records of one visit: the triangle's record, then its vertices'. */
+static size_t visit_records(const emm_mesh *m, uint32_t t, const struct synth_arrays *a,
+                            uint32_t work, emm_trace_record *out)
+{
+    const emm_triangle *tr = emm_mesh_triangle(m, t);
+    out[0] = (emm_trace_record){t, a->tri, a->tri_offset, a->tri_bytes, work, 0};
+    for (int k = 0; k < 3; k++)
+        out[1 + k] = (emm_trace_record){(uint64_t)tr->v[k], a->vert, a->vert_offset,
+                                        a->vert_bytes, work, 0};
+    return 4;
+}
+
+static const struct synth_arrays thesis_arrays = {1, 4, 24, 0, 8, 24};
+
+emm_status emm_synth_trace(const emm_mesh *m, const emm_synth_options *opt, const char *path,
+                           uint64_t *records, emm_error *err)
+{
+    uint32_t *order;
+    size_t n;
+    double *xyz;
+    int32_t *tri;
+    emm_status st = synth_order(m, opt, path, &order, &n, &xyz, &tri, err);
+    if (st != EMM_OK)
+        return st;
+    size_t nv = emm_mesh_vertex_count(m), nt = emm_mesh_triangle_count(m);
     emm_trace_array arrays[2] = {
-        {EMM_ARRAY_VERTICES, VERTEX_BYTES, s.nv, 0x10000000u},
-        {EMM_ARRAY_TRIANGLES, TRIANGLE_BYTES, s.nt, 0},
+        {EMM_ARRAY_VERTICES, VERTEX_BYTES, nv, 0x10000000u},
+        {EMM_ARRAY_TRIANGLES, TRIANGLE_BYTES, nt, 0},
     };
     /* The triangle array follows the vertex array, 4 KiB aligned, as malloc
      * would place two large blocks. */
-    arrays[1].base = (arrays[0].base + s.nv * VERTEX_BYTES + 8191) & ~(uint64_t)4095;
-    emm_trace_geometry geo = {s.nv, s.nt, xyz, tri};
+    arrays[1].base = (arrays[0].base + nv * VERTEX_BYTES + 8191) & ~(uint64_t)4095;
+    emm_trace_geometry geo = {nv, nt, xyz, tri};
     emm_trace_writer *w;
     st = emm_trace_writer_open(path, arrays, 2, &geo, opt->compress, &w, err);
     if (st != EMM_OK)
@@ -369,10 +449,7 @@ emm_status emm_synth_trace(const emm_mesh *m, const emm_synth_options *opt, cons
     emm_trace_record buf[CHUNK];
     size_t nb = 0;
     for (size_t i = 0; i < n && st == EMM_OK; i++) {
-        const emm_triangle *tr = emm_mesh_triangle(m, order[i]);
-        buf[nb++] = (emm_trace_record){order[i], 1, 4, 24, opt->work, 0};
-        for (int k = 0; k < 3; k++)
-            buf[nb++] = (emm_trace_record){(uint64_t)tr->v[k], 0, 8, 24, opt->work, 0};
+        nb += visit_records(m, order[i], &thesis_arrays, opt->work, buf + nb);
         if (nb + 4 > CHUNK) {
             st = emm_trace_write(w, buf, nb, err);
             nb = 0;
@@ -390,8 +467,29 @@ emm_status emm_synth_trace(const emm_mesh *m, const emm_synth_options *opt, cons
 done:
     free(xyz);
     free(tri);
-    free(s.cx);
-    free(s.cy);
     free(order);
     return st;
+}
+
+emm_status emm_synth_records(const emm_mesh *m, const emm_synth_options *opt,
+                             const struct synth_arrays *arrays, const char *name,
+                             emm_trace_record **out, size_t *nrec, emm_error *err)
+{
+    uint32_t *order;
+    size_t n;
+    emm_status st = synth_order(m, opt, name, &order, &n, NULL, NULL, err);
+    if (st != EMM_OK)
+        return st;
+    emm_trace_record *recs = malloc((n ? n : 1) * 4 * sizeof *recs);
+    if (!recs) {
+        free(order);
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for %zu synthetic visits", name, n);
+    }
+    size_t k = 0;
+    for (size_t i = 0; i < n; i++)
+        k += visit_records(m, order[i], arrays ? arrays : &thesis_arrays, opt->work, recs + k);
+    free(order);
+    *out = recs;
+    *nrec = k;
+    return EMM_OK;
 }

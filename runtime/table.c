@@ -20,6 +20,7 @@
 #include "error.h"
 #include "outfile.h"
 #include "parse.h"
+#include "synth_internal.h"
 
 #ifndef EMM_SOURCE_DIR
 #define EMM_SOURCE_DIR "."
@@ -35,6 +36,7 @@ struct emm_table {
     emm_table_sample *s;
     char **source; /* per sample, "" or a strdup'd path */
     size_t n, cap;
+    int version;   /* of the last file loaded */
 };
 
 emm_table *emm_table_new(void)
@@ -124,6 +126,14 @@ emm_status emm_table_add(emm_table *t, const emm_table_sample *s, emm_error *err
         if (!isfinite(s->f[k]))
             return emm_fail(err, EMM_ERR_INVALID, "sample '%s': feature %d is not finite",
                             s->name, k + 1);
+    emm_synth_options so;
+    if (s->synth[0] && strcmp(s->synth, "-") != 0) {
+        if (!name_ok(s->synth))
+            return emm_fail(err, EMM_ERR_INVALID, "synth recipe '%s': bad characters", s->synth);
+        emm_status st = emm_synth_recipe_parse(s->synth, &so, err);
+        if (st != EMM_OK)
+            return st;
+    }
     if (find(t, s->name) >= 0)
         return emm_fail(err, EMM_ERR_INVALID, "sample '%s' is already in the table", s->name);
     return push(t, s, "", err);
@@ -164,7 +174,8 @@ emm_status emm_table_load(emm_table *t, const char *path, emm_error *err)
     size_t cap = 0;
     long lineno = 0;
     bool header = false;
-    enum { MAXF = EMM_FEATURES + 3 };
+    enum { MAXF = EMM_FEATURES + 4 };
+    int version = EMM_TABLE_VERSION, fixed = 4; /* fields before the features */
     char *field[MAXF];
     while (st == EMM_OK && getline(&line, &cap, fp) >= 0) {
         lineno++;
@@ -182,24 +193,30 @@ emm_status emm_table_load(emm_table *t, const char *path, emm_error *err)
                 st = emm_fail(err, EMM_ERR_FORMAT,
                               "%s:%ld: expected the header 'emm-table %d features=%d'", path,
                               lineno, EMM_TABLE_VERSION, EMM_FEATURES);
-            } else if (!emm_parse_u64(field[1], &ver) || ver != EMM_TABLE_VERSION) {
+            } else if (!emm_parse_u64(field[1], &ver) || ver < 2 || ver > EMM_TABLE_VERSION) {
                 st = emm_fail(err, EMM_ERR_FORMAT,
-                              "%s:%ld: table version '%s' is not supported (this is version %d)",
+                              "%s:%ld: table version '%s' is not supported (this build reads "
+                              "versions 2 to %d)",
                               path, lineno, field[1], EMM_TABLE_VERSION);
             } else if (!emm_parse_u64(field[2] + 9, &nfeat) || nfeat != EMM_FEATURES) {
                 st = emm_fail(err, EMM_ERR_FORMAT,
                               "%s:%ld: the table has '%s' but this build computes %d features",
                               path, lineno, field[2] + 9, EMM_FEATURES);
             }
+            if (st == EMM_OK) {
+                version = t->version = (int)ver;
+                fixed = version >= 3 ? 4 : 3;
+            }
             header = true;
             continue;
         }
-        if (nf != EMM_FEATURES + 3) {
+        if (nf != EMM_FEATURES + fixed) {
             st = emm_fail(err, EMM_ERR_FORMAT,
-                          "%s:%ld: expected name, pattern, strategy and %d features, found %s%d "
-                          "fields",
-                          path, lineno, EMM_FEATURES, nf > EMM_FEATURES + 3 ? "more than " : "",
-                          nf > EMM_FEATURES + 3 ? EMM_FEATURES + 3 : nf);
+                          "%s:%ld: expected name, pattern, %sstrategy and %d features, found "
+                          "%s%d fields",
+                          path, lineno, fixed == 4 ? "synth, " : "", EMM_FEATURES,
+                          nf > EMM_FEATURES + fixed ? "more than " : "",
+                          nf > EMM_FEATURES + fixed ? EMM_FEATURES + fixed : nf);
             break;
         }
         emm_table_sample s;
@@ -218,15 +235,23 @@ emm_status emm_table_load(emm_table *t, const char *path, emm_error *err)
         }
         snprintf(s.name, sizeof s.name, "%s", field[0]);
         snprintf(s.pattern, sizeof s.pattern, "%s", field[1]);
+        snprintf(s.synth, sizeof s.synth, "%s", fixed == 4 ? field[2] : "-");
         emm_error serr;
-        if (emm_strategy_parse(field[2], &s.strategy, &serr) != EMM_OK) {
+        emm_synth_options so;
+        if (strcmp(s.synth, "-") != 0 &&
+            (!name_ok(s.synth) || emm_synth_recipe_parse(s.synth, &so, &serr) != EMM_OK)) {
+            st = emm_fail(err, EMM_ERR_FORMAT, "%s:%ld: synth '%s': %s", path, lineno, s.synth,
+                          name_ok(s.synth) ? serr.message : "bad characters");
+            break;
+        }
+        if (emm_strategy_parse(field[fixed - 1], &s.strategy, &serr) != EMM_OK) {
             st = emm_fail(err, EMM_ERR_FORMAT, "%s:%ld: %s", path, lineno, serr.message);
             break;
         }
         for (int k = 0; k < EMM_FEATURES && st == EMM_OK; k++)
-            if (!emm_parse_double(field[3 + k], &s.f[k]))
+            if (!emm_parse_double(field[fixed + k], &s.f[k]))
                 st = emm_fail(err, EMM_ERR_FORMAT, "%s:%ld: feature %d: '%s' is not a number",
-                              path, lineno, k + 1, field[3 + k]);
+                              path, lineno, k + 1, field[fixed + k]);
         if (st != EMM_OK)
             break;
         ptrdiff_t dup = find(t, s.name);
@@ -259,7 +284,8 @@ static void write_sample(FILE *fp, const emm_table_sample *s)
 {
     char strat[96];
     emm_strategy_format(&s->strategy, strat, sizeof strat);
-    fprintf(fp, "%-24s %-9s %-24s", s->name, s->pattern, strat);
+    fprintf(fp, "%-24s %-9s %-13s %-24s", s->name, s->pattern, s->synth[0] ? s->synth : "-",
+            strat);
     for (int k = 0; k < EMM_FEATURES; k++)
         fprintf(fp, " %.9g", s->f[k]);
     fputc('\n', fp);
@@ -280,7 +306,8 @@ static void write_header(FILE *fp, const char *comment)
             p += len + (nl ? 1 : 0);
         }
     }
-    fprintf(fp, "# name                   pattern   strategy                 features 1..%d\n",
+    fprintf(fp, "# name                   pattern   synth         strategy                 "
+                "features 1..%d\n",
             EMM_FEATURES);
 }
 
@@ -357,8 +384,10 @@ emm_status emm_table_append(const char *path, const emm_table_sample *s, emm_err
     if (st == EMM_OK && find(t, s->name) >= 0)
         st = emm_fail(err, EMM_ERR_INVALID, "%s: sample '%s' is already in this table", path,
                       s->name);
+    /* An older version's file is rewritten whole in this version. */
     if (st == EMM_OK)
-        st = exists ? append_line(path, s, err) : write_whole(t, path, NULL, s, err);
+        st = exists && t->version == EMM_TABLE_VERSION ? append_line(path, s, err)
+                                                         : write_whole(t, path, NULL, s, err);
     emm_table_free(t);
     return st;
 }
@@ -438,6 +467,7 @@ emm_status emm_table_decide(const emm_table *t, const double f[EMM_FEATURES], do
     memset(out, 0, sizeof *out);
     snprintf(out->pattern, sizeof out->pattern, "%s", t->s[best].pattern);
     snprintf(out->nearest, sizeof out->nearest, "%s", t->s[best].name);
+    snprintf(out->synth, sizeof out->synth, "%s", t->s[best].synth[0] ? t->s[best].synth : "-");
     out->strategy = t->s[best].strategy;
     out->distance = bd;
     out->novel = out->distance > threshold;
@@ -454,6 +484,7 @@ struct sweep_job {
     const emm_strategy *s;
     emm_sweep *out;
     size_t first, step; /* strategies first, first + step, ... */
+    const bool *want;   /* NULL: every strategy */
     bool nomem;
 };
 
@@ -461,6 +492,8 @@ static void *sweep_run(void *arg)
 {
     struct sweep_job *j = arg;
     for (size_t i = j->first; i < j->out->count; i += j->step) {
+        if (j->want && !j->want[i])
+            continue;
         emm_model *model;
         emm_error e;
         emm_status st = emm_model_new(j->m, &j->s[i], j->info, &model, &e);
@@ -476,9 +509,9 @@ static void *sweep_run(void *arg)
     return NULL;
 }
 
-emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
-                             const emm_trace_record *recs, size_t n, emm_sweep *out,
-                             emm_error *err)
+static emm_status sweep_some(const emm_machine *m, const emm_trace_info *info,
+                             const emm_trace_record *recs, size_t n, const bool *want,
+                             emm_sweep *out, emm_error *err)
 {
     emm_strategy s[EMM_SWEEP_MAX];
     memset(out, 0, sizeof *out);
@@ -492,8 +525,8 @@ emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
     }
     /* Strategies alternate between the threads, so both get a mix of the
      * cheap and the expensive ones; each result depends only on its model. */
-    struct sweep_job jobs[2] = {{m, info, recs, n, s, out, 0, 2, false},
-                                {m, info, recs, n, s, out, 1, 2, false}};
+    struct sweep_job jobs[2] = {{m, info, recs, n, s, out, 0, 2, want, false},
+                                {m, info, recs, n, s, out, 1, 2, want, false}};
     pthread_t th;
     bool threaded = pthread_create(&th, NULL, sweep_run, &jobs[1]) == 0;
     if (!threaded)
@@ -516,6 +549,174 @@ emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
         return emm_fail(err, EMM_ERR_UNSUPPORTED,
                         "strategy sweep: no strategy of the sweep can be simulated on this trace");
     return EMM_OK;
+}
+
+emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
+                             const emm_trace_record *recs, size_t n, emm_sweep *out,
+                             emm_error *err)
+{
+    return sweep_some(m, info, recs, n, NULL, out, err);
+}
+
+/* ---- the decision ---------------------------------------------------------- */
+
+const char *emm_decided_name(emm_decided_how how)
+{
+    switch (how) {
+    case EMM_DECIDED_TABLE:
+        return "table";
+    case EMM_DECIDED_CHECKED:
+        return "checked";
+    case EMM_DECIDED_WINDOW:
+        return "window";
+    default:
+        return "none";
+    }
+}
+
+/* The first array of a kind in the trace, or -1. */
+static int array_of(const emm_trace_info *info, emm_array_kind kind)
+{
+    for (uint32_t i = 0; i < info->narrays; i++)
+        if (info->arrays[i].kind == kind)
+            return (int)i;
+    return -1;
+}
+
+/* Where a synthetic visit lands in the program's own arrays: the thesis'
+ * fields when the records are as large as the thesis' structs, else the
+ * front of each record. */
+static bool program_arrays(const emm_trace_info *info, struct synth_arrays *a)
+{
+    int tri = array_of(info, EMM_ARRAY_TRIANGLES), vert = array_of(info, EMM_ARRAY_VERTICES);
+    if (tri < 0 || vert < 0)
+        return false;
+    uint32_t trs = info->arrays[tri].record_size, vrs = info->arrays[vert].record_size;
+    a->tri = (uint32_t)tri;
+    a->tri_offset = trs >= 28 ? 4 : 0;
+    a->tri_bytes = trs >= 28 ? 24 : (trs < 12 ? trs : 12);
+    a->vert = (uint32_t)vert;
+    a->vert_offset = vrs >= 32 ? 8 : 0;
+    a->vert_bytes = vrs >= 32 ? 24 : (vrs < 24 ? vrs : 24);
+    return a->tri_bytes > 0 && a->vert_bytes > 0;
+}
+
+/* The table's pattern, checked on this mesh and this window (docs/profile.md
+ * "The decision"): the nearest sample's canonical traversal is synthesised
+ * over the program's own mesh and arrays and swept (S: the long run the
+ * pattern predicts on this mesh and machine), the window is swept too (W:
+ * what the program did), and the strategy with the least (S/S_best)·(W/W_best)
+ * is taken — unless the long run says it loses to the cache and it is not
+ * at least 1/EMM_DECIDE_CACHE_MARGIN times better than the cache over both.
+ * Returns EMM_OK leaving *out alone when the trace has no geometry or
+ * arrays to synthesise over; errors are out of memory only. */
+static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info,
+                                const emm_trace_record *recs, size_t n, const char *name,
+                                emm_window_decision *out, emm_error *err)
+{
+    struct synth_arrays arrays;
+    emm_synth_options so = {.seed = EMM_DECIDE_SYNTH_SEED};
+    if (strcmp(out->table.synth, "-") == 0 || info->geometry.nt == 0 ||
+        !program_arrays(info, &arrays) ||
+        emm_synth_recipe_parse(out->table.synth, &so, NULL) != EMM_OK)
+        return EMM_OK;
+    emm_mesh *mesh;
+    if (emm_mesh_from_arrays(info->geometry.xyz, info->geometry.nv, info->geometry.tri,
+                             info->geometry.nt, name, &mesh, NULL) != EMM_OK)
+        return EMM_OK;
+    /* A region grows from where the program's did: its first triangle. */
+    for (size_t i = 0; i < n && !so.has_start; i++)
+        if ((int)recs[i].array == array_of(info, EMM_ARRAY_TRIANGLES) &&
+            recs[i].element < info->geometry.nt) {
+            so.has_start = 1;
+            so.start = (uint32_t)recs[i].element;
+        }
+    so.visits = info->geometry.nt < EMM_DECIDE_SYNTH_VISITS ? info->geometry.nt
+                                                             : EMM_DECIDE_SYNTH_VISITS;
+    emm_trace_record *syn = NULL;
+    size_t ns = 0;
+    emm_status st = emm_synth_records(mesh, &so, &arrays, name, &syn, &ns, err);
+    emm_mesh_free(mesh);
+    if (st != EMM_OK)
+        return st;
+    emm_sweep *S = malloc(sizeof *S), *W = malloc(sizeof *W);
+    if (!S || !W) {
+        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+        goto done;
+    }
+    emm_error e;
+    if (sweep_some(m, info, syn, ns, NULL, S, &e) != EMM_OK ||
+        sweep_some(m, info, recs, n, NULL, W, &e) != EMM_OK) {
+        st = e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
+        goto done;
+    }
+    double sb = (double)S->result[S->best].total, wb = (double)W->result[W->best].total;
+    size_t pick = SIZE_MAX, both = 0;
+    double score = INFINITY;
+    for (size_t i = 0; i < S->count; i++) {
+        if (!S->ran[i] || !W->ran[i])
+            continue;
+        both++;
+        double v = (double)S->result[i].total / sb * ((double)W->result[i].total / wb);
+        if (v < score) {
+            score = v;
+            pick = i;
+        }
+    }
+    size_t c = S->cache;
+    if (pick != SIZE_MAX && S->ran[c] && W->ran[c] && pick != c &&
+        S->result[pick].total > S->result[c].total) {
+        double vs_cache = (double)S->result[pick].total / (double)S->result[c].total *
+                          ((double)W->result[pick].total / (double)W->result[c].total);
+        if (vs_cache > EMM_DECIDE_CACHE_MARGIN)
+            pick = c;
+    }
+    if (pick != SIZE_MAX) {
+        out->how = EMM_DECIDED_CHECKED;
+        out->strategy = W->result[pick].strategy;
+        out->cycles = W->result[pick].total;
+        out->candidates = both;
+        out->synth_visits = (size_t)so.visits;
+    }
+done:
+    free(S);
+    free(W);
+    free(syn);
+    return st;
+}
+
+emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
+                               const emm_trace_info *info, const emm_trace_record *recs, size_t n,
+                               const double f[EMM_FEATURES], size_t accesses, const char *name,
+                               double threshold, int simulate, emm_window_decision *out,
+                               emm_error *err)
+{
+    memset(out, 0, sizeof *out);
+    memcpy(out->f, f, sizeof out->f);
+    out->accesses = accesses;
+    emm_status st;
+    if (t && t->n > 0) {
+        if ((st = emm_table_decide(t, out->f, threshold, &out->table, err)) != EMM_OK)
+            return st;
+        out->has_table = 1;
+        out->strategy = out->table.strategy;
+        out->how = EMM_DECIDED_TABLE;
+    }
+    if (!simulate && out->has_table && !out->table.novel)
+        return m ? check_pattern(m, info, recs, n, name, out, err) : EMM_OK;
+    emm_sweep *sw = malloc(sizeof *sw);
+    if (!sw)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+    st = sweep_some(m, info, recs, n, NULL, sw, err);
+    if (st == EMM_OK) {
+        out->simulated = 1;
+        out->how = EMM_DECIDED_WINDOW;
+        out->strategy = sw->result[sw->best].strategy;
+        out->cycles = sw->result[sw->best].total;
+        out->candidates = sw->simulated;
+    }
+    free(sw);
+    return st;
 }
 
 emm_status emm_decide_window(const emm_table *t, const emm_machine *m, const emm_trace_info *info,
@@ -545,32 +746,13 @@ emm_status emm_decide_window(const emm_table *t, const emm_machine *m, const emm
         emm_profiler_free(p);
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile", name);
     }
+    double f[EMM_FEATURES];
     st = emm_profile_compute(xy, np, D, NULL, err);
     emm_profiler_free(p);
     if (st == EMM_OK)
-        st = emm_profile_features(D, np, name, out->f, err);
+        st = emm_profile_features(D, np, name, f, err);
     free(D);
     if (st != EMM_OK)
         return st;
-    out->accesses = np;
-    if (t && t->n > 0) {
-        if ((st = emm_table_decide(t, out->f, threshold, &out->table, err)) != EMM_OK)
-            return st;
-        out->has_table = 1;
-        out->strategy = out->table.strategy;
-    }
-    if (!simulate && out->has_table && !out->table.novel)
-        return EMM_OK;
-    emm_sweep *sw = malloc(sizeof *sw);
-    if (!sw)
-        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
-    st = emm_sweep_records(m, info, recs, n, sw, err);
-    if (st == EMM_OK) {
-        out->simulated = 1;
-        out->strategy = sw->result[sw->best].strategy;
-        out->cycles = sw->result[sw->best].total;
-        out->candidates = sw->simulated;
-    }
-    free(sw);
-    return st;
+    return emm_decide_features(t, m, info, recs, n, f, np, name, threshold, simulate, out, err);
 }

@@ -28,9 +28,12 @@ static void usage(FILE *out)
             "of the trace's first N element accesses (vertex or triangle accesses; consecutive\n"
             "accesses to one element count once; positions scaled by the mesh's bounding-box\n"
             "diagonal), reduces it to features, and prints the pattern class, the nearest\n"
-            "sample of the strategy table with its distance, and the strategy chosen. A\n"
-            "profile farther than the threshold from every sample is novel: then the\n"
-            "standard sweep of strategies is simulated on the window and the best is chosen.\n"
+            "sample of the strategy table with its distance, and the strategy chosen: the\n"
+            "nearest sample's pattern synthesised over the trace's mesh and simulated under\n"
+            "every strategy, weighed with the sweep on the window ('checked';\n"
+            "docs/profile.md \"The decision\"), or the sample's own strategy when it has no\n"
+            "recipe ('table'). A profile farther than the threshold from every sample is\n"
+            "novel: then the best of the sweep on the window is chosen ('window').\n"
             "\n"
             "  --window N      element accesses to profile (default %u); up to %u use\n"
             "                  the exact method, longer windows the fast one\n"
@@ -98,6 +101,8 @@ static int write_json(const char *path, const char *trace, int exact,
     json_double(&jw, d->distance);
     json_key(&jw, "novel");
     json_bool(&jw, d->novel);
+    json_key(&jw, "how");
+    json_string(&jw, emm_decided_name(w->how));
     json_key(&jw, "simulated");
     json_bool(&jw, w->simulated);
     if (w->simulated) {
@@ -280,6 +285,9 @@ int emm_cmd_profile(int argc, char **argv)
     if (w.simulated)
         printf("simulated: %zu strategies on the window; best %llu cycles\n", w.candidates,
                (unsigned long long)w.cycles);
+    else if (w.how == EMM_DECIDED_CHECKED)
+        printf("checked:   %s over this mesh (%zu visits) and the window, %zu strategies\n",
+               w.table.synth, w.synth_visits, w.candidates);
     printf("strategy:  %s\n", strat);
     rc = EMM_EXIT_OK;
     if (learn && w.simulated) {

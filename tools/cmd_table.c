@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "synth_internal.h"
 #include "emm/mesh.h"
 #include "emm/profile.h"
 #include "emm/synth.h"
@@ -226,23 +227,22 @@ done:
 
 /* ---- emm table build ----------------------------------------------------- */
 
-/* The canonical patterns (thesis Table 5.1 and Figs. 5.2–5.3). */
+/* The canonical patterns (thesis Table 5.1 and Figs. 5.2–5.3), each a
+ * synthetic recipe (the table's synth column): "@corner" grows the region
+ * from the corner, "@24" makes curves of 24 triangles. */
 static const struct {
-    const char *name, *cls;
-    emm_pattern pattern;
-    uint64_t length; /* curves: triangles per walk (0: to the boundary) */
-    int corner;
+    const char *name, *cls, *recipe;
 } build_patterns[] = {
-    {"random", "random", EMM_PATTERN_RANDOM, 0, 0},
-    {"region", "region", EMM_PATTERN_REGION, 0, 0},
-    {"region-corner", "region", EMM_PATTERN_REGION, 0, 1},
-    {"curve", "curve", EMM_PATTERN_CURVE, 0, 0},
-    {"curve-short", "curve", EMM_PATTERN_CURVE, 24, 0},
-    {"scanline", "scanline", EMM_PATTERN_SCANLINE, 0, 0},
-    {"zorder", "zorder", EMM_PATTERN_ZORDER, 0, 0},
-    {"gray", "gray", EMM_PATTERN_GRAY, 0, 0},
-    {"hilbert", "hilbert", EMM_PATTERN_HILBERT, 0, 0},
-    {"spiral", "spiral", EMM_PATTERN_SPIRAL, 0, 0},
+    {"random", "random", "random"},
+    {"region", "region", "region"},
+    {"region-corner", "region", "region@corner"},
+    {"curve", "curve", "curve"},
+    {"curve-short", "curve", "curve@24"},
+    {"scanline", "scanline", "scanline"},
+    {"zorder", "zorder", "zorder"},
+    {"gray", "gray", "gray"},
+    {"hilbert", "hilbert", "hilbert"},
+    {"spiral", "spiral", "spiral"},
 };
 
 static const struct {
@@ -340,12 +340,10 @@ static int table_build(int argc, char **argv)
             break;
         }
         for (size_t p = 0; p < sizeof build_patterns / sizeof build_patterns[0]; p++) {
-            emm_synth_options so = {.pattern = build_patterns[p].pattern,
-                                    .seed = 100 + build_meshes[g].seed,
-                                    .length = build_patterns[p].length,
-                                    .corner_seed = build_patterns[p].corner};
+            emm_synth_options so = {.seed = 100 + build_meshes[g].seed};
             emm_trace_reader *r = NULL;
-            if (emm_synth_trace(mesh, &so, trace, NULL, &err) != EMM_OK ||
+            if (emm_synth_recipe_parse(build_patterns[p].recipe, &so, &err) != EMM_OK ||
+                emm_synth_trace(mesh, &so, trace, NULL, &err) != EMM_OK ||
                 emm_trace_reader_open(trace, &r, &err) != EMM_OK) {
                 rc = cli_fail(&err);
                 break;
@@ -382,6 +380,7 @@ static int table_build(int argc, char **argv)
                          build_meshes[g].faces / 1000,
                          build_meshes[g].density == EMM_DENSITY_UNIFORM ? 'u' : 'c', np);
                 snprintf(s.pattern, sizeof s.pattern, "%s", build_patterns[p].cls);
+                snprintf(s.synth, sizeof s.synth, "%s", build_patterns[p].recipe);
                 s.strategy = sw->result[sw->best].strategy;
                 if (emm_table_add(t, &s, &err) != EMM_OK) {
                     rc = cli_fail(&err);

@@ -45,6 +45,10 @@ typedef struct emm_synth_options {
     /* Compute cycles charged between records (the record's work field). */
     uint32_t work;
     int compress;
+    /* region: when has_start, grow from triangle `start` (over corner_seed
+     * and seed), as the session does to follow the program's own start. */
+    int has_start;
+    uint32_t start;
 } emm_synth_options;
 
 /* Parses a pattern name (region, curve, scanline, zorder, gray, hilbert,

@@ -2,12 +2,17 @@
  * Table 5.1; DESIGN.md "Distance profile and the strategy table").
  *
  * A table is a plain text file of samples, each a name, a pattern class, a
- * strategy and a feature vector (emm_profile_features):
+ * synthetic recipe, a strategy and a feature vector (emm_profile_features):
  *
  *     # comments start with '#', anywhere on a line
- *     emm-table 2 features=19
- *     # name          pattern  strategy               f1 ... f19
- *     region-20k-a    region   tiles+convolution@64   -0.90 -0.56 ...
+ *     emm-table 3 features=19
+ *     # name          pattern  synth          strategy               f1 ... f19
+ *     region-20k-a    region   region@corner  tiles+convolution@64   -0.90 -0.56 ...
+ *
+ * The recipe names the canonical traversal the sample was made from
+ * (`emm trace synth`: a pattern, "@corner" for a region grown from the
+ * corner, "@N" for curves of N triangles), or "-" for a sample taken from a
+ * real program. Version 2 files (no synth column) are still read, as "-".
  *
  * The first non-comment line is the header: the format version and the
  * feature count, both checked. Parsing is strict: every problem is an error
@@ -27,8 +32,9 @@
 extern "C" {
 #endif
 
-/* Version 2: the features 17–19 (locality across scales) were added. */
-#define EMM_TABLE_VERSION 2
+/* Version 2: the features 17–19 (locality across scales) were added.
+ * Version 3: the synth column. */
+#define EMM_TABLE_VERSION 3
 #define EMM_TABLE_NAME_MAX 64
 /* A profile whose nearest sample is farther than this (Euclidean, in
  * feature space) is novel. See docs/profile.md for how it was chosen. */
@@ -37,6 +43,7 @@ extern "C" {
 typedef struct emm_table_sample {
     char name[EMM_TABLE_NAME_MAX];    /* letters, digits, '-', '_', '.', '@', '+' */
     char pattern[EMM_TABLE_NAME_MAX]; /* the class: random, region, curve, scanline, ... */
+    char synth[EMM_TABLE_NAME_MAX];   /* the recipe it was made from, or "-" (or "": "-") */
     emm_strategy strategy;
     double f[EMM_FEATURES];
 } emm_table_sample;
@@ -83,6 +90,7 @@ EMM_API emm_status emm_table_load_standard(emm_table *t, const char *user, emm_e
 typedef struct emm_decision {
     char pattern[EMM_TABLE_NAME_MAX];
     char nearest[EMM_TABLE_NAME_MAX];
+    char synth[EMM_TABLE_NAME_MAX]; /* the nearest sample's recipe ("-": none) */
     emm_strategy strategy;
     double distance; /* to the nearest sample */
     int novel;       /* distance > threshold */
@@ -121,27 +129,60 @@ EMM_API emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info 
                                      const emm_trace_record *recs, size_t n, emm_sweep *out,
                                      emm_error *err);
 
+/* How a window's strategy was decided. */
+typedef enum emm_decided_how {
+    EMM_DECIDED_NONE = 0,
+    EMM_DECIDED_TABLE,   /* the nearest sample's strategy, as in the thesis */
+    EMM_DECIDED_CHECKED, /* the nearest sample's pattern simulated over this mesh, with the window */
+    EMM_DECIDED_WINDOW   /* the best of the sweep on the window (novel, no table, or asked) */
+} emm_decided_how;
+
+/* The synthetic run of the nearest sample's pattern: its seed and the most
+ * triangle visits it makes (a larger mesh is sampled by its first visits). */
+#define EMM_DECIDE_SYNTH_SEED 1
+#define EMM_DECIDE_SYNTH_VISITS 262144
+/* When the pattern's long run says the pick loses to the cache, the pick
+ * must beat the cache by this factor over window and long run together. */
+#define EMM_DECIDE_CACHE_MARGIN 0.5
+
 typedef struct emm_window_decision {
     emm_decision table;      /* the nearest sample (valid when has_table) */
     int has_table;           /* a table with samples was given */
     double f[EMM_FEATURES];  /* the window's features */
     size_t accesses;         /* element accesses profiled */
-    int simulated;           /* the sweep ran: novel, no table, or asked for */
-    emm_strategy strategy;   /* the choice: the sweep's best when simulated, else the table's */
-    uint64_t cycles;         /* the best strategy's cycles on the window, when simulated */
-    size_t candidates;       /* strategies simulated */
+    emm_decided_how how;
+    int simulated;           /* the sweep on the window alone decided (how == WINDOW) */
+    emm_strategy strategy;   /* the choice */
+    uint64_t cycles;         /* the chosen strategy's cycles on the window (CHECKED, WINDOW) */
+    size_t candidates;       /* strategies simulated on the window (CHECKED, WINDOW) */
+    size_t synth_visits;     /* triangle visits of the synthetic run (CHECKED) */
 } emm_window_decision;
 
-/* The session's decision on a window (thesis §5): profiles recs[0..n)
- * (records of a trace described by `info`; the window is all of them),
- * takes the nearest sample of t (may be NULL or empty), and when the
- * profile is novel (distance > threshold; threshold <= 0 means
- * EMM_NOVELTY_THRESHOLD), when there is no sample, or when `simulate` is
- * set, simulates the standard sweep on the window with machine m and takes
- * the best. `name` names the window in messages. Fails with EMM_ERR_RANGE
+/* A short word for how: "table", "checked", "window" ("none"). */
+EMM_API const char *emm_decided_name(emm_decided_how how);
+
+/* The session's decision on a window (thesis §5, and beyond it: see
+ * docs/profile.md "The decision"): profiles recs[0..n) (records of a trace
+ * described by `info`; the window is all of them) and takes the nearest
+ * sample of t (may be NULL or empty). When the profile is novel (distance >
+ * threshold; threshold <= 0 means EMM_NOVELTY_THRESHOLD), when there is no
+ * sample, or when `simulate` is set, it simulates the standard sweep on the
+ * window with machine m and takes the best (how = WINDOW). Otherwise, when
+ * the sample has a synthetic recipe and the trace has geometry, the
+ * sample's pattern is simulated over this mesh and weighed with the window
+ * (how = CHECKED); else the sample's strategy stands (how = TABLE). `name` names the window in messages. Fails with EMM_ERR_RANGE
  * when the window has fewer than EMM_PROFILE_MIN element accesses. To learn
  * a novel profile, append a sample made of out->f and out->strategy
  * (emm_table_append). */
+/* The same decision for features the caller already computed from the
+ * window's profile (`accesses` element accesses); m may be NULL only when
+ * nothing is to be simulated (then the table's strategy stands). */
+EMM_API emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
+                                       const emm_trace_info *info, const emm_trace_record *recs,
+                                       size_t n, const double f[EMM_FEATURES], size_t accesses,
+                                       const char *name, double threshold, int simulate,
+                                       emm_window_decision *out, emm_error *err);
+
 EMM_API emm_status emm_decide_window(const emm_table *t, const emm_machine *m,
                                      const emm_trace_info *info, const emm_trace_record *recs,
                                      size_t n, const char *name, double threshold, int simulate,

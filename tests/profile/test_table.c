@@ -23,7 +23,7 @@ static char *line(const char *name, const char *pattern, const char *strategy, c
                   int nfeat)
 {
     static char buf[4096];
-    int n = snprintf(buf, sizeof buf, "%s %s %s", name, pattern, strategy);
+    int n = snprintf(buf, sizeof buf, "%s %s - %s", name, pattern, strategy);
     for (int k = 0; k < nfeat; k++)
         n += snprintf(buf + n, sizeof buf - (size_t)n, " %s", v);
     snprintf(buf + n, sizeof buf - (size_t)n, "\n");
@@ -74,14 +74,15 @@ static void test_parse(void)
     /* Errors name the file and the line. */
     /* Version 1 had 16 features; its tables are refused, not misread. */
     expect_error("emm-table 1 features=16\n", "table_test.txt:1: table version '1'");
+    expect_error("emm-table 4 features=19\n", "table_test.txt:1: table version '4'");
     snprintf(text, sizeof text, "emm-table %d features=%d\n", EMM_TABLE_VERSION, EMM_FEATURES + 1);
     expect_error(text, "table_test.txt:1: the table has");
     expect_error("emm-tables 1\n", "table_test.txt:1: expected the header");
     expect_error("# only comments\n", "table_test.txt: empty file");
     snprintf(text, sizeof text, "%s%s", header, line("x", "random", "cache", "1", EMM_FEATURES - 1));
-    expect_error(text, "table_test.txt:2: expected name, pattern, strategy");
+    expect_error(text, "table_test.txt:2: expected name, pattern, synth, strategy");
     snprintf(text, sizeof text, "%s%s", header, line("x", "random", "cache", "1", EMM_FEATURES + 1));
-    expect_error(text, "table_test.txt:2: expected name, pattern, strategy");
+    expect_error(text, "table_test.txt:2: expected name, pattern, synth, strategy");
     snprintf(text, sizeof text, "%s\n%s", header, line("x", "random", "tiles+warp", "1", EMM_FEATURES));
     expect_error(text, "table_test.txt:3: ");
     snprintf(text, sizeof text, "%s%s", header, line("x", "random", "cache", "1.5x", EMM_FEATURES));
@@ -93,6 +94,26 @@ static void test_parse(void)
     snprintf(text, sizeof text, "%s%s", header, line("dup", "random", "cache", "1", EMM_FEATURES));
     strcat(text, line("dup", "region", "cache", "2", EMM_FEATURES));
     expect_error(text, "table_test.txt:3: sample 'dup' is already defined in table_test.txt:2");
+
+    /* The synth column: a recipe emm trace synth knows, or '-'. */
+    snprintf(text, sizeof text, "%s%s", header, line("r", "region", "cache", "1", EMM_FEATURES));
+    char *dash = strstr(text, " - ");
+    REQUIRE(dash);
+    char good[16384];
+    snprintf(good, sizeof good, "%.*s region@corner %s", (int)(dash - text), text, dash + 3);
+    CHECK(load_text(good, &err, &n) == EMM_OK && n == 1);
+    snprintf(good, sizeof good, "%.*s curve@24 %s", (int)(dash - text), text, dash + 3);
+    CHECK(load_text(good, &err, &n) == EMM_OK && n == 1);
+    snprintf(good, sizeof good, "%.*s spiral@corner %s", (int)(dash - text), text, dash + 3);
+    expect_error(good, "table_test.txt:2: synth 'spiral@corner'");
+    snprintf(good, sizeof good, "%.*s warp %s", (int)(dash - text), text, dash + 3);
+    expect_error(good, "table_test.txt:2: synth 'warp': pattern 'warp' is unknown");
+    /* Version 2 tables (no synth column) are still read. */
+    snprintf(good, sizeof good, "emm-table 2 features=%d\nold random cache", EMM_FEATURES);
+    for (int k = 0; k < EMM_FEATURES; k++)
+        strcat(good, " 0.5");
+    strcat(good, "\n");
+    CHECK(load_text(good, &err, &n) == EMM_OK && n == 1);
 
     CHECK(load_text("", &err, &n) != EMM_OK);
     emm_table *t = emm_table_new();
@@ -126,6 +147,9 @@ static void test_write_append_decide(void)
     CHECK(emm_table_add(t, &a, &err) == EMM_ERR_INVALID);
     emm_table_sample bad = sample("bad name", "random", "cache", 0.0);
     CHECK(emm_table_add(t, &bad, &err) == EMM_ERR_INVALID);
+    emm_table_sample badsynth = sample("badsynth", "random", "cache", 0.0);
+    snprintf(badsynth.synth, sizeof badsynth.synth, "curve@x");
+    CHECK(emm_table_add(t, &badsynth, &err) == EMM_ERR_INVALID);
 
     /* Decide: nearest by Euclidean distance; novel beyond the threshold. */
     double f[EMM_FEATURES];
