@@ -15,6 +15,7 @@
 #include <immintrin.h>
 
 #include "error.h"
+#include "lead_sweep.h"
 
 /* ---- exact ------------------------------------------------------------ */
 
@@ -392,6 +393,9 @@ struct emm_profiler {
     uint32_t last_array;
     uint64_t last_element;
     bool any;
+    lead_sweep sweep;
+    size_t records;       /* records added and read */
+    size_t sweep_records; /* of them, the leading sweep's */
 };
 
 emm_status emm_profiler_new(const emm_trace_info *info, uint64_t window, const char *name,
@@ -460,11 +464,18 @@ static bool profiler_push(emm_profiler *p, double x, double y)
     return true;
 }
 
+uint64_t emm_profiler_swept(const emm_profiler *p, size_t *records)
+{
+    if (records)
+        *records = p->n ? p->sweep_records : p->records;
+    return p->sweep.elements;
+}
+
 emm_status emm_profiler_add(emm_profiler *p, const emm_trace_record *recs, size_t n,
                             emm_error *err)
 {
     const emm_trace_geometry *g = &p->info->geometry;
-    for (size_t r = 0; r < n && p->n < p->window; r++) {
+    for (size_t r = 0; r < n && p->n < p->window; r++, p->records++) {
         const emm_trace_record *rec = &recs[r];
         if (rec->array >= p->info->narrays)
             return emm_fail(err, EMM_ERR_FORMAT, "%s: a record names array %u of %u", p->name,
@@ -477,6 +488,10 @@ emm_status emm_profiler_add(emm_profiler *p, const emm_trace_record *recs, size_
         p->any = true;
         p->last_array = rec->array;
         p->last_element = rec->element;
+        if (lead_sweep_step(&p->sweep, rec->array, rec->element))
+            continue;
+        if (p->n == 0)
+            p->sweep_records = p->records;
         double x, y;
         if (kind == EMM_ARRAY_VERTICES) {
             if (rec->element >= g->nv)

@@ -32,6 +32,7 @@
 #include "emm/strategy.h"
 #include "emm/table.h"
 #include "error.h"
+#include "lead_sweep.h"
 #include "json.h"
 #include "outfile.h"
 #include "report.h"
@@ -48,9 +49,6 @@
  * and in all when the window counts iterations. */
 #define SESSION_RECORDS_PER_ELEMENT 32u
 #define SESSION_ITERATION_RECORDS (1u << 20)
-/* The most element accesses of a leading index-order sweep the profile
- * leaves out (see window_add). */
-#define SESSION_SWEEP_MAX (1u << 18)
 
 enum session_phase { PHASE_PROFILING, PHASE_DECIDE, PHASE_SIMULATING, PHASE_FAILED, PHASE_DONE };
 
@@ -65,7 +63,6 @@ typedef struct session_array {
     unsigned char *snap; /* the fields, copied when the array went away before the
                             decision while the window named it; else NULL */
     uint64_t refs;       /* window records that name this slot */
-    uint64_t sweep_next; /* the element an index-order sweep touches next */
     int32_t trace_index; /* the trace array it feeds after the decision, or -1 */
 } session_array;
 
@@ -96,9 +93,8 @@ struct emm_session {
     bool wany;
     uint32_t wlast_array;
     uint64_t wlast_element;
-    bool sweep_over;      /* the leading index-order sweep has ended */
-    size_t wskip;         /* window records of that sweep: the profile starts after them */
-    uint64_t swept;       /* element accesses of that sweep */
+    lead_sweep sweep;     /* the leading index-order sweep */
+    size_t wskip;         /* window records of that sweep (the profiler's count) */
 
     /* frozen at the decision */
     emm_trace_array *tarrays;
@@ -482,24 +478,14 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
             s->wany = true;
             s->wlast_array = r.array;
             s->wlast_element = r.element;
-            /* A program that first walks its arrays in index order (reading
-             * the file, initialising per-element data) shows the layout, not
-             * its traversal: the profile starts after such a leading sweep
-             * (bounded by SESSION_SWEEP_MAX), whose records are still
-             * simulated with the rest. */
-            session_array *arr = &s->arrays[r.array];
-            if (!s->sweep_over && r.element == arr->sweep_next && s->swept < SESSION_SWEEP_MAX) {
-                arr->sweep_next++;
-                s->swept++;
-            } else {
-                s->sweep_over = true;
+            /* The profile starts after a leading index-order sweep (reading
+             * the file, initialising per-element data), whose records are
+             * still simulated: runtime/lead_sweep.h. */
+            if (!lead_sweep_step(&s->sweep, r.array, r.element))
                 s->welements++;
-            }
         }
-        if (!s->sweep_over) {
-            s->wskip = s->wn;
-            s->wlimit++;
-        }
+        if (!s->sweep.over)
+            s->wlimit++; /* the sweep's records do not count against the window */
         window_full_check(s);
     }
 }
@@ -722,13 +708,11 @@ static emm_status freeze_arrays(emm_session *s, emm_error *err)
     s->info.version = 1;
     s->info.narrays = s->ntarrays;
     s->info.arrays = s->tarrays;
-    size_t m = 0, skip = 0;
+    size_t m = 0;
     uint64_t work = 0;
     for (size_t k = 0; k < s->wn; k++) {
         emm_trace_record r = s->window[k];
         int32_t t = s->arrays[r.array].trace_index;
-        if (k == s->wskip)
-            skip = m;
         if (t < 0) {
             work += r.work;
             s->dropped++;
@@ -740,7 +724,6 @@ static emm_status freeze_arrays(emm_session *s, emm_error *err)
         r.array = (uint32_t)t;
         s->window[m++] = r;
     }
-    s->wskip = s->wskip >= s->wn ? m : skip;
     s->wn = m;
     return EMM_OK;
 }
@@ -752,10 +735,14 @@ static emm_status profile_window(emm_session *s, emm_error *err)
     emm_status st = emm_profiler_new(&s->info, s->welements ? s->welements : 1, s->program, &p, err);
     if (st != EMM_OK)
         return st;
-    if ((st = emm_profiler_add(p, s->window + s->wskip, s->wn - s->wskip, err)) != EMM_OK) {
+    if ((st = emm_profiler_add(p, s->window, s->wn, err)) != EMM_OK) {
         emm_profiler_free(p);
         return st;
     }
+    /* The profiler leaves the leading sweep out by the same rule as
+     * window_add; its count of the sweep's records is the one that holds
+     * for the frozen window. */
+    emm_profiler_swept(p, &s->wskip);
     size_t n;
     const double *xy = emm_profiler_positions(p, &n);
     if (n > 0) {
@@ -787,8 +774,9 @@ static emm_status profile_window(emm_session *s, emm_error *err)
 static emm_status choose(emm_session *s, emm_error *err)
 {
     emm_window_decision wd;
-    emm_status st = emm_decide_features(s->table, s->machine, &s->info, s->window + s->wskip,
-                                        s->wn - s->wskip, s->features, s->nD, s->program, 0, 0, &wd, err);
+    emm_status st =
+        emm_decide_features(s->table, s->machine, &s->info, s->window + s->wskip, s->wn - s->wskip,
+                            s->features, s->nD, s->program, 0, 0, &wd, err);
     if (st != EMM_OK)
         return st;
     s->chosen = wd.strategy;
@@ -925,6 +913,82 @@ typedef struct report_ctx {
     const emm_session *s;
 } report_ctx;
 
+/* The most profile points the report carries: enough for a plot of the
+ * curve (emm plot, thesis Fig. 5.5), little enough for a small report. */
+#define REPORT_PROFILE_POINTS 2000
+
+static void write_features(json_writer *w, const double f[EMM_FEATURES])
+{
+    json_begin_array(w);
+    for (int k = 0; k < EMM_FEATURES; k++)
+        json_double(w, f[k]);
+    json_end_array(w);
+}
+
+/* "profile" (docs/report.md): the window's D_i downsampled to at most
+ * REPORT_PROFILE_POINTS points, the last one always included; m_end, the
+ * mean of D_i / i over the last n/32 accesses that features 11-16 divide
+ * by (docs/profile.md), so a plot can draw a sample's shape at this
+ * window's scale; the features, and the nearest sample's. */
+static void write_profile(json_writer *w, const emm_session *s)
+{
+    size_t n = s->nD, step = n > REPORT_PROFILE_POINTS ? (n + REPORT_PROFILE_POINTS - 1) /
+                                                             REPORT_PROFILE_POINTS
+                                                       : 1;
+    json_key(w, "profile");
+    if (n == 0) {
+        json_null(w);
+        return;
+    }
+    json_begin_object(w);
+    json_key(w, "accesses");
+    json_u64(w, n);
+    double sum = 0;
+    size_t a = n - n / 32 > 1 ? n - n / 32 : 1, b = n > a ? n : a + 1, cnt = 0;
+    for (size_t i = a; i < b && i < n; i++, cnt++)
+        sum += s->D[i] / (double)i;
+    json_key(w, "m_end");
+    if (cnt)
+        json_double(w, sum / (double)cnt);
+    else
+        json_null(w);
+    json_key(w, "points");
+    json_begin_array(w);
+    bool pretty = w->pretty; /* one point a line, not one number */
+    for (size_t i = 0; i < n; i += step) {
+        size_t k = i + step >= n ? n - 1 : i;
+        json_begin_array(w);
+        w->pretty = false;
+        json_u64(w, k);
+        json_double(w, s->D[k]);
+        json_end_array(w);
+        w->pretty = pretty;
+    }
+    json_end_array(w);
+    if (s->has_profile) {
+        json_key(w, "features");
+        write_features(w, s->features);
+        for (size_t i = 0; s->table && i < emm_table_count(s->table); i++) {
+            const emm_table_sample *t = emm_table_at(s->table, i);
+            if (strcmp(t->name, s->decision.nearest) != 0)
+                continue;
+            json_key(w, "nearest");
+            json_begin_object(w);
+            json_key(w, "name");
+            json_string(w, t->name);
+            json_key(w, "pattern");
+            json_string(w, t->pattern);
+            json_key(w, "distance");
+            json_double(w, s->decision.distance);
+            json_key(w, "features");
+            write_features(w, t->f);
+            json_end_object(w);
+            break;
+        }
+    }
+    json_end_object(w);
+}
+
 static void report_extra(json_writer *w, void *ctx)
 {
     const emm_session *s = ((const report_ctx *)ctx)->s;
@@ -984,8 +1048,9 @@ static void report_extra(json_writer *w, void *ctx)
     json_key(w, "iterations");
     json_u64(w, s->iterations);
     json_key(w, "leading_sweep");
-    json_u64(w, s->swept);
+    json_u64(w, s->sweep.elements);
     json_end_object(w);
+    write_profile(w, s);
 }
 
 /* "1,234,567" */
@@ -1132,8 +1197,11 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
     emm_result *res = calloc(s->nmodels, sizeof *res);
     if (!res)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the results", s->program);
-    for (size_t i = 0; i < s->nmodels; i++)
+    for (size_t i = 0; i < s->nmodels; i++) {
         emm_model_result(s->models[i], &res[i]);
+        if (s->report_path) /* the report's per-cell DMA bytes; no cells is no error */
+            emm_model_cells(s->models[i], &res[i], NULL);
+    }
     if (summary && s->log >= 1) {
         print_summary(s, summary, res);
         fflush(summary);
@@ -1171,6 +1239,8 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
         if (first == EMM_OK)
             first = emm_fail(err, s->trace_error.status, "EMM_TRACE: %s", s->trace_error.message);
     }
+    for (size_t i = 0; i < s->nmodels; i++)
+        emm_result_release(&res[i]);
     free(res);
     s->phase = PHASE_DONE;
     return first;

@@ -747,6 +747,8 @@ emm_status emm_decide_window(const emm_table *t, const emm_machine *m, const emm
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile", name);
     }
     double f[EMM_FEATURES];
+    size_t skip;
+    emm_profiler_swept(p, &skip);
     st = emm_profile_compute(xy, np, D, NULL, err);
     emm_profiler_free(p);
     if (st == EMM_OK)
@@ -754,5 +756,7 @@ emm_status emm_decide_window(const emm_table *t, const emm_machine *m, const emm
     free(D);
     if (st != EMM_OK)
         return st;
-    return emm_decide_features(t, m, info, recs, n, f, np, name, threshold, simulate, out, err);
+    /* The window proper starts after the leading sweep, as the session's does. */
+    return emm_decide_features(t, m, info, recs + skip, n - skip, f, np, name, threshold,
+                               simulate, out, err);
 }

@@ -90,12 +90,24 @@ typedef struct emm_profiler emm_profiler;
 /* Fails with EMM_ERR_UNSUPPORTED when no array of the trace has positions
  * (an address-only trace: RAW arrays, or no geometry). window = 0 means
  * EMM_PROFILE_DEFAULT_WINDOW. */
+/* The most element accesses of a leading index-order sweep that a profile
+ * leaves out (docs/profile.md "The leading sweep"). */
+#define EMM_PROFILE_SWEEP_MAX 262144u
+
 EMM_API emm_status emm_profiler_new(const emm_trace_info *info, uint64_t window,
                                     const char *name, emm_profiler **out, emm_error *err);
-/* Adds records; records of RAW arrays are skipped. An element outside the
- * geometry is an error. Records after the window is full are ignored. */
+/* Adds records; records of RAW arrays are skipped, and so is a leading
+ * index-order sweep (docs/profile.md "The leading sweep": element 0, 1, 2,
+ * ... of the arrays before the traversal; at most EMM_PROFILE_SWEEP_MAX
+ * element accesses), which does not count towards the window. An element
+ * outside the geometry is an error. Records after the window is full are
+ * ignored. */
 EMM_API emm_status emm_profiler_add(emm_profiler *p, const emm_trace_record *recs, size_t n,
                                     emm_error *err);
+/* The element accesses of the leading sweep left out so far; *records
+ * (when not NULL) receives how many of the records added belong to it (the
+ * window proper starts after them). */
+EMM_API uint64_t emm_profiler_swept(const emm_profiler *p, size_t *records);
 /* True once `window` element accesses are collected. */
 EMM_API int emm_profiler_full(const emm_profiler *p);
 /* The positions so far (x0, y0, x1, y1, ...), owned by p; *n receives their count. */

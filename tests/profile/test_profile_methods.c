@@ -173,14 +173,18 @@ static void test_profiler(void)
     emm_error err;
     REQUIRE(emm_profiler_new(&info, 3, "t", &p, &err) == EMM_OK);
     emm_trace_record recs[] = {
-        {0, 0, 8, 8, 0, 0}, {0, 0, 16, 8, 0, 0}, /* one element access */
+        {0, 0, 8, 8, 0, 0}, {1, 0, 8, 8, 0, 0}, /* a leading index-order sweep: left out */
         {77, 2, 0, 4, 0, 0},                     /* RAW: no position */
+        {0, 0, 8, 8, 0, 0}, {0, 0, 16, 8, 0, 0}, /* breaks the sweep; one element access */
         {0, 1, 4, 24, 0, 0},                     /* the triangle: its centroid */
         {2, 0, 8, 8, 0, 0},
         {1, 0, 8, 8, 0, 0},                      /* past the window */
     };
-    REQUIRE(emm_profiler_add(p, recs, 6, &err) == EMM_OK);
+    REQUIRE(emm_profiler_add(p, recs, 8, &err) == EMM_OK);
     CHECK(emm_profiler_full(p));
+    size_t sweep_records;
+    CHECK(emm_profiler_swept(p, &sweep_records) == 2);
+    CHECK(sweep_records == 3);
     size_t n;
     const double *xy = emm_profiler_positions(p, &n);
     REQUIRE(n == 3);
