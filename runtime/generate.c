@@ -3,10 +3,14 @@
  * mesh (§6.1: a 2D triangle mesh of 20,000 faces whose elements are not
  * uniformly distributed).
  *
- * Points. A fixed convex hull — the unit square's four corners, or, when an
- * odd face count is wanted, the square with one corner cut off (five
- * corners) — plus interior points drawn strictly inside it from one
- * deterministic stream (xoshiro256**). `clustered` draws a seed-dependent
+ * Points. A fixed convex hull — h points spread evenly around the unit
+ * square's border and pushed out radially onto the squircle |2x−1|⁴ +
+ * |2y−1|⁴ = 1, so that they are strictly convex, h ≈ √(2·faces), about the
+ * spacing of the points inside — plus interior points drawn strictly inside
+ * it from one deterministic stream (xoshiro256**). (A hull of the square's
+ * four corners alone made each side one edge, fanned by slivers from the
+ * corners to points along it: a traversal that entered a corner went all
+ * along the side.) `clustered` draws a seed-dependent
  * handful of Gaussian clusters (count, centres, widths and weights come from
  * the seed) over a uniform background share; `uniform` draws everything
  * uniformly. Points falling outside are redrawn (rejection, not clamping,
@@ -14,15 +18,14 @@
  *
  * Face count. A planar triangulation of n points with h of them on the hull
  * has 2n - h - 2 triangles. The hull is fixed, so n follows from the wanted
- * count exactly, and the hull's parity (4 or 5 corners) matches the count's.
+ * count exactly, and h has the count's parity.
  * Because the stream is drawn in order, asking for more points only appends
  * to the same set; if qhull leaves a point out (an exact duplicate) the
  * count is corrected by drawing more and triangulating again.
  *
  * Triangulation. qhull ("qhull d Qbb Qz Qt"): 'd' Delaunay by lifting to
  * the paraboloid, 'Qbb' scales the lifted coordinate for precision, 'Qz'
- * adds a point at infinity so cocircular sites (the hull's corners) do not
- * cost precision, 'Qt' triangulates any merged (cocircular) region so the
+ * adds a point at infinity so cocircular sites do not cost precision, 'Qt' triangulates any merged (cocircular) region so the
  * output is all triangles. None of these options use qhull's random
  * generator, so a run is repeatable. Facets of the upper hull are skipped;
  * each triangle is turned counter-clockwise; a zero-area triangle (which
@@ -91,11 +94,9 @@ double emm_rng_uniform(emm_rng *r)
 /* ---------------------------------------------------------------- points */
 
 #define MAX_CLUSTERS 8
-/* Interior points keep this distance from the hull so that no triangle along
- * the border is close to degenerate. */
-#define MARGIN 0x1.0p-20
-/* The cut corner of the five-corner hull: (CUT, 0) and (0, CUT). */
-#define CUT 0.0625
+/* Interior points keep this share of the hull's point spacing from it, so
+ * that no triangle along the border is close to degenerate. */
+#define MARGIN 0.25
 
 struct cluster {
     double cx, cy, sigma;
@@ -105,7 +106,10 @@ struct cluster {
 struct sampler {
     emm_rng rng;
     emm_density density;
-    bool cut;          /* five-corner hull */
+    const double *hull; /* the hull's points, counter-clockwise */
+    double *angle;      /* each hull point's angle around the centre, increasing */
+    size_t h;
+    double margin;      /* interior points keep this distance from every hull edge */
     double background; /* share of uniform points in `clustered` */
     size_t clusters;
     struct cluster c[MAX_CLUSTERS];
@@ -113,12 +117,22 @@ struct sampler {
     double spare;
 };
 
-static void sampler_init(struct sampler *s, const emm_gen_options *opt, bool cut)
+static void sampler_init(struct sampler *s, const emm_gen_options *opt, const double *hull,
+                         double *angle, size_t h)
 {
     memset(s, 0, sizeof *s);
     emm_rng_seed(&s->rng, opt->seed);
     s->density = opt->density;
-    s->cut = cut;
+    s->hull = hull;
+    s->angle = angle;
+    s->h = h;
+    for (size_t i = 0; i < h; i++) {
+        angle[i] = atan2(hull[2 * i + 1] - 0.5, hull[2 * i] - 0.5);
+        if (i > 0)
+            while (angle[i] < angle[i - 1])
+                angle[i] += 2 * 3.14159265358979323846;
+    }
+    s->margin = MARGIN * hypot(hull[2] - hull[0], hull[3] - hull[1]);
     if (opt->density != EMM_DENSITY_CLUSTERED)
         return;
     /* 3 to 8 clusters, 30-45% background; widths 0.04-0.12 (log-uniform),
@@ -157,11 +171,47 @@ static double sampler_normal(struct sampler *s)
     return r * cos(a);
 }
 
+/* Strictly inside the hull, at least `margin` from its edges: the edge is
+ * the one whose angular sector around the centre holds the point. */
 static bool inside(const struct sampler *s, double x, double y)
 {
-    if (!(x > MARGIN && x < 1.0 - MARGIN && y > MARGIN && y < 1.0 - MARGIN))
-        return false;
-    return !s->cut || x + y > CUT + 2 * MARGIN;
+    double a = atan2(y - 0.5, x - 0.5);
+    while (a < s->angle[0])
+        a += 2 * 3.14159265358979323846;
+    size_t lo = 0, hi = s->h; /* the last i with angle[i] <= a */
+    while (hi - lo > 1) {
+        size_t mid = (lo + hi) / 2;
+        if (s->angle[mid] <= a)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    const double *p = s->hull + 2 * lo, *q = s->hull + 2 * ((lo + 1) % s->h);
+    double ex = q[0] - p[0], ey = q[1] - p[1];
+    double cross = ex * (y - p[1]) - ey * (x - p[0]);
+    return cross > s->margin * hypot(ex, ey);
+}
+
+/* h hull points, evenly spaced along the square's border (starting at the
+ * middle of the bottom side, so that when 4 divides h the four sides'
+ * middles are among them and the bounding box is the unit square), pushed
+ * out radially onto the squircle: in convex position, counter-clockwise. */
+static void hull_points(size_t h, double *xy)
+{
+    for (size_t i = 0; i < h; i++) {
+        double t = fmod(0.5 + 4.0 * (double)i / (double)h, 4.0), u, v; /* along [-1, 1]^2's border */
+        if (t < 1)
+            u = -1 + 2 * t, v = -1;
+        else if (t < 2)
+            u = 1, v = -1 + 2 * (t - 1);
+        else if (t < 3)
+            u = 1 - 2 * (t - 2), v = 1;
+        else
+            u = -1, v = 1 - 2 * (t - 3);
+        double r = pow(u * u * u * u + v * v * v * v, -0.25);
+        xy[2 * i] = (1 + u * r) / 2;
+        xy[2 * i + 1] = (1 + v * r) / 2;
+    }
 }
 
 static void sampler_point(struct sampler *s, double *xy)
@@ -429,6 +479,17 @@ static size_t diff(size_t a, size_t b)
     return a > b ? a - b : b - a;
 }
 
+size_t emm_gen_hull_points(size_t faces)
+{
+    /* About the spacing of the points inside: h ~ 2 sqrt(n), n ~ faces / 2. */
+    size_t h = (size_t)llround(sqrt(2.0 * (double)faces));
+    if (h < 4)
+        h = 4;
+    if ((h + faces) % 2)
+        h++;
+    return h;
+}
+
 emm_status emm_gen_arrays_build(const emm_gen_options *opt, emm_gen_arrays *out, emm_error *err)
 {
     assert(opt && out);
@@ -441,20 +502,22 @@ emm_status emm_gen_arrays_build(const emm_gen_options *opt, emm_gen_arrays *out,
     if (opt->density != EMM_DENSITY_CLUSTERED && opt->density != EMM_DENSITY_UNIFORM)
         return emm_fail(err, EMM_ERR_INVALID, "generator: unknown density %d", (int)opt->density);
 
-    const bool cut = want % 2 == 1;
-    static const double square[] = {0, 0, 1, 0, 1, 1, 0, 1};
-    static const double pentagon[] = {CUT, 0, 1, 0, 1, 1, 0, 1, 0, CUT};
-    const size_t hull = cut ? 5 : 4;
-    struct sampler s;
-    sampler_init(&s, opt, cut);
-
+    const size_t hull = emm_gen_hull_points(want);
     /* faces = 2 n - hull - 2 with n = hull + interior */
     size_t interior = (want + 2 - hull) / 2;
     size_t cap = hull + interior + interior / 64 + 16, drawn = hull;
     double *xy = malloc(2 * cap * sizeof *xy);
-    if (!xy)
+    double *hxy = malloc(2 * hull * sizeof *hxy), *angle = malloc(hull * sizeof *angle);
+    if (!xy || !hxy || !angle) {
+        free(xy);
+        free(hxy);
+        free(angle);
         return emm_fail(err, EMM_ERR_NOMEM, "generator: out of memory for %zu points", cap);
-    memcpy(xy, cut ? pentagon : square, 2 * hull * sizeof *xy);
+    }
+    hull_points(hull, hxy);
+    memcpy(xy, hxy, 2 * hull * sizeof *xy);
+    struct sampler s;
+    sampler_init(&s, opt, hxy, angle, hull);
 
     emm_status st = EMM_OK;
     int32_t *best = NULL;
@@ -512,6 +575,8 @@ emm_status emm_gen_arrays_build(const emm_gen_options *opt, emm_gen_arrays *out,
     }
     free(best);
     free(xy);
+    free(hxy);
+    free(angle);
     return st;
 }
 

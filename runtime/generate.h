@@ -43,6 +43,10 @@ typedef struct emm_gen_arrays {
     unsigned attempts;
 } emm_gen_arrays;
 
+/* The hull's point count for a mesh of `faces` triangles: about
+ * sqrt(2 * faces), at least 4, of the same parity as faces. */
+size_t emm_gen_hull_points(size_t faces);
+
 /* Builds the point set for `opt` and triangulates it (see
  * emm_mesh_generate). On success `out` owns two buffers; release them with
  * emm_gen_arrays_free. */

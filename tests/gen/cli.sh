@@ -62,8 +62,8 @@ faces)
             # within 1% of n
             [ $((faces * 100)) -ge $((n * 99)) ] && [ $((faces * 100)) -le $((n * 101)) ] ||
                 fail "$density $n: $faces faces"
-            # the hull is the square (4 corners) or the cut square (5) when n is odd
-            hull=$((4 + n % 2))
+            # the hull: about sqrt(2 n) points, at least 4, of n's parity
+            hull=$(awk -v n=$n 'BEGIN { h = int(sqrt(2 * n) + 0.5); if (h < 4) h = 4; if ((h + n) % 2) h++; print h }')
             [ "$boundary" = "$hull" ] || fail "$density $n: $boundary boundary edges, not $hull"
             # Euler for a disc: V - E + F = 1, E = (3F + B) / 2
             [ $((verts - (3 * faces + boundary) / 2 + faces)) -eq 1 ] || fail "$density $n: Euler"

@@ -98,8 +98,11 @@ static double bin_ratio(const emm_gen_arrays *g)
         by = by < 0 ? 0 : by > 7 ? 7 : by;
         bins[by * 8 + bx]++;
     }
-    size_t lo = bins[0], hi = bins[0];
-    for (int i = 1; i < 64; i++) {
+    /* The inner 6x6 bins: the outer ones are cut by the rounded hull. */
+    size_t lo = bins[9], hi = bins[9];
+    for (int i = 0; i < 64; i++) {
+        if (i / 8 == 0 || i / 8 == 7 || i % 8 == 0 || i % 8 == 7)
+            continue;
         lo = bins[i] < lo ? bins[i] : lo;
         hi = bins[i] > hi ? bins[i] : hi;
     }
