@@ -396,6 +396,8 @@ struct emm_profiler {
     lead_sweep sweep;
     size_t records;       /* records added and read */
     size_t sweep_records; /* of them, the leading sweep's */
+    double first[2];      /* the sweep's first position, given back if it stays alone */
+    size_t first_record;
 };
 
 emm_status emm_profiler_new(const emm_trace_info *info, uint64_t window, const char *name,
@@ -488,10 +490,6 @@ emm_status emm_profiler_add(emm_profiler *p, const emm_trace_record *recs, size_
         p->any = true;
         p->last_array = rec->array;
         p->last_element = rec->element;
-        if (lead_sweep_step(&p->sweep, rec->array, rec->element))
-            continue;
-        if (p->n == 0)
-            p->sweep_records = p->records;
         double x, y;
         if (kind == EMM_ARRAY_VERTICES) {
             if (rec->element >= g->nv)
@@ -520,6 +518,22 @@ emm_status emm_profiler_add(emm_profiler *p, const emm_trace_record *recs, size_
             x /= 3;
             y /= 3;
         }
+        int enter = lead_sweep_step(&p->sweep, rec->array, rec->element);
+        if (enter == 0) {
+            if (p->sweep.elements == 1) {
+                p->first[0] = x;
+                p->first[1] = y;
+                p->first_record = p->records;
+            }
+            continue;
+        }
+        if (p->n == 0)
+            p->sweep_records = enter == 2 ? p->first_record : p->records;
+        if (enter == 2 && !profiler_push(p, p->first[0], p->first[1]))
+            return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile window",
+                            p->name);
+        if (p->n >= p->window)
+            break;
         if (!profiler_push(p, x, y))
             return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile window",
                             p->name);

@@ -481,8 +481,7 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
             /* The profile starts after a leading index-order sweep (reading
              * the file, initialising per-element data), whose records are
              * still simulated: runtime/lead_sweep.h. */
-            if (!lead_sweep_step(&s->sweep, r.array, r.element))
-                s->welements++;
+            s->welements += (uint64_t)lead_sweep_step(&s->sweep, r.array, r.element);
         }
         if (!s->sweep.over)
             s->wlimit++; /* the sweep's records do not count against the window */
@@ -914,8 +913,10 @@ typedef struct report_ctx {
 } report_ctx;
 
 /* The most profile points the report carries: enough for a plot of the
- * curve (emm plot, thesis Fig. 5.5), little enough for a small report. */
+ * curve (emm plot, thesis Fig. 5.5), little enough for a small report. The
+ * first REPORT_PROFILE_HEAD are all kept, for a plot on a log axis. */
 #define REPORT_PROFILE_POINTS 2000
+#define REPORT_PROFILE_HEAD 500
 
 static void write_features(json_writer *w, const double f[EMM_FEATURES])
 {
@@ -926,15 +927,15 @@ static void write_features(json_writer *w, const double f[EMM_FEATURES])
 }
 
 /* "profile" (docs/report.md): the window's D_i downsampled to at most
- * REPORT_PROFILE_POINTS points, the last one always included; m_end, the
+ * REPORT_PROFILE_POINTS points (all of the first REPORT_PROFILE_HEAD, then
+ * evenly spaced, the last one always included); m_end, the
  * mean of D_i / i over the last n/32 accesses that features 11-16 divide
  * by (docs/profile.md), so a plot can draw a sample's shape at this
  * window's scale; the features, and the nearest sample's. */
 static void write_profile(json_writer *w, const emm_session *s)
 {
-    size_t n = s->nD, step = n > REPORT_PROFILE_POINTS ? (n + REPORT_PROFILE_POINTS - 1) /
-                                                             REPORT_PROFILE_POINTS
-                                                       : 1;
+    const size_t head = REPORT_PROFILE_HEAD, rest = REPORT_PROFILE_POINTS - REPORT_PROFILE_HEAD;
+    size_t n = s->nD, step = n > REPORT_PROFILE_POINTS ? (n - head + rest - 1) / rest : 1;
     json_key(w, "profile");
     if (n == 0) {
         json_null(w);
@@ -955,8 +956,8 @@ static void write_profile(json_writer *w, const emm_session *s)
     json_key(w, "points");
     json_begin_array(w);
     bool pretty = w->pretty; /* one point a line, not one number */
-    for (size_t i = 0; i < n; i += step) {
-        size_t k = i + step >= n ? n - 1 : i;
+    for (size_t i = 0; i < n; i += i < head ? 1 : step) {
+        size_t k = i >= head && i + step >= n ? n - 1 : i;
         json_begin_array(w);
         w->pretty = false;
         json_u64(w, k);

@@ -67,6 +67,7 @@ typedef struct fetch_model {
     uint64_t *ready;       /* present cells: when their transfer completes */
     uint32_t *prev, *next; /* LRU list of present cells, most recent at head */
     uint8_t *flags;
+    uint64_t *cell_dma;    /* bytes DMA moved per cell (emm_model_cells) */
     uint32_t head, tail;
     uint64_t used;         /* bytes of present cells (resident or in flight) */
     uint32_t cur;          /* the cell of the previous access */
@@ -165,6 +166,7 @@ static void issue(fetch_model *m, uint32_t c)
     done = emm_dma_start(&m->dma, m->now, m->cell_bytes[c], &core_free);
     charge(m, EMM_BUCKET_DMA_ISSUE, core_free - m->now);
     m->ready[c] = done;
+    m->cell_dma[c] += m->cell_bytes[c];
     m->used += m->cell_bytes[c];
     lru_push_front(m, c);
 }
@@ -354,6 +356,7 @@ static void fetch_reset(emm_model *model)
     m->now = 0;
     memset(m->cycles, 0, sizeof m->cycles);
     memset(m->flags, 0, m->ncells);
+    memset(m->cell_dma, 0, m->ncells * sizeof *m->cell_dma);
     m->head = m->tail = NONE;
     m->used = 0;
     m->cur = m->last_tri = NONE;
@@ -409,6 +412,7 @@ static void fetch_destroy(emm_model *model)
     free(m->prev);
     free(m->next);
     free(m->flags);
+    free(m->cell_dma);
     free(m);
 }
 
@@ -505,8 +509,9 @@ static emm_status flatten(fetch_model *m, const emm_machine_params *p, emm_error
     m->prev = malloc(nc * sizeof *m->prev);
     m->next = malloc(nc * sizeof *m->next);
     m->flags = calloc(nc, 1);
+    m->cell_dma = calloc(nc, sizeof *m->cell_dma);
     if (!m->tri_cell || !m->vcopy_start || !m->cell_bytes || !m->cell_ntri || !m->lookup_cost ||
-        !m->ready || !m->prev || !m->next || !m->flags)
+        !m->ready || !m->prev || !m->next || !m->flags || !m->cell_dma)
         return emm_fail(err, EMM_ERR_NOMEM, "EMM model: out of memory for %u cells", nc);
     for (uint64_t t = 0; t < m->nt; t++)
         m->tri_cell[t] = emm_layout_triangle_index(l, (uint32_t)t).cell;
@@ -623,4 +628,35 @@ const emm_layout *emm_fetch_layout(const emm_model *model)
 {
     assert(model->ops == &fetch_ops);
     return ((const fetch_model *)model)->layout;
+}
+
+/* Per-cell traffic, for the report's "cells" key and `emm plot`'s map of
+ * the mesh: only the cells' rectangles and counters, so a caller that
+ * never asks pays one add per transfer. */
+emm_status emm_model_cells(const emm_model *model, emm_result *out, emm_error *err)
+{
+    const fetch_model *m = (const fetch_model *)model;
+    int axes[2];
+    assert(model && out && !out->cells.cell);
+    if (model->ops != &fetch_ops)
+        return EMM_OK;
+    out->cells.cell = malloc((m->ncells ? m->ncells : 1) * sizeof *out->cells.cell);
+    if (!out->cells.cell)
+        return emm_fail(err, EMM_ERR_NOMEM, "EMM model: out of memory for %u cells", m->ncells);
+    out->cells.count = m->ncells;
+    emm_layout_axes(m->layout, axes, out->cells.lo, out->cells.hi);
+    for (uint32_t c = 0; c < m->ncells; c++) {
+        const emm_layout_cell *cell = emm_layout_cell_get(m->layout, c);
+        emm_cell_dma *o = &out->cells.cell[c];
+        memcpy(o->lo, cell->lo, sizeof o->lo);
+        memcpy(o->hi, cell->hi, sizeof o->hi);
+        o->bytes = m->cell_dma[c];
+    }
+    return EMM_OK;
+}
+
+void emm_result_release(emm_result *r)
+{
+    free(r->cells.cell);
+    memset(&r->cells, 0, sizeof r->cells);
 }

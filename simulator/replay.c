@@ -220,7 +220,7 @@ emm_status emm_replay_ex(const char *path, const emm_machine *m, const emm_strat
                          size_t n, const emm_replay_options *opt, emm_result *results,
                          emm_error *skipped, uint64_t *accesses, emm_error *err)
 {
-    static const emm_replay_options defaults = {0, NULL, NULL};
+    static const emm_replay_options defaults = {0, NULL, NULL, 0};
     emm_trace_reader *r = NULL;
     emm_model **models = NULL, **run = NULL;
     const emm_trace_info *info;
@@ -274,6 +274,11 @@ emm_status emm_replay_ex(const char *path, const emm_machine *m, const emm_strat
     for (size_t i = 0; i < n; i++) {
         if (models[i]) {
             emm_model_result(models[i], &results[i]);
+            if (opt->cells && (st = emm_model_cells(models[i], &results[i], err)) != EMM_OK) {
+                for (size_t j = 0; j <= i; j++)
+                    emm_result_release(&results[j]);
+                goto out;
+            }
         } else {
             memset(&results[i], 0, sizeof results[i]);
             results[i].strategy = s[i];
@@ -294,7 +299,7 @@ emm_status emm_replay(const char *path, const emm_machine *m, const emm_strategy
                       size_t n, emm_result *results, uint64_t *accesses,
                       emm_progress_fn progress, void *progress_ctx, emm_error *err)
 {
-    emm_replay_options opt = {1, progress, progress_ctx};
+    emm_replay_options opt = {1, progress, progress_ctx, 0};
     return emm_replay_ex(path, m, s, n, &opt, results, NULL, accesses, err);
 }
 
@@ -312,6 +317,46 @@ static void write_machine(json_writer *w, const emm_machine *m)
             json_u64(w, emm_machine_get(m, key));
         }
     }
+    json_end_object(w);
+}
+
+/* "cells": the layout's bounding box and count, then [x0, y0, x1, y1,
+ * bytes] for each cell DMA moved anything for (the others add nothing to
+ * a map of the traffic and would double the report on a sparse run). One
+ * cell per line even in a pretty report: five numbers a line, not one. */
+static void write_cells(json_writer *w, const emm_result *res)
+{
+    bool pretty = w->pretty;
+    json_key(w, "cells");
+    json_begin_object(w);
+    json_key(w, "count");
+    json_u64(w, res->cells.count);
+    json_key(w, "bbox");
+    json_begin_array(w);
+    w->pretty = false;
+    json_double(w, res->cells.lo[0]);
+    json_double(w, res->cells.lo[1]);
+    json_double(w, res->cells.hi[0]);
+    json_double(w, res->cells.hi[1]);
+    json_end_array(w);
+    w->pretty = pretty;
+    json_key(w, "rects");
+    json_begin_array(w);
+    for (uint32_t c = 0; c < res->cells.count; c++) {
+        const emm_cell_dma *cell = &res->cells.cell[c];
+        if (cell->bytes == 0)
+            continue;
+        json_begin_array(w);
+        w->pretty = false;
+        json_double(w, cell->lo[0]);
+        json_double(w, cell->lo[1]);
+        json_double(w, cell->hi[0]);
+        json_double(w, cell->hi[1]);
+        json_u64(w, cell->bytes);
+        json_end_array(w);
+        w->pretty = pretty;
+    }
+    json_end_array(w);
     json_end_object(w);
 }
 
@@ -382,6 +427,8 @@ static void write_result(json_writer *w, const emm_machine *m, const emm_result 
         }
         json_end_object(w);
     }
+    if (res->cells.cell)
+        write_cells(w, res);
     if (res->has_direct) {
         json_key(w, "direct");
         json_begin_object(w);

@@ -293,7 +293,7 @@ int emm_cmd_replay(int argc, char **argv)
         return rc;
 
     pctx.on = !quiet && isatty(STDERR_FILENO);
-    emm_replay_options ropt = {(unsigned)jobs, progress, &pctx};
+    emm_replay_options ropt = {(unsigned)jobs, progress, &pctx, json != NULL};
     if (emm_replay_ex(trace, m, strategies, nstrategies, &ropt, results, all ? skipped : NULL,
                       &accesses, &err) != EMM_OK) {
         if (pctx.on)
@@ -305,9 +305,13 @@ int emm_cmd_replay(int argc, char **argv)
         fprintf(stderr, "\r\033[K");
     if (json && emm_report_write_ex(json, trace, m, accesses, results, all ? skipped : NULL,
                                     nstrategies, &err) != EMM_OK) {
+        for (size_t i = 0; i < nstrategies; i++)
+            emm_result_release(&results[i]);
         emm_machine_free(m);
         return cli_fail(&err);
     }
+    for (size_t i = 0; i < nstrategies; i++)
+        emm_result_release(&results[i]);
     if (!quiet && all)
         print_sweep(trace, accesses, m, results, skipped, nstrategies);
     else if (!quiet)

@@ -20,6 +20,7 @@ static const struct command commands[] = {
     {"profile", emm_cmd_profile, "distance profile of a trace and the strategy it picks"},
     {"table", emm_cmd_table, "list the strategy table or add a sample to it"},
     {"run", emm_cmd_run, "run a program under the shim: profile, decide, simulate"},
+    {"plot", emm_cmd_plot, "draw a report's figures with gnuplot (PNG, SVG)"},
 };
 
 static void usage(FILE *out)

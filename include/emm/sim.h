@@ -98,6 +98,12 @@ typedef enum emm_bucket {
 /* "local_access", "remote_access", ... (the JSON report's keys). */
 EMM_API const char *emm_bucket_name(emm_bucket b);
 
+/* One layout cell of an EMM strategy and the DMA traffic it caused. */
+typedef struct emm_cell_dma {
+    double lo[2], hi[2]; /* the cell's rectangle in the layout's plane (emm_layout_axes) */
+    uint64_t bytes;      /* bytes DMA moved for the cell: its demand fetches and prefetches */
+} emm_cell_dma;
+
 typedef struct emm_result {
     emm_strategy strategy;
     uint64_t accesses;                   /* records simulated */
@@ -138,6 +144,15 @@ typedef struct emm_result {
         uint64_t filtered_prefetches;    /* prefetches skipped: the cell's last prefetch was
                                             evicted unused (docs/fetch.md, "Prefetch filter") */
     } emm;
+    /* Per-cell DMA traffic of an EMM strategy, filled only on request
+     * (emm_model_cells, emm_replay_options.cells); cell == NULL otherwise.
+     * The result owns `cell`: emm_result_release frees it. The sum of the
+     * cells' bytes equals dma.bytes. */
+    struct {
+        uint32_t count;      /* the layout's cells: cell[0..count), in cell order */
+        double lo[2], hi[2]; /* the layout's bounding box in its plane */
+        emm_cell_dma *cell;
+    } cells;
 } emm_result;
 
 /* ---- models ---------------------------------------------------------------- */
@@ -159,8 +174,17 @@ EMM_API emm_status emm_model_new(const emm_machine *m, const emm_strategy *s,
 EMM_API void emm_model_run(emm_model *model, const emm_trace_record *recs, size_t n);
 /* Back to the state of a new model (empty cache, idle DMA, zero cycles). */
 EMM_API void emm_model_reset(emm_model *model);
-/* The result so far. */
+/* The result so far (out->cells stays empty: see emm_model_cells). */
 EMM_API void emm_model_result(const emm_model *model, emm_result *out);
+/* Adds to `out` (a result of this model) the layout's cells and the DMA
+ * bytes moved for each since the model's last reset: allocates
+ * out->cells.cell, which emm_result_release frees. A model of a strategy
+ * without cells (direct, cache, cache@LAYOUT) leaves out->cells empty.
+ * EMM_ERR_NOMEM when memory runs out (out->cells stays empty). */
+EMM_API emm_status emm_model_cells(const emm_model *model, emm_result *out, emm_error *err);
+/* Frees what emm_model_cells allocated in r and empties r->cells; any
+ * result may be passed (one without cells is left as it is). */
+EMM_API void emm_result_release(emm_result *r);
 EMM_API void emm_model_free(emm_model *model);
 
 /* ---- replay ---------------------------------------------------------------- */
@@ -184,6 +208,10 @@ typedef struct emm_replay_options {
     unsigned jobs;
     emm_progress_fn progress; /* may be NULL; called from the calling thread */
     void *progress_ctx;
+    /* Nonzero: also fill each EMM strategy's per-cell DMA bytes
+     * (emm_model_cells); the caller then releases every result with
+     * emm_result_release. */
+    int cells;
 } emm_replay_options;
 
 /* emm_replay with options (opt may be NULL: defaults). The trace is read
@@ -197,7 +225,8 @@ EMM_API emm_status emm_replay_ex(const char *path, const emm_machine *m, const e
                                  size_t n, const emm_replay_options *opt, emm_result *results,
                                  emm_error *skipped, uint64_t *accesses, emm_error *err);
 
-/* Writes the JSON report of docs/report.md to `path` (whole or not at all). */
+/* Writes the JSON report of docs/report.md to `path` (whole or not at all).
+ * A result with cells (emm_model_cells) gets its "cells" key. */
 EMM_API emm_status emm_report_write(const char *path, const char *trace_name,
                                     const emm_machine *m, uint64_t accesses,
                                     const emm_result *results, size_t n, emm_error *err);

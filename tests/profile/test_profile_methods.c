@@ -194,6 +194,16 @@ static void test_profiler(void)
     CHECK(fabs(xy[4]) < 1e-15 && fabs(xy[5] - 0.8) < 1e-15);
     emm_profiler_free(p);
 
+    /* A sweep of one access is none: the first access is given back. */
+    REQUIRE(emm_profiler_new(&info, 3, "t", &p, &err) == EMM_OK);
+    emm_trace_record jump[] = {{1, 0, 8, 8, 0, 0}, {0, 0, 8, 8, 0, 0}, {0, 1, 4, 24, 0, 0}};
+    REQUIRE(emm_profiler_add(p, jump, 3, &err) == EMM_OK);
+    CHECK(emm_profiler_full(p));
+    CHECK(emm_profiler_swept(p, &sweep_records) == 0 && sweep_records == 0);
+    xy = emm_profiler_positions(p, &n);
+    CHECK(n == 3 && fabs(xy[0] - 0.6) < 1e-15 && fabs(xy[1]) < 1e-15);
+    emm_profiler_free(p);
+
     REQUIRE(emm_profiler_new(&info, 10, "t", &p, &err) == EMM_OK);
     emm_trace_record bad = {9, 0, 8, 8, 0, 0};
     CHECK(emm_profiler_add(p, &bad, 1, &err) == EMM_ERR_FORMAT);

@@ -516,6 +516,7 @@ static void test_bad_geometry(void)
     REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
     CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_F64) >= 0);
     CHECK(emm_session_tag(s, EMM_ARRAY_TRIANGLES, tmem, nt, TSTRIDE, 0, EMM_I64) >= 0);
+    /* Not in index order: no leading sweep. */
     emm_raw_access a[WINDOW];
     for (size_t i = 0; i < WINDOW; i++)
         a[i] = (emm_raw_access){vbase + ((i * 7919 + 1) % nv) * VSTRIDE + 8, 8, 0};
