@@ -23,7 +23,8 @@ static void usage(FILE *out)
             "usage: emm table list [--table FILE]\n"
             "       emm table add PROFILE --name NAME [--strategy S] [--pattern CLASS]\n"
             "                     [--window N] [--table FILE] [--machine FILE] [--set K=V]...\n"
-            "       emm table build [-o FILE] [--quick] [--machine FILE] [--set K=V]...\n"
+            "       emm table build [-o FILE] [--quick] [--program TRACE:CLASS:RECIPE]...\n"
+            "                       [--machine FILE] [--set K=V]...\n"
             "\n"
             "The strategy table maps distance-profile samples to strategies. The default\n"
             "table is %s; a user table\n"
@@ -41,7 +42,12 @@ static void usage(FILE *out)
             "         strategy the best of the standard sweep simulated on the whole\n"
             "         traversal (the run a decision on the window is for).\n"
             "         Deterministic. -o FILE (default: the default table above); --quick:\n"
-            "         two meshes and two windows, for tests\n"
+            "         two meshes and two windows, for tests. --program TRACE:CLASS:RECIPE\n"
+            "         adds samples of a program's trace (EMM_TRACE / emm run --trace), named\n"
+            "         prog-<file name>-wN, of pattern CLASS and synthetic recipe RECIPE (a\n"
+            "         pattern of emm trace synth, PATTERN@corner, PATTERN@N, or -), labelled\n"
+            "         as the canonical ones (scripts/table.sh makes the shipped table so,\n"
+            "         from the example workloads' traces on meshes the tests do not use)\n"
             MACHINE_CLI_HELP,
             emm_table_default_path(), EMM_PROFILE_DEFAULT_WINDOW);
 }
@@ -284,11 +290,108 @@ static emm_status window_features(emm_trace_reader *r, uint64_t window, const ch
     return st;
 }
 
+/* Adds the samples of one trace to t: its features at each window of
+ * build_windows (the first nwin; a window past the end of the trace is
+ * dropped), named PREFIX-wN, of class `cls` and recipe `recipe`, each with
+ * the strategy that serves the whole traversal best — the run a decision
+ * made on the window is for. */
+static int add_trace_samples(emm_table *t, const emm_machine *m, const char *trace,
+                             const char *prefix, const char *cls, const char *recipe,
+                             size_t nwin)
+{
+    emm_error err;
+    emm_trace_reader *r;
+    if (emm_trace_reader_open(trace, &r, &err) != EMM_OK)
+        return cli_fail(&err);
+    int rc = EMM_EXIT_OK;
+    emm_trace_record *all = NULL;
+    size_t nall = 0;
+    emm_sweep *sw = malloc(sizeof *sw);
+    if (!sw) {
+        cli_error("%s: out of memory", trace);
+        rc = EMM_EXIT_FAIL;
+    } else if (emm_profile_trace_window(r, UINT64_MAX, trace, &all, &nall, &err) != EMM_OK ||
+               emm_sweep_records(m, emm_trace_reader_info(r), all, nall, sw, &err) != EMM_OK) {
+        rc = cli_fail(&err);
+    }
+    free(all);
+    size_t covered = 0;
+    for (size_t w = 0; w < nwin && rc == EMM_EXIT_OK; w++) {
+        emm_table_sample smp;
+        memset(&smp, 0, sizeof smp);
+        size_t np = 0;
+        if (window_features(r, build_windows[w], trace, smp.f, &np, &err) != EMM_OK) {
+            rc = cli_fail(&err);
+            break;
+        }
+        if (np <= covered)
+            break;
+        covered = np;
+        snprintf(smp.name, sizeof smp.name, "%s-w%zu", prefix, np);
+        snprintf(smp.pattern, sizeof smp.pattern, "%s", cls);
+        snprintf(smp.synth, sizeof smp.synth, "%s", recipe);
+        smp.strategy = sw->result[sw->best].strategy;
+        if (emm_table_add(t, &smp, &err) != EMM_OK) {
+            rc = cli_fail(&err);
+            break;
+        }
+        char strat[96];
+        emm_strategy_format(&smp.strategy, strat, sizeof strat);
+        printf("%-28s %-9s %-24s %llu cycles (best of %zu; cache %llu)\n", smp.name, smp.pattern,
+               strat, (unsigned long long)sw->result[sw->best].total, sw->simulated,
+               (unsigned long long)sw->result[sw->cache].total);
+        fflush(stdout);
+    }
+    free(sw);
+    emm_trace_reader_close(r);
+    return rc;
+}
+
+/* --program TRACE:CLASS:RECIPE — a real program's trace (EMM_TRACE). */
+struct program_trace {
+    char path[512], cls[EMM_TABLE_NAME_MAX], recipe[EMM_TABLE_NAME_MAX], prefix[EMM_TABLE_NAME_MAX];
+};
+
+static int parse_program(const char *cmd, const char *v, struct program_trace *p)
+{
+    const char *c2 = strrchr(v, ':');
+    const char *c1 = NULL;
+    for (const char *q = v; c2 && q < c2; q++)
+        if (*q == ':')
+            c1 = q;
+    if (!c1 || c1 == v || c2 == c1 + 1 || !c2[1])
+        return cli_usage_error(cmd, "--program takes TRACE:CLASS:RECIPE, not '%s'", v);
+    size_t lp = (size_t)(c1 - v), lc = (size_t)(c2 - c1 - 1);
+    if (lp >= sizeof p->path || lc >= sizeof p->cls || strlen(c2 + 1) >= sizeof p->recipe)
+        return cli_usage_error(cmd, "--program '%s': too long", v);
+    memcpy(p->path, v, lp);
+    p->path[lp] = '\0';
+    memcpy(p->cls, c1 + 1, lc);
+    p->cls[lc] = '\0';
+    snprintf(p->recipe, sizeof p->recipe, "%s", c2 + 1);
+    emm_synth_options so;
+    emm_error err;
+    if (strcmp(p->recipe, "-") != 0 && emm_synth_recipe_parse(p->recipe, &so, &err) != EMM_OK)
+        return cli_usage_error(cmd, "--program '%s': %s", v, err.message);
+    /* The sample names: "prog-" and the trace's file name without its extension. */
+    const char *base = strrchr(p->path, '/');
+    base = base ? base + 1 : p->path;
+    size_t lb = strcspn(base, ".");
+    if (lb > 40)
+        lb = 40;
+    snprintf(p->prefix, sizeof p->prefix, "prog-%.*s", (int)lb, base);
+    return EMM_EXIT_OK;
+}
+
+enum { BUILD_MAX_PROGRAMS = 64 };
+
 static int table_build(int argc, char **argv)
 {
     const char *cmd = "table build", *out = NULL;
     int quick = 0;
     machine_cli mc = {0};
+    static struct program_trace progs[BUILD_MAX_PROGRAMS];
+    size_t nprog = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         int mo = machine_cli_option(&mc, cmd, argc, argv, &i);
@@ -304,6 +407,16 @@ static int table_build(int argc, char **argv)
                 return EMM_EXIT_USAGE;
         } else if (strcmp(a, "--quick") == 0) {
             quick = 1;
+        } else if (strcmp(a, "--program") == 0) {
+            const char *v = cli_value(cmd, argc, argv, &i);
+            if (!v)
+                return EMM_EXIT_USAGE;
+            if (nprog == BUILD_MAX_PROGRAMS)
+                return cli_usage_error(cmd, "at most %d --program traces", BUILD_MAX_PROGRAMS);
+            int prc = parse_program(cmd, v, &progs[nprog]);
+            if (prc != EMM_EXIT_OK)
+                return prc;
+            nprog++;
         } else {
             return cli_usage_error(cmd, "unexpected argument '%s'", a);
         }
@@ -341,60 +454,17 @@ static int table_build(int argc, char **argv)
         }
         for (size_t p = 0; p < sizeof build_patterns / sizeof build_patterns[0]; p++) {
             emm_synth_options so = {.seed = 100 + build_meshes[g].seed};
-            emm_trace_reader *r = NULL;
             if (emm_synth_recipe_parse(build_patterns[p].recipe, &so, &err) != EMM_OK ||
-                emm_synth_trace(mesh, &so, trace, NULL, &err) != EMM_OK ||
-                emm_trace_reader_open(trace, &r, &err) != EMM_OK) {
+                emm_synth_trace(mesh, &so, trace, NULL, &err) != EMM_OK) {
                 rc = cli_fail(&err);
                 break;
             }
-            /* The strategy is the one that serves the whole traversal best:
-             * the run a decision made on the window is for. */
-            emm_trace_record *all = NULL;
-            size_t nall = 0;
-            emm_sweep *sw = malloc(sizeof *sw);
-            if (!sw) {
-                cli_error("out of memory");
-                rc = EMM_EXIT_FAIL;
-            } else if (emm_profile_trace_window(r, UINT64_MAX, trace, &all, &nall, &err) !=
-                           EMM_OK ||
-                       emm_sweep_records(m, emm_trace_reader_info(r), all, nall, sw, &err) !=
-                           EMM_OK) {
-                rc = cli_fail(&err);
-            }
-            free(all);
-            size_t covered = 0;
-            for (size_t w = 0; w < nwin && rc == EMM_EXIT_OK; w++) {
-                emm_table_sample s;
-                memset(&s, 0, sizeof s);
-                size_t np = 0;
-                if (window_features(r, build_windows[w], trace, s.f, &np, &err) != EMM_OK) {
-                    rc = cli_fail(&err);
-                    break;
-                }
-                /* A window past the end of the trace repeats the last sample. */
-                if (np <= covered)
-                    break;
-                covered = np;
-                snprintf(s.name, sizeof s.name, "%s-%zuk%c-w%zu", build_patterns[p].name,
-                         build_meshes[g].faces / 1000,
-                         build_meshes[g].density == EMM_DENSITY_UNIFORM ? 'u' : 'c', np);
-                snprintf(s.pattern, sizeof s.pattern, "%s", build_patterns[p].cls);
-                snprintf(s.synth, sizeof s.synth, "%s", build_patterns[p].recipe);
-                s.strategy = sw->result[sw->best].strategy;
-                if (emm_table_add(t, &s, &err) != EMM_OK) {
-                    rc = cli_fail(&err);
-                    break;
-                }
-                char strat[96];
-                emm_strategy_format(&s.strategy, strat, sizeof strat);
-                printf("%-28s %-9s %-24s %llu cycles (best of %zu; cache %llu)\n", s.name,
-                       s.pattern, strat, (unsigned long long)sw->result[sw->best].total,
-                       sw->simulated, (unsigned long long)sw->result[sw->cache].total);
-                fflush(stdout);
-            }
-            free(sw);
-            emm_trace_reader_close(r);
+            char prefix[EMM_TABLE_NAME_MAX];
+            snprintf(prefix, sizeof prefix, "%s-%zuk%c", build_patterns[p].name,
+                     build_meshes[g].faces / 1000,
+                     build_meshes[g].density == EMM_DENSITY_UNIFORM ? 'u' : 'c');
+            rc = add_trace_samples(t, m, trace, prefix, build_patterns[p].cls,
+                                   build_patterns[p].recipe, nwin);
             remove(trace);
             if (rc != EMM_EXIT_OK)
                 break;
@@ -402,20 +472,27 @@ static int table_build(int argc, char **argv)
         emm_mesh_free(mesh);
     }
     rmdir(dir);
+    for (size_t k = 0; k < nprog && rc == EMM_EXIT_OK; k++)
+        rc = add_trace_samples(t, m, progs[k].path, progs[k].prefix, progs[k].cls,
+                               progs[k].recipe, nwin);
     if (rc == EMM_EXIT_OK) {
         char comment[1024];
         int len = snprintf(comment, sizeof comment,
-                           "Generated by `emm table build%s%s%s`; do not edit by hand, rebuild.\n"
+                           "Generated by `emm table build%s%s%s%s`; do not edit by hand, rebuild.\n"
                            "Samples: canonical patterns (emm trace synth, seed 100 + the mesh's)\n"
                            "over planar Delaunay meshes (emm mesh gen):",
                            quick ? " --quick" : "", mc.file ? " --machine " : "",
-                           mc.file ? mc.file : "");
+                           mc.file ? mc.file : "", nprog ? " --program ..." : "");
         for (size_t g = 0; g < nmesh && len > 0 && (size_t)len < sizeof comment; g++)
             len += snprintf(comment + len, sizeof comment - (size_t)len, " %zu %s faces seed %llu%s",
                             build_meshes[g].faces,
                             build_meshes[g].density == EMM_DENSITY_UNIFORM ? "uniform"
                                                                             : "clustered",
                             (unsigned long long)build_meshes[g].seed, g + 1 < nmesh ? "," : ";");
+        if (len > 0 && (size_t)len < sizeof comment && nprog)
+            len += snprintf(comment + len, sizeof comment - (size_t)len,
+                            "\nand %zu traces of programs (the prog-* samples; scripts/table.sh);",
+                            nprog);
         if (len > 0 && (size_t)len < sizeof comment)
             snprintf(comment + len, sizeof comment - (size_t)len,
                      "\nwindows of %s element accesses; each strategy is the fewest cycles of\n"

@@ -40,6 +40,8 @@ static const uint64_t windows[] = {4096, 16384, 65536};
  * one on a smaller mesh. */
 static const uint64_t train_windows[] = {2048, 4096, 8192, 16384, 32768, 65536};
 #define NTRAIN_WIN 6
+/* Traversals per pattern and training mesh (other start points and walks). */
+#define NTRAIN_RUNS 2
 
 /* The profile of a pattern over a mesh, up to the longest window; the
  * shorter windows are its prefixes (D_i depends only on earlier accesses). */
@@ -103,15 +105,16 @@ int main(int argc, char **argv)
     };
     for (size_t g = 0; g < sizeof train / sizeof train[0]; g++) {
         emm_mesh *m = mesh(train[g].faces, train[g].d, train[g].seed);
-        for (size_t c = 0; c < NCLASS; c++) {
+        for (size_t c = 0; c < NCLASS; c++)
+        for (uint64_t run = 0; run < NTRAIN_RUNS; run++) {
             size_t n;
-            double *D = profile_of(m, classes[c].pattern, 1000 + g, &n);
+            double *D = profile_of(m, classes[c].pattern, 1000 * (run + 1) + g, &n);
             for (int w = 0; w < NTRAIN_WIN; w++) {
                 emm_table_sample s;
                 memset(&s, 0, sizeof s);
-                snprintf(s.name, sizeof s.name, "%s-%zuk-%c-%llu", classes[c].cls,
+                snprintf(s.name, sizeof s.name, "%s-%zuk-%c-%llu-%llu", classes[c].cls,
                          train[g].faces / 1000, train[g].d == EMM_DENSITY_UNIFORM ? 'u' : 'c',
-                         (unsigned long long)train_windows[w]);
+                         (unsigned long long)train_windows[w], (unsigned long long)run);
                 snprintf(s.pattern, sizeof s.pattern, "%s", classes[c].cls);
                 REQUIRE(emm_strategy_parse(classes[c].strategy, &s.strategy, &err) == EMM_OK);
                 features(D, n, train_windows[w], s.f);

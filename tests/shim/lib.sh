@@ -7,8 +7,11 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 SHIM=$1; WORK=$2; shift 2
 rm -rf "$WORK" && mkdir -p "$WORK" || fail "cannot make $WORK"
 # The tests must not depend on a strategy table being built: a fixed
-# strategy (the decision is the session's, tested elsewhere).
-EMM_STRATEGY=${EMM_STRATEGY:-cache}; export EMM_STRATEGY
+# strategy (the decision is the session's, tested elsewhere) — except the
+# decision tests (decide.sh), which set EMM_TEST_DECIDE.
+if [ -z "${EMM_TEST_DECIDE:-}" ]; then
+  EMM_STRATEGY=${EMM_STRATEGY:-cache}; export EMM_STRATEGY
+fi
 
 # run_both NAME PROGRAM [ARGS...]: native run into $WORK/NAME.native.*, shim
 # run into $WORK/NAME.shim.*; fails unless stdout and exit status match.
