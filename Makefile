@@ -5,7 +5,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build demo check check-asan bench install clean
+.PHONY: all deps configure build demo check check-asan bench thesis table install clean
 
 all: build
 
@@ -34,6 +34,19 @@ check-asan: deps
 
 bench: build
 	@scripts/bench.sh $(BUILD)
+
+# The reproduction of the thesis' chapter 6: tables of Figs. 6.1-6.9, a verdict
+# per claim of DESIGN.md "What the thesis reports", figures, and the
+# calibration of compute.per_access (docs/calibration.md). A report, not a test.
+thesis: build
+	@bench/thesis --calibrate $(BUILD)
+
+# The shipped strategy table, data/table.txt: canonical patterns and the
+# example workloads' own profiles (docs/profile.md). Deterministic but for
+# ASLR's ~0.1% on the cache baseline; rerun when the features, the machine's
+# defaults or the generator change.
+table: build
+	@scripts/table.sh $(BUILD) data/table.txt
 
 install: build
 	@cmake --install $(BUILD)
