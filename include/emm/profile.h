@@ -91,8 +91,10 @@ typedef struct emm_profiler emm_profiler;
  * (an address-only trace: RAW arrays, or no geometry). window = 0 means
  * EMM_PROFILE_DEFAULT_WINDOW. */
 /* The most element accesses of a leading index-order sweep that a profile
- * leaves out (docs/profile.md "The leading sweep"). */
-#define EMM_PROFILE_SWEEP_MAX 262144u
+ * leaves out (docs/profile.md "The leading sweep"): a sweep over every
+ * triangle of a 2M-face mesh. The session keeps the sweep's records until
+ * the decision (some 32 bytes each), so this bounds that memory. */
+#define EMM_PROFILE_SWEEP_MAX 2097152u
 
 EMM_API emm_status emm_profiler_new(const emm_trace_info *info, uint64_t window,
                                     const char *name, emm_profiler **out, emm_error *err);
