@@ -484,7 +484,6 @@ struct sweep_job {
     const emm_strategy *s;
     emm_sweep *out;
     size_t first, step; /* strategies first, first + step, ... */
-    const bool *want;   /* NULL: every strategy */
     bool nomem;
 };
 
@@ -492,8 +491,6 @@ static void *sweep_run(void *arg)
 {
     struct sweep_job *j = arg;
     for (size_t i = j->first; i < j->out->count; i += j->step) {
-        if (j->want && !j->want[i])
-            continue;
         emm_model *model;
         emm_error e;
         emm_status st = emm_model_new(j->m, &j->s[i], j->info, &model, &e);
@@ -509,9 +506,9 @@ static void *sweep_run(void *arg)
     return NULL;
 }
 
-static emm_status sweep_some(const emm_machine *m, const emm_trace_info *info,
-                             const emm_trace_record *recs, size_t n, const bool *want,
-                             emm_sweep *out, emm_error *err)
+emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
+                             const emm_trace_record *recs, size_t n, emm_sweep *out,
+                             emm_error *err)
 {
     emm_strategy s[EMM_SWEEP_MAX];
     memset(out, 0, sizeof *out);
@@ -525,8 +522,8 @@ static emm_status sweep_some(const emm_machine *m, const emm_trace_info *info,
     }
     /* Strategies alternate between the threads, so both get a mix of the
      * cheap and the expensive ones; each result depends only on its model. */
-    struct sweep_job jobs[2] = {{m, info, recs, n, s, out, 0, 2, want, false},
-                                {m, info, recs, n, s, out, 1, 2, want, false}};
+    struct sweep_job jobs[2] = {{m, info, recs, n, s, out, 0, 2, false},
+                                {m, info, recs, n, s, out, 1, 2, false}};
     pthread_t th;
     bool threaded = pthread_create(&th, NULL, sweep_run, &jobs[1]) == 0;
     if (!threaded)
@@ -551,12 +548,6 @@ static emm_status sweep_some(const emm_machine *m, const emm_trace_info *info,
     return EMM_OK;
 }
 
-emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
-                             const emm_trace_record *recs, size_t n, emm_sweep *out,
-                             emm_error *err)
-{
-    return sweep_some(m, info, recs, n, NULL, out, err);
-}
 
 /* ---- the decision ---------------------------------------------------------- */
 
@@ -626,8 +617,7 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
         return EMM_OK;
     /* A region grows from where the program's did: its first triangle. */
     for (size_t i = 0; i < n && !so.has_start; i++)
-        if ((int)recs[i].array == array_of(info, EMM_ARRAY_TRIANGLES) &&
-            recs[i].element < info->geometry.nt) {
+        if (recs[i].array == arrays.tri && recs[i].element < info->geometry.nt) {
             so.has_start = 1;
             so.start = (uint32_t)recs[i].element;
         }
@@ -645,8 +635,8 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
         goto done;
     }
     emm_error e;
-    if (sweep_some(m, info, syn, ns, NULL, S, &e) != EMM_OK ||
-        sweep_some(m, info, recs, n, NULL, W, &e) != EMM_OK) {
+    if (emm_sweep_records(m, info, syn, ns, S, &e) != EMM_OK ||
+        emm_sweep_records(m, info, recs, n, W, &e) != EMM_OK) {
         st = e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
         goto done;
     }
@@ -707,7 +697,7 @@ emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
     emm_sweep *sw = malloc(sizeof *sw);
     if (!sw)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
-    st = sweep_some(m, info, recs, n, NULL, sw, err);
+    st = emm_sweep_records(m, info, recs, n, sw, err);
     if (st == EMM_OK) {
         out->simulated = 1;
         out->how = EMM_DECIDED_WINDOW;

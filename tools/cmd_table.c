@@ -88,6 +88,32 @@ static int table_list(int argc, char **argv)
     return EMM_EXIT_OK;
 }
 
+/* The features of a trace's first `window` element accesses; *n receives
+ * how many there were. */
+static emm_status window_features(emm_trace_reader *r, uint64_t window, const char *name,
+                                  double f[EMM_FEATURES], size_t *n, emm_error *err)
+{
+    double *xy = NULL, *D = NULL;
+    emm_status st = emm_profile_trace_positions(r, window, name, &xy, n, err);
+    if (st == EMM_OK && *n < EMM_PROFILE_MIN) {
+        err->status = st = EMM_ERR_RANGE;
+        snprintf(err->message, sizeof err->message,
+                 "%.300s: only %zu element accesses; a profile needs at least %u", name, *n,
+                 EMM_PROFILE_MIN);
+    }
+    if (st == EMM_OK && !(D = malloc(*n * sizeof *D))) {
+        err->status = st = EMM_ERR_NOMEM;
+        snprintf(err->message, sizeof err->message, "%.300s: out of memory", name);
+    }
+    if (st == EMM_OK)
+        st = emm_profile_compute(xy, *n, D, NULL, err);
+    if (st == EMM_OK)
+        st = emm_profile_features(D, *n, name, f, err);
+    free(xy);
+    free(D);
+    return st;
+}
+
 /* table add without --strategy: the best of the sweep on the window. */
 static int table_add_swept(const char *trace, const char *table, uint64_t window,
                            const machine_cli *mc, emm_table_sample *s)
@@ -199,34 +225,13 @@ static int table_add(int argc, char **argv)
     emm_trace_reader *r;
     if (emm_trace_reader_open(trace, &r, &err) != EMM_OK)
         return cli_fail(&err);
-    double *xy = NULL, *D = NULL;
     size_t n = 0;
-    int rc = EMM_EXIT_FAIL;
-    if (emm_profile_trace_positions(r, window, trace, &xy, &n, &err) != EMM_OK) {
+    int rc = EMM_EXIT_OK;
+    if (window_features(r, window, trace, s.f, &n, &err) != EMM_OK ||
+        emm_table_append(table, &s, &err) != EMM_OK)
         rc = cli_fail(&err);
-        goto done;
-    }
-    if (n < EMM_PROFILE_MIN) {
-        cli_error("%s: only %zu element accesses; a profile needs at least %u", trace, n,
-                  EMM_PROFILE_MIN);
-        goto done;
-    }
-    D = malloc(n * sizeof *D);
-    if (!D) {
-        cli_error("%s: out of memory", trace);
-        goto done;
-    }
-    if (emm_profile_compute(xy, n, D, NULL, &err) != EMM_OK ||
-        emm_profile_features(D, n, trace, s.f, &err) != EMM_OK ||
-        emm_table_append(table, &s, &err) != EMM_OK) {
-        rc = cli_fail(&err);
-        goto done;
-    }
-    printf("added %s (%s, %s) to %s\n", s.name, s.pattern, strategy, table);
-    rc = EMM_EXIT_OK;
-done:
-    free(xy);
-    free(D);
+    else
+        printf("added %s (%s, %s) to %s\n", s.name, s.pattern, strategy, table);
     emm_trace_reader_close(r);
     return rc;
 }
@@ -263,32 +268,6 @@ static const struct {
 };
 
 static const uint64_t build_windows[] = {4096, 16384, 65536};
-
-/* The features of a trace's first `window` element accesses; *n receives
- * how many there were. */
-static emm_status window_features(emm_trace_reader *r, uint64_t window, const char *name,
-                                  double f[EMM_FEATURES], size_t *n, emm_error *err)
-{
-    double *xy = NULL, *D = NULL;
-    emm_status st = emm_profile_trace_positions(r, window, name, &xy, n, err);
-    if (st == EMM_OK && *n < EMM_PROFILE_MIN) {
-        err->status = st = EMM_ERR_RANGE;
-        snprintf(err->message, sizeof err->message,
-                 "%.300s: only %zu element accesses; a profile needs at least %u", name, *n,
-                 EMM_PROFILE_MIN);
-    }
-    if (st == EMM_OK && !(D = malloc(*n * sizeof *D))) {
-        err->status = st = EMM_ERR_NOMEM;
-        snprintf(err->message, sizeof err->message, "%.300s: out of memory", name);
-    }
-    if (st == EMM_OK)
-        st = emm_profile_compute(xy, *n, D, NULL, err);
-    if (st == EMM_OK)
-        st = emm_profile_features(D, *n, name, f, err);
-    free(xy);
-    free(D);
-    return st;
-}
 
 /* Adds the samples of one trace to t: its features at each window of
  * build_windows (the first nwin; a window past the end of the trace is
