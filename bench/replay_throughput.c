@@ -16,6 +16,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "emm/replay.h"
 #include "emm/sim.h"
 #include "emm/strategy.h"
 #include "emm/trace.h"

@@ -28,6 +28,7 @@
 #include <unistd.h>
 
 #include "emm/profile.h"
+#include "emm/replay.h"
 #include "emm/sim.h"
 #include "emm/strategy.h"
 #include "emm/table.h"

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "emm/replay.h"
 #include "emm/sim.h"
 #include "emm/strategy.h"
 #include "machine_cli.h"

@@ -38,6 +38,29 @@ typedef struct emm_error {
     char message[512];
 } emm_error;
 
+/* Scalar type of a field inside a record. */
+typedef enum emm_scalar {
+    EMM_F32 = 0,
+    EMM_F64,
+    EMM_I32,
+    EMM_U32,
+    EMM_I64
+} emm_scalar;
+
+/* What the records of a tagged or traced array hold. */
+typedef enum emm_array_kind {
+    EMM_ARRAY_VERTICES = 0,  /* records hold a vertex's coordinates */
+    EMM_ARRAY_TRIANGLES = 1, /* records hold a triangle's vertex indices */
+    EMM_ARRAY_RAW = 2        /* plain memory: element = byte address (din import) */
+} emm_array_kind;
+
+/* The bytes the thesis' structs take on a 64-bit host: struct Vertex
+ * {unsigned name; double coor[3]; int vfConnec[12];} is 80 bytes and
+ * struct Triangle {unsigned name; int vertexIndices[3]; int neighbors[3];}
+ * is 28 bytes (thesis §3.1). */
+#define EMM_THESIS_VERTEX_BYTES 80u
+#define EMM_THESIS_TRIANGLE_BYTES 28u
+
 /* A short, static description of a status ("malformed file", ...). */
 EMM_API const char *emm_strerror(emm_status status);
 

@@ -31,12 +31,7 @@ typedef struct emm_triangle {
     int32_t n[3];
 } emm_triangle;
 
-/* The bytes the thesis' structs take on a 64-bit host: struct Vertex
- * {unsigned name; double coor[3]; int vfConnec[12];} is 80 bytes and
- * struct Triangle {unsigned name; int vertexIndices[3]; int neighbors[3];}
- * is 28 bytes (thesis §3.1). */
-#define EMM_THESIS_VERTEX_BYTES 80u
-#define EMM_THESIS_TRIANGLE_BYTES 28u
+/* EMM_THESIS_VERTEX_BYTES and EMM_THESIS_TRIANGLE_BYTES: emm/common.h. */
 
 /* Reads a mesh file. On success *out owns a new mesh (free it with
  * emm_mesh_free). On failure *out is NULL and err names the file and the

@@ -187,56 +187,6 @@ EMM_API emm_status emm_model_cells(const emm_model *model, emm_result *out, emm_
 EMM_API void emm_result_release(emm_result *r);
 EMM_API void emm_model_free(emm_model *model);
 
-/* ---- replay ---------------------------------------------------------------- */
-
-/* Called now and then during emm_replay with the records done so far. */
-typedef void (*emm_progress_fn)(void *ctx, uint64_t done, uint64_t total);
-
-/* Simulates every strategy of s[0..n) over the trace at `path` in one
- * streaming pass (memory does not grow with the trace) and fills
- * results[0..n). *accesses (when not NULL) receives the records read.
- * `progress` may be NULL. */
-EMM_API emm_status emm_replay(const char *path, const emm_machine *m, const emm_strategy *s,
-                              size_t n, emm_result *results, uint64_t *accesses,
-                              emm_progress_fn progress, void *progress_ctx, emm_error *err);
-
-/* How emm_replay_ex runs; zero-initialise, then set what you need. */
-typedef struct emm_replay_options {
-    /* Threads simulating models; 0: the online CPUs. Never more than the
-     * models. Each model runs on one thread at a time and sees every record
-     * in order, so the results do not depend on `jobs`. */
-    unsigned jobs;
-    emm_progress_fn progress; /* may be NULL; called from the calling thread */
-    void *progress_ctx;
-    /* Nonzero: also fill each EMM strategy's per-cell DMA bytes
-     * (emm_model_cells); the caller then releases every result with
-     * emm_result_release. */
-    int cells;
-} emm_replay_options;
-
-/* emm_replay with options (opt may be NULL: defaults). The trace is read
- * once; its records go to every model in windows, the models split over
- * opt->jobs threads. With `skipped` NULL a strategy whose model cannot be
- * built fails the replay, as in emm_replay. With `skipped` (n entries), such
- * a strategy gets its error in skipped[i] (status != EMM_OK) and a result
- * with only the strategy set, and the others go on; skipped[i].status is
- * EMM_OK for the strategies that ran. */
-EMM_API emm_status emm_replay_ex(const char *path, const emm_machine *m, const emm_strategy *s,
-                                 size_t n, const emm_replay_options *opt, emm_result *results,
-                                 emm_error *skipped, uint64_t *accesses, emm_error *err);
-
-/* Writes the JSON report of docs/report.md to `path` (whole or not at all).
- * A result with cells (emm_model_cells) gets its "cells" key. */
-EMM_API emm_status emm_report_write(const char *path, const char *trace_name,
-                                    const emm_machine *m, uint64_t accesses,
-                                    const emm_result *results, size_t n, emm_error *err);
-/* The same, where skipped (may be NULL) marks strategies that did not run,
- * as emm_replay_ex fills it: they are written as {"strategy": ..., "error": ...}. */
-EMM_API emm_status emm_report_write_ex(const char *path, const char *trace_name,
-                                       const emm_machine *m, uint64_t accesses,
-                                       const emm_result *results, const emm_error *skipped,
-                                       size_t n, emm_error *err);
-
 #ifdef __cplusplus
 }
 #endif

@@ -13,15 +13,6 @@
 extern "C" {
 #endif
 
-/* Scalar type of a field inside a record. */
-typedef enum emm_scalar {
-    EMM_F32 = 0,
-    EMM_F64,
-    EMM_I32,
-    EMM_U32,
-    EMM_I64
-} emm_scalar;
-
 /* The vertex array: `count` records of `stride` bytes starting at `ptr`;
  * the x, y, z coordinates are consecutive scalars of `type` (EMM_F32 or
  * EMM_F64) at `xyz_offset` in each record. */

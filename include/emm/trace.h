@@ -16,12 +16,6 @@
 extern "C" {
 #endif
 
-typedef enum emm_array_kind {
-    EMM_ARRAY_VERTICES = 0,  /* records hold a vertex's coordinates */
-    EMM_ARRAY_TRIANGLES = 1, /* records hold a triangle's vertex indices */
-    EMM_ARRAY_RAW = 2        /* plain memory: element = byte address (din import) */
-} emm_array_kind;
-
 /* One tagged array. The original address of byte `offset` of element `e` is
  * base + e * record_size + offset. */
 typedef struct emm_trace_array {

@@ -9,6 +9,7 @@
 
 #include "check.h"
 #include "emm/mesh.h"
+#include "emm/replay.h"
 #include "emm/sim.h"
 #include "emm/synth.h"
 #include "emm/trace.h"

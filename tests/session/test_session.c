@@ -18,6 +18,7 @@
 #include "emm/profile.h"
 #include "emm/session.h"
 #include "emm/table.h"
+#include "emm/replay.h"
 #include "emm/sim.h"
 #include "emm/synth.h"
 #include "emm/trace.h"

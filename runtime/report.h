@@ -3,6 +3,7 @@
 #ifndef EMM_SIM_REPORT_H
 #define EMM_SIM_REPORT_H
 
+#include "emm/replay.h"
 #include "emm/sim.h"
 #include "json.h"
 

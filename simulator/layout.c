@@ -12,7 +12,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "emm/mesh.h"
 #include "error.h"
 #include "parse.h"
 
