@@ -124,8 +124,8 @@ int main(int argc, char **argv)
             size_t nall;
             if (emm_profile_trace_window(r, UINT64_MAX, path, &all, &nall, &err) != EMM_OK)
                 die(patterns[p].name, &err);
-            emm_sweep *whole = malloc(sizeof *whole);
-            if (!whole || emm_sweep_records(m, info, all, nall, whole, &err) != EMM_OK)
+            emm_sweep *whole = NULL;
+            if (emm_sweep_records(m, info, all, nall, NULL, &whole, &err) != EMM_OK)
                 die(patterns[p].name, &err);
             uint64_t best = whole->result[whole->best].total;
             uint64_t cache = whole->result[whole->cache].total;
@@ -142,7 +142,8 @@ int main(int argc, char **argv)
                     skipped++;
                     continue;
                 }
-                if (emm_decide_window(t, m, info, recs, n, path, 0, simulate, &d, &err) != EMM_OK)
+                emm_decide_options dopt = {0, simulate, NULL};
+                if (emm_decide_window(t, m, info, recs, n, path, &dopt, &d, &err) != EMM_OK)
                     die(patterns[p].name, &err);
                 free(recs);
                 size_t k = whole->count;
@@ -177,7 +178,7 @@ int main(int argc, char **argv)
                     max_vs_cache = vs_cache;
                 worse_than_cache += vs_cache > 0.05;
             }
-            free(whole);
+            emm_sweep_free(whole);
             free(all);
             emm_trace_reader_close(r);
         }

@@ -88,3 +88,15 @@ const char *emm_grouped(uint64_t v, char buf[32])
     buf[o] = '\0';
     return buf;
 }
+
+const char *emm_clip(const char *text, size_t len, char buf[EMM_CLIP + 1])
+{
+    if (len > EMM_CLIP) {
+        memcpy(buf, text, EMM_CLIP - 3);
+        memcpy(buf + EMM_CLIP - 3, "...", 4);
+    } else {
+        memcpy(buf, text, len);
+        buf[len] = '\0';
+    }
+    return buf;
+}

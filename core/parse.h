@@ -6,6 +6,7 @@
 #define EMM_INTERNAL_PARSE_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 /* A non-negative decimal integer. */
@@ -19,5 +20,10 @@ bool emm_parse_double(const char *s, double *out);
 /* Writes v with thousands grouped ("301,200") into buf and returns buf:
  * counts in messages and tables read better that way. */
 const char *emm_grouped(uint64_t v, char buf[32]);
+
+/* Quotes text[0..len) in messages: cut to EMM_CLIP characters with "..." so
+ * the explanation after it always fits one line. Returns buf. */
+#define EMM_CLIP 60
+const char *emm_clip(const char *text, size_t len, char buf[EMM_CLIP + 1]);
 
 #endif

@@ -9,12 +9,19 @@
 #include "error.h"
 #include "parse.h"
 
-static const char *const layout_names[] = {"original", "grid", "tiles", "quadtree"};
-static const char *const fetch_names[] = {"none", "naive", "convolution", "extrapolated"};
+#define NAME_(e, n) #n,
+static const char *const layout_names[EMM_LAYOUT_COUNT] = {"original", EMM_LAYOUT_LIST(NAME_)};
+static const char *const fetch_names[EMM_FETCH_COUNT] = {"none", EMM_FETCH_LIST(NAME_)};
+#undef NAME_
+/* "grid, tiles, quadtree" */
+#define LIST_(e, n) ", " #n
+#define LAYOUTS (EMM_LAYOUT_LIST(LIST_) + 2)
+#define FETCHES (EMM_FETCH_LIST(LIST_) + 2)
 
 #define ACCEPTED "direct, cache, cache@LAYOUT or LAYOUT+FETCH[@CELL]"
-#define LAYOUTS "grid, tiles, quadtree"
-#define FETCHES "naive, convolution, extrapolated"
+
+/* The standard sweep's cell sizes (thesis §6.3: "small cells" win). */
+static const uint32_t sweep_cells[] = {16, 32, 64, 128, 256};
 
 const char *emm_layout_name(emm_layout_kind k)
 {
@@ -29,7 +36,7 @@ const char *emm_fetch_name(emm_fetch_kind k)
 /* Matches [s, s+n) against the three EMM layouts. */
 static int match_layout(const char *s, size_t n, emm_layout_kind *out)
 {
-    for (int k = EMM_LAYOUT_GRID; k <= EMM_LAYOUT_QUADTREE; k++)
+    for (int k = EMM_LAYOUT_ORIGINAL + 1; k < EMM_LAYOUT_COUNT; k++)
         if (strlen(layout_names[k]) == n && memcmp(s, layout_names[k], n) == 0) {
             *out = (emm_layout_kind)k;
             return 1;
@@ -39,7 +46,7 @@ static int match_layout(const char *s, size_t n, emm_layout_kind *out)
 
 static int match_fetch(const char *s, size_t n, emm_fetch_kind *out)
 {
-    for (int k = EMM_FETCH_NAIVE; k <= EMM_FETCH_EXTRAPOLATED; k++)
+    for (int k = EMM_FETCH_NONE + 1; k < EMM_FETCH_COUNT; k++)
         if (strlen(fetch_names[k]) == n && memcmp(s, fetch_names[k], n) == 0) {
             *out = (emm_fetch_kind)k;
             return 1;
@@ -47,24 +54,29 @@ static int match_fetch(const char *s, size_t n, emm_fetch_kind *out)
     return 0;
 }
 
-static emm_status parse_cell(const char *text, const char *s, uint32_t *cell, emm_error *err)
+static emm_status parse_cell(const char *q, const char *s, uint32_t *cell, emm_error *err)
 {
     uint64_t v;
+    char c[EMM_CLIP + 1];
     if (!emm_parse_u64(s, &v) || v == 0 || v > EMM_MAX_CELL)
         return emm_fail(err, EMM_ERR_INVALID,
                         "strategy '%s': cell size '%s' is not an integer from 1 to %u "
                         "(triangles per cell)",
-                        text, s, EMM_MAX_CELL);
+                        q, emm_clip(s, strlen(s), c), EMM_MAX_CELL);
     *cell = (uint32_t)v;
     return EMM_OK;
 }
 
+/* Messages quote the text and its parts cut to EMM_CLIP characters, so the
+ * list of what is accepted always fits. */
 emm_status emm_strategy_parse(const char *text, emm_strategy *out, emm_error *err)
 {
     emm_strategy s = {EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
+    char q[EMM_CLIP + 1], part[EMM_CLIP + 1];
 
     if (!text || !*text)
         return emm_fail(err, EMM_ERR_INVALID, "strategy is empty; accepted: " ACCEPTED);
+    emm_clip(text, strlen(text), q);
     if (strcmp(text, "direct") == 0) {
         *out = s;
         return EMM_OK;
@@ -75,8 +87,8 @@ emm_status emm_strategy_parse(const char *text, emm_strategy *out, emm_error *er
             const char *l = text + 6;
             if (!match_layout(l, strlen(l), &s.layout))
                 return emm_fail(err, EMM_ERR_INVALID,
-                                "strategy '%s': unknown layout '%s'; accepted: " LAYOUTS,
-                                text, l);
+                                "strategy '%s': unknown layout '%s'; accepted: %s", q,
+                                emm_clip(l, strlen(l), part), LAYOUTS);
             s.cell = EMM_DEFAULT_CELL;
         }
         *out = s;
@@ -88,27 +100,26 @@ emm_status emm_strategy_parse(const char *text, emm_strategy *out, emm_error *er
         size_t n = strcspn(text, "@");
         if (match_layout(text, n, &s.layout))
             return emm_fail(err, EMM_ERR_INVALID,
-                            "strategy '%s': layout '%.*s' needs a fetch scheme, "
-                            "e.g. '%.*s+naive'; fetch schemes: " FETCHES,
-                            text, (int)n, text, (int)n, text);
+                            "strategy '%s': layout '%s' needs a fetch scheme, "
+                            "e.g. '%s+naive'; fetch schemes: %s",
+                            q, emm_layout_name(s.layout), emm_layout_name(s.layout), FETCHES);
         return emm_fail(err, EMM_ERR_INVALID, "strategy '%s' is unknown; accepted: " ACCEPTED,
-                        text);
+                        q);
     }
     if (!match_layout(text, (size_t)(plus - text), &s.layout))
-        return emm_fail(err, EMM_ERR_INVALID,
-                        "strategy '%s': unknown layout '%.*s'; accepted: " LAYOUTS, text,
-                        (int)(plus - text), text);
+        return emm_fail(err, EMM_ERR_INVALID, "strategy '%s': unknown layout '%s'; accepted: %s",
+                        q, emm_clip(text, (size_t)(plus - text), part), LAYOUTS);
     const char *f = plus + 1;
     const char *at = strchr(f, '@');
     size_t fn = at ? (size_t)(at - f) : strlen(f);
     if (!match_fetch(f, fn, &s.fetch))
         return emm_fail(err, EMM_ERR_INVALID,
-                        "strategy '%s': unknown fetch scheme '%.*s'; accepted: " FETCHES, text,
-                        (int)fn, f);
+                        "strategy '%s': unknown fetch scheme '%s'; accepted: %s", q,
+                        emm_clip(f, fn, part), FETCHES);
     s.kind = EMM_STRATEGY_EMM;
     s.cell = EMM_DEFAULT_CELL;
     if (at) {
-        emm_status st = parse_cell(text, at + 1, &s.cell, err);
+        emm_status st = parse_cell(q, at + 1, &s.cell, err);
         if (st != EMM_OK)
             return st;
     }
@@ -137,9 +148,14 @@ size_t emm_strategy_format(const emm_strategy *s, char *buf, size_t cap)
     return n < 0 ? 0 : (size_t)n;
 }
 
+size_t emm_strategy_sweep_cells(const uint32_t **cells)
+{
+    *cells = sweep_cells;
+    return sizeof sweep_cells / sizeof *sweep_cells;
+}
+
 size_t emm_strategy_sweep(emm_strategy *out, size_t cap)
 {
-    static const uint32_t cells[] = {16, 32, 64, 128, 256};
     size_t n = 0;
 #define PUT(...)                                                                               \
     do {                                                                                       \
@@ -147,13 +163,13 @@ size_t emm_strategy_sweep(emm_strategy *out, size_t cap)
             out[n] = (emm_strategy){__VA_ARGS__};                                              \
         n++;                                                                                   \
     } while (0)
-    for (int l = EMM_LAYOUT_GRID; l <= EMM_LAYOUT_QUADTREE; l++)
-        for (int f = EMM_FETCH_NAIVE; f <= EMM_FETCH_EXTRAPOLATED; f++)
-            for (size_t c = 0; c < sizeof cells / sizeof *cells; c++)
-                PUT(EMM_STRATEGY_EMM, (emm_layout_kind)l, (emm_fetch_kind)f, cells[c]);
+    for (int l = EMM_LAYOUT_ORIGINAL + 1; l < EMM_LAYOUT_COUNT; l++)
+        for (int f = EMM_FETCH_NONE + 1; f < EMM_FETCH_COUNT; f++)
+            for (size_t c = 0; c < sizeof sweep_cells / sizeof *sweep_cells; c++)
+                PUT(EMM_STRATEGY_EMM, (emm_layout_kind)l, (emm_fetch_kind)f, sweep_cells[c]);
     PUT(EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0);
     PUT(EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0);
-    for (int l = EMM_LAYOUT_GRID; l <= EMM_LAYOUT_QUADTREE; l++)
+    for (int l = EMM_LAYOUT_ORIGINAL + 1; l < EMM_LAYOUT_COUNT; l++)
         PUT(EMM_STRATEGY_CACHE, (emm_layout_kind)l, EMM_FETCH_NONE, EMM_DEFAULT_CELL);
 #undef PUT
     return n;

@@ -5,7 +5,6 @@
 #include "emm/profile.h"
 
 #include <math.h>
-#include <pthread.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,6 +15,7 @@
 
 #include "error.h"
 #include "lead_sweep.h"
+#include "pool.h"
 
 /* ---- exact ------------------------------------------------------------ */
 
@@ -86,18 +86,17 @@ struct exact_job {
     row_fn row;
 };
 
-static void *exact_run(void *arg)
+static void exact_run(void *ctx, size_t k)
 {
-    struct exact_job *j = arg;
+    struct exact_job *j = (struct exact_job *)ctx + k;
     for (size_t i = j->lo; i < j->hi; i++)
         j->D[i] = j->row(j->x, j->y, i, j->x[i], j->y[i]);
-    return NULL;
 }
 
 /* Too short to be worth a thread. */
 #define EXACT_THREAD_MIN 2048u
 
-void emm_profile_exact(const double *xy, size_t n, double *D)
+void emm_profile_exact(const double *xy, size_t n, double *D, const emm_threads *threads)
 {
     if (n == 0)
         return;
@@ -123,13 +122,9 @@ void emm_profile_exact(const double *xy, size_t n, double *D)
     /* Row i costs i: the split at n/√2 halves the work. */
     size_t mid = n < EXACT_THREAD_MIN ? n : (size_t)((double)n * 0.70710678118654752);
     struct exact_job jobs[2] = {{x, y, D, 0, mid, row}, {x, y, D, mid, n, row}};
-    pthread_t th;
-    bool threaded = mid < n && pthread_create(&th, NULL, exact_run, &jobs[1]) == 0;
-    exact_run(&jobs[0]);
-    if (threaded)
-        pthread_join(th, NULL);
-    else if (mid < n)
-        exact_run(&jobs[1]);
+    emm_pool *pool = mid < n ? emm_pool_new(threads, 2) : NULL;
+    emm_pool_for(pool, mid < n ? 2 : 1, exact_run, jobs);
+    emm_pool_free(pool);
     free(x);
 }
 
@@ -292,9 +287,9 @@ struct fast_job {
     bool ok;
 };
 
-static void *fast_run(void *arg)
+static void fast_run(void *ctx, size_t k)
 {
-    struct fast_job *j = arg;
+    struct fast_job *j = (struct fast_job *)ctx + k;
     struct qtree t = {0};
     j->ok = false;
     t.cap = 1024;
@@ -320,7 +315,6 @@ static void *fast_run(void *arg)
     free(t.node);
     free(t.next);
     free(t.stack);
-    return NULL;
 }
 
 double emm_profile_fast_bound(double theta)
@@ -331,7 +325,8 @@ double emm_profile_fast_bound(double theta)
     return q * q * q / (3 * sqrt(3.0));
 }
 
-emm_status emm_profile_fast(const double *xy, size_t n, double theta, double *D, emm_error *err)
+emm_status emm_profile_fast(const double *xy, size_t n, double theta, double *D,
+                            const emm_threads *threads, emm_error *err)
 {
     if (!(theta > 0 && theta < 1))
         return emm_fail(err, EMM_ERR_RANGE, "opening angle %g: must be between 0 and 1", theta);
@@ -355,29 +350,26 @@ emm_status emm_profile_fast(const double *xy, size_t n, double theta, double *D,
         {xy, n, 0, mid, theta, D, 0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), half, false},
         {xy, n, mid, n, theta, D, 0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), half, false},
     };
-    pthread_t th;
-    bool threaded = mid < n && pthread_create(&th, NULL, fast_run, &jobs[1]) == 0;
-    fast_run(&jobs[0]);
-    if (threaded)
-        pthread_join(th, NULL);
-    else if (mid < n)
-        fast_run(&jobs[1]);
+    emm_pool *pool = mid < n ? emm_pool_new(threads, 2) : NULL;
+    emm_pool_for(pool, mid < n ? 2 : 1, fast_run, jobs);
+    emm_pool_free(pool);
     if (!jobs[0].ok || (mid < n && !jobs[1].ok))
         return emm_fail(err, EMM_ERR_NOMEM, "%zu accesses: out of memory for the profile's tree", n);
     return EMM_OK;
 }
 
-emm_status emm_profile_compute(const double *xy, size_t n, double *D, int *exact, emm_error *err)
+emm_status emm_profile_compute(const double *xy, size_t n, double *D, int *exact,
+                               const emm_threads *threads, emm_error *err)
 {
     if (n <= EMM_PROFILE_EXACT_MAX) {
-        emm_profile_exact(xy, n, D);
+        emm_profile_exact(xy, n, D, threads);
         if (exact)
             *exact = 1;
         return EMM_OK;
     }
     if (exact)
         *exact = 0;
-    return emm_profile_fast(xy, n, EMM_PROFILE_THETA, D, err);
+    return emm_profile_fast(xy, n, EMM_PROFILE_THETA, D, threads, err);
 }
 
 /* ---- positions of element accesses -------------------------------------- */

@@ -11,7 +11,6 @@
 #include <dlfcn.h>
 #include <errno.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,6 +19,7 @@
 #include "error.h"
 #include "outfile.h"
 #include "parse.h"
+#include "runner.h"
 #include "synth_internal.h"
 
 #ifndef EMM_SOURCE_DIR
@@ -476,78 +476,69 @@ emm_status emm_table_decide(const emm_table *t, const double f[EMM_FEATURES], do
 
 /* ---- simulating the candidates ------------------------------------------- */
 
-struct sweep_job {
-    const emm_machine *m;
-    const emm_trace_info *info;
-    const emm_trace_record *recs;
-    size_t n;
-    const emm_strategy *s;
-    emm_sweep *out;
-    size_t first, step; /* strategies first, first + step, ... */
-    bool nomem;
-};
-
-static void *sweep_run(void *arg)
-{
-    struct sweep_job *j = arg;
-    for (size_t i = j->first; i < j->out->count; i += j->step) {
-        emm_model *model;
-        emm_error e;
-        emm_status st = emm_model_new(j->m, &j->s[i], j->info, &model, &e);
-        if (st != EMM_OK) {
-            j->nomem |= st == EMM_ERR_NOMEM;
-            continue;
-        }
-        emm_model_run(model, j->recs, j->n);
-        emm_model_result(model, &j->out->result[i]);
-        emm_model_free(model);
-        j->out->ran[i] = 1;
-    }
-    return NULL;
-}
-
 emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
-                             const emm_trace_record *recs, size_t n, emm_sweep *out,
-                             emm_error *err)
+                             const emm_trace_record *recs, size_t n, const emm_threads *threads,
+                             emm_sweep **out, emm_error *err)
 {
-    emm_strategy s[EMM_SWEEP_MAX];
-    memset(out, 0, sizeof *out);
-    size_t count = emm_strategy_sweep(s, EMM_SWEEP_MAX);
-    assert(count <= EMM_SWEEP_MAX);
-    out->count = count;
-    for (size_t i = 0; i < count; i++) {
-        out->result[i].strategy = s[i];
-        if (s[i].kind == EMM_STRATEGY_CACHE && s[i].layout == EMM_LAYOUT_ORIGINAL)
-            out->cache = i;
+    *out = NULL;
+    size_t count = emm_strategy_sweep(NULL, 0);
+    emm_sweep *sw = calloc(1, sizeof *sw);
+    emm_strategy *s = calloc(count, sizeof *s);
+    emm_error *skipped = calloc(count, sizeof *skipped);
+    emm_runner *run = NULL;
+    emm_status st = EMM_OK;
+    if (sw) {
+        sw->result = calloc(count, sizeof *sw->result);
+        sw->ran = calloc(count, sizeof *sw->ran);
     }
-    /* Strategies alternate between the threads, so both get a mix of the
-     * cheap and the expensive ones; each result depends only on its model. */
-    struct sweep_job jobs[2] = {{m, info, recs, n, s, out, 0, 2, false},
-                                {m, info, recs, n, s, out, 1, 2, false}};
-    pthread_t th;
-    bool threaded = pthread_create(&th, NULL, sweep_run, &jobs[1]) == 0;
-    if (!threaded)
-        jobs[0].step = 1;
-    sweep_run(&jobs[0]);
-    if (threaded)
-        pthread_join(th, NULL);
-    if (jobs[0].nomem || jobs[1].nomem)
-        return emm_fail(err, EMM_ERR_NOMEM, "strategy sweep: out of memory for a model");
+    if (!sw || !s || !skipped || !sw->result || !sw->ran) {
+        st = emm_fail(err, EMM_ERR_NOMEM, "strategy sweep: out of memory");
+        goto out;
+    }
+    emm_strategy_sweep(s, count);
+    sw->count = count;
+    if ((st = emm_runner_new(threads, &run, err)) != EMM_OK ||
+        (st = emm_runner_add(run, m, s, count, info, skipped, err)) != EMM_OK)
+        goto out;
+    emm_runner_run(run, recs, n);
     uint64_t best = UINT64_MAX;
-    for (size_t i = 0; i < count; i++)
-        if (out->ran[i]) {
-            out->simulated++;
-            if (out->result[i].total < best) {
-                best = out->result[i].total;
-                out->best = i;
-            }
+    for (size_t i = 0; i < count; i++) {
+        emm_model *model = emm_runner_model(run, i);
+        sw->result[i].strategy = s[i];
+        if (s[i].kind == EMM_STRATEGY_CACHE && s[i].layout == EMM_LAYOUT_ORIGINAL)
+            sw->cache = i;
+        if (!model)
+            continue;
+        emm_model_result(model, &sw->result[i]);
+        sw->ran[i] = 1;
+        sw->simulated++;
+        if (sw->result[i].total < best) {
+            best = sw->result[i].total;
+            sw->best = i;
         }
-    if (out->simulated == 0)
-        return emm_fail(err, EMM_ERR_UNSUPPORTED,
-                        "strategy sweep: no strategy of the sweep can be simulated on this trace");
-    return EMM_OK;
+    }
+    if (sw->simulated == 0)
+        st = emm_fail(err, EMM_ERR_UNSUPPORTED,
+                      "strategy sweep: no strategy of the sweep can be simulated on this trace");
+out:
+    emm_runner_free(run);
+    free(s);
+    free(skipped);
+    if (st == EMM_OK)
+        *out = sw;
+    else
+        emm_sweep_free(sw);
+    return st;
 }
 
+void emm_sweep_free(emm_sweep *sw)
+{
+    if (!sw)
+        return;
+    free(sw->result);
+    free(sw->ran);
+    free(sw);
+}
 
 /* ---- the decision ---------------------------------------------------------- */
 
@@ -603,7 +594,8 @@ static bool program_arrays(const emm_trace_info *info, struct synth_arrays *a)
  * arrays to synthesise over; errors are out of memory only. */
 static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info,
                                 const emm_trace_record *recs, size_t n, const char *name,
-                                emm_window_decision *out, emm_error *err)
+                                const emm_threads *threads, emm_window_decision *out,
+                                emm_error *err)
 {
     struct synth_arrays arrays;
     emm_synth_options so = {.seed = EMM_DECIDE_SYNTH_SEED};
@@ -629,14 +621,10 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
     emm_mesh_free(mesh);
     if (st != EMM_OK)
         return st;
-    emm_sweep *S = malloc(sizeof *S), *W = malloc(sizeof *W);
-    if (!S || !W) {
-        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
-        goto done;
-    }
+    emm_sweep *S = NULL, *W = NULL;
     emm_error e;
-    if (emm_sweep_records(m, info, syn, ns, S, &e) != EMM_OK ||
-        emm_sweep_records(m, info, recs, n, W, &e) != EMM_OK) {
+    if (emm_sweep_records(m, info, syn, ns, threads, &S, &e) != EMM_OK ||
+        emm_sweep_records(m, info, recs, n, threads, &W, &e) != EMM_OK) {
         st = e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
         goto done;
     }
@@ -669,8 +657,8 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
         out->synth_visits = (size_t)so.visits;
     }
 done:
-    free(S);
-    free(W);
+    emm_sweep_free(S);
+    emm_sweep_free(W);
     free(syn);
     return st;
 }
@@ -678,7 +666,7 @@ done:
 emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
                                const emm_trace_info *info, const emm_trace_record *recs, size_t n,
                                const double f[EMM_FEATURES], size_t accesses, const char *name,
-                               double threshold, int simulate, emm_window_decision *out,
+                               const emm_decide_options *opt, emm_window_decision *out,
                                emm_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -686,18 +674,18 @@ emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
     out->accesses = accesses;
     emm_status st;
     if (t && t->n > 0) {
-        if ((st = emm_table_decide(t, out->f, threshold, &out->table, err)) != EMM_OK)
+        if ((st = emm_table_decide(t, out->f, opt ? opt->threshold : 0, &out->table, err)) !=
+            EMM_OK)
             return st;
         out->has_table = 1;
         out->strategy = out->table.strategy;
         out->how = EMM_DECIDED_TABLE;
     }
-    if (!simulate && out->has_table && !out->table.novel)
-        return m ? check_pattern(m, info, recs, n, name, out, err) : EMM_OK;
-    emm_sweep *sw = malloc(sizeof *sw);
-    if (!sw)
-        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
-    st = emm_sweep_records(m, info, recs, n, sw, err);
+    const emm_threads *threads = opt ? opt->threads : NULL;
+    if (!(opt && opt->simulate) && out->has_table && !out->table.novel)
+        return m ? check_pattern(m, info, recs, n, name, threads, out, err) : EMM_OK;
+    emm_sweep *sw = NULL;
+    st = emm_sweep_records(m, info, recs, n, threads, &sw, err);
     if (st == EMM_OK) {
         out->simulated = 1;
         out->how = EMM_DECIDED_WINDOW;
@@ -705,13 +693,13 @@ emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
         out->cycles = sw->result[sw->best].total;
         out->candidates = sw->simulated;
     }
-    free(sw);
+    emm_sweep_free(sw);
     return st;
 }
 
 emm_status emm_decide_window(const emm_table *t, const emm_machine *m, const emm_trace_info *info,
                              const emm_trace_record *recs, size_t n, const char *name,
-                             double threshold, int simulate, emm_window_decision *out,
+                             const emm_decide_options *opt, emm_window_decision *out,
                              emm_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -739,7 +727,7 @@ emm_status emm_decide_window(const emm_table *t, const emm_machine *m, const emm
     double f[EMM_FEATURES];
     size_t skip;
     emm_profiler_swept(p, &skip);
-    st = emm_profile_compute(xy, np, D, NULL, err);
+    st = emm_profile_compute(xy, np, D, NULL, opt ? opt->threads : NULL, err);
     emm_profiler_free(p);
     if (st == EMM_OK)
         st = emm_profile_features(D, np, name, f, err);
@@ -747,6 +735,5 @@ emm_status emm_decide_window(const emm_table *t, const emm_machine *m, const emm
     if (st != EMM_OK)
         return st;
     /* The window proper starts after the leading sweep, as the session's does. */
-    return emm_decide_features(t, m, info, recs + skip, n - skip, f, np, name, threshold,
-                               simulate, out, err);
+    return emm_decide_features(t, m, info, recs + skip, n - skip, f, np, name, opt, out, err);
 }

@@ -21,9 +21,12 @@
     if (!real_##name)                                     \
         real_##name = (__typeof__(name) *)dlsym(RTLD_NEXT, #name)
 
+static bool wanted(void);
+const struct shim_capture_ops shim_capture_api = {.kind = EMM_CAPTURE_API, .wanted = wanted};
+
 static bool api_active(void)
 {
-    return shim.capture == SHIM_CAPTURE_API && shim.enabled && !shim.finished && !shim_busy;
+    return shim.ops == &shim_capture_api && shim.enabled && !shim.finished && !shim_busy;
 }
 
 
@@ -45,23 +48,17 @@ static void tag_mesh(const emm_mesh *m)
 {
     shim_busy++;
     size_t nv = emm_mesh_vertex_count(m), nt = emm_mesh_triangle_count(m);
-    if (nv > 0) {
-        const char *v0 = (const char *)real_vertex(m, 0);
-        size_t stride = nv > 1 ? (size_t)((const char *)real_vertex(m, 1) - v0) : sizeof(emm_vertex);
-        shim_busy--;
-        shim_tag_array(EMM_ARRAY_VERTICES, v0, nv * stride, stride, offsetof(emm_vertex, xyz),
-                       EMM_F64, false, NULL, 0);
-        shim_busy++;
-    }
-    if (nt > 0) {
-        const char *t0 = (const char *)real_triangle(m, 0);
-        size_t stride = nt > 1 ? (size_t)((const char *)real_triangle(m, 1) - t0) : sizeof(emm_triangle);
-        shim_busy--;
-        shim_tag_array(EMM_ARRAY_TRIANGLES, t0, nt * stride, stride, offsetof(emm_triangle, v),
-                       EMM_I32, false, NULL, 0);
-        shim_busy++;
-    }
+    const char *v0 = nv ? (const char *)real_vertex(m, 0) : NULL;
+    const char *t0 = nt ? (const char *)real_triangle(m, 0) : NULL;
+    size_t vs = nv > 1 ? (size_t)((const char *)real_vertex(m, 1) - v0) : sizeof(emm_vertex);
+    size_t ts = nt > 1 ? (size_t)((const char *)real_triangle(m, 1) - t0) : sizeof(emm_triangle);
     shim_busy--;
+    if (v0)
+        shim_tag_array(EMM_ARRAY_VERTICES, v0, nv * vs, vs, offsetof(emm_vertex, xyz), EMM_F64,
+                       false, NULL, 0);
+    if (t0)
+        shim_tag_array(EMM_ARRAY_TRIANGLES, t0, nt * ts, ts, offsetof(emm_triangle, v), EMM_I32,
+                       false, NULL, 0);
 }
 
 emm_status emm_mesh_open(const char *path, emm_mesh **out, emm_error *err)
@@ -98,7 +95,7 @@ emm_status emm_mesh_generate(const emm_gen_options *opt, emm_mesh **out, emm_err
 void emm_mesh_free(emm_mesh *m)
 {
     REAL(emm_mesh_free);
-    if (m && shim.capture == SHIM_CAPTURE_API && shim.enabled && !shim_busy) {
+    if (m && shim.ops == &shim_capture_api && shim.enabled && !shim_busy) {
         shim_busy++;
         const void *v0 = emm_mesh_vertex_count(m) ? (const void *)real_vertex(m, 0) : NULL;
         const void *t0 = emm_mesh_triangle_count(m) ? (const void *)real_triangle(m, 0) : NULL;
@@ -196,9 +193,17 @@ static int first_object(struct dl_phdr_info *info, size_t size, void *arg)
     return 1; /* only the main program */
 }
 
-bool shim_program_imports(const char *name)
+static bool imports(const char *name)
 {
     struct import_query q = {name, false};
     dl_iterate_phdr(first_object, &q);
     return q.found;
+}
+
+/* A program written against the mesh interface, that keeps no arrays of its
+ * own for the shim to watch. */
+static bool wanted(void)
+{
+    return shim.config.tags.n == 0 && !imports("emm_tag_vertices") &&
+           (imports("emm_mesh_vertex") || imports("emm_mesh_triangle"));
 }

@@ -60,22 +60,17 @@ static size_t page_size(void)
     return ps;
 }
 
-int shim_real_sigaction(int sig, const struct sigaction *act, struct sigaction *old)
-{
-    static int (*real)(int, const struct sigaction *, struct sigaction *);
-    if (!real)
-        real = (int (*)(int, const struct sigaction *, struct sigaction *))dlsym(RTLD_NEXT, "sigaction");
-    return real(sig, act, old);
-}
-
-bool shim_fault_watching(void)
+static bool watching_now(void)
 {
     return __atomic_load_n(&watching, __ATOMIC_RELAXED);
 }
 
-void *shim_fault_map(size_t size, size_t *map_len)
+/* A block a rule tags while profiling gets pages of its own. */
+static void *map(size_t size, size_t align, size_t *map_len)
 {
     size_t ps = page_size();
+    if (!watching_now() || align > ps)
+        return NULL;
     size_t len = (size + ps - 1) & ~(ps - 1);
     if (len < size)
         return NULL;
@@ -86,7 +81,7 @@ void *shim_fault_map(size_t size, size_t *map_len)
     return p;
 }
 
-void shim_fault_protect(struct shim_tag *t)
+static void protect(struct shim_tag *t)
 {
     size_t i = (size_t)(t - shim.tags), ps = page_size();
     uintptr_t plo, phi;
@@ -108,7 +103,7 @@ void shim_fault_protect(struct shim_tag *t)
     t->protected_ = true;
 }
 
-void shim_fault_unprotect(struct shim_tag *t)
+static void unprotect(struct shim_tag *t)
 {
     size_t i = (size_t)(t - shim.tags);
     uintptr_t plo = reg[i].plo, phi = reg[i].phi;
@@ -120,17 +115,32 @@ void shim_fault_unprotect(struct shim_tag *t)
     t->protected_ = false;
 }
 
-void shim_fault_lift(void)
+static void on_tag_locked(struct shim_tag *t)
+{
+    if (t->protected_)
+        unprotect(t);
+    if (watching_now())
+        protect(t);
+}
+
+static void on_untag_locked(struct shim_tag *t)
+{
+    if (t->protected_)
+        unprotect(t);
+}
+
+/* The window closed: every protection is lifted and capture stops. */
+static void lift_locked(void)
 {
     __atomic_store_n(&watching, false, __ATOMIC_RELAXED);
     for (size_t i = 0; i < SHIM_MAX_TAGS; i++)
         if (shim.tags[i].base && shim.tags[i].protected_)
-            shim_fault_unprotect(&shim.tags[i]);
+            unprotect(&shim.tags[i]);
 }
 
-void shim_fault_child(void)
+static void fork_child(void)
 {
-    shim_fault_lift();
+    lift_locked();
     npending = 0;
 }
 
@@ -188,7 +198,7 @@ static void on_segv(int sig, siginfo_t *si, void *uctx)
     ucontext_t *uc = uctx;
     uintptr_t page = a & ~(uintptr_t)(page_size() - 1);
     bool write = (uc->uc_mcontext.gregs[REG_ERR] & 2) != 0;
-    if (shim_fault_watching() && !shim_busy && a >= reg[r].lo && a < reg[r].hi)
+    if (watching_now() && !shim_busy && a >= reg[r].lo && a < reg[r].hi)
         shim_record(a, 8, write);
     mprotect((void *)page, page_size(), PROT_READ | PROT_WRITE);
     if (npending < 4)
@@ -205,15 +215,16 @@ static void on_trap(int sig, siginfo_t *si, void *uctx)
     }
     for (int i = 0; i < npending; i++) {
         int r = region_of(pending[i]);
-        if (r >= 0 && shim_fault_watching() && __atomic_load_n(&reg[r].io, __ATOMIC_RELAXED) == 0)
+        if (r >= 0 && watching_now() && __atomic_load_n(&reg[r].io, __ATOMIC_RELAXED) == 0)
             mprotect((void *)pending[i], page_size(), PROT_NONE);
     }
     npending = 0;
     uc->uc_mcontext.gregs[REG_EFL] &= ~(greg_t)TRAP_FLAG;
 }
 
-bool shim_fault_init(void)
+static bool init(char *msg, size_t cap)
 {
+    snprintf(msg, cap, "EMM_CAPTURE=fault: cannot install the SIGSEGV/SIGTRAP handlers");
     if (shim_real_sigaction(SIGSEGV, NULL, &saved_segv) != 0
         || shim_real_sigaction(SIGTRAP, NULL, &saved_trap) != 0)
         return false;
@@ -232,10 +243,20 @@ bool shim_fault_init(void)
     return true;
 }
 
+const struct shim_capture_ops shim_capture_fault = {
+    .kind = EMM_CAPTURE_FAULT,
+    .init = init,
+    .map = map,
+    .on_tag_locked = on_tag_locked,
+    .on_untag_locked = on_untag_locked,
+    .before_decide_locked = lift_locked,
+    .fork_child = fork_child,
+};
+
 /* --- the program's signal handlers ------------------------------------- */
 
-EMM_API int sigaction(int sig, const struct sigaction *act, struct sigaction *old);
-EMM_API sighandler_t signal(int sig, sighandler_t handler);
+SHIM_API int sigaction(int sig, const struct sigaction *act, struct sigaction *old);
+SHIM_API sighandler_t signal(int sig, sighandler_t handler);
 
 int sigaction(int sig, const struct sigaction *act, struct sigaction *old)
 {
@@ -272,7 +293,7 @@ sighandler_t signal(int sig, sighandler_t handler)
 /* Opens the protected pages that [p, p + n) touches; returns which. */
 static uint64_t io_begin(const void *p, size_t n)
 {
-    if (!__atomic_load_n(&installed, __ATOMIC_RELAXED) || !shim_fault_watching() || shim_busy || n == 0)
+    if (!__atomic_load_n(&installed, __ATOMIC_RELAXED) || !watching_now() || shim_busy || n == 0)
         return 0;
     uintptr_t a = (uintptr_t)p, b = a + n;
     uint64_t mask = 0;
@@ -304,7 +325,7 @@ static void io_end(uint64_t mask)
     pthread_mutex_lock(&shim.lock);
     for (int i = 0; i < SHIM_MAX_TAGS; i++)
         if ((mask >> i & 1) && reg[i].io > 0 && --reg[i].io == 0 && reg[i].plo < reg[i].phi
-            && shim_fault_watching())
+            && watching_now())
             mprotect((void *)reg[i].plo, reg[i].phi - reg[i].plo, PROT_NONE);
     pthread_mutex_unlock(&shim.lock);
     shim_busy--;
@@ -316,83 +337,24 @@ static void io_end(uint64_t mask)
     if (!real_##name)                                     \
         real_##name = (__typeof__(name) *)dlsym(RTLD_NEXT, #name)
 
-EMM_API ssize_t read(int fd, void *buf, size_t n);
-EMM_API ssize_t write(int fd, const void *buf, size_t n);
-EMM_API ssize_t pread(int fd, void *buf, size_t n, off_t off);
-EMM_API ssize_t pwrite(int fd, const void *buf, size_t n, off_t off);
-EMM_API ssize_t recv(int fd, void *buf, size_t n, int flags);
-EMM_API ssize_t send(int fd, const void *buf, size_t n, int flags);
-EMM_API size_t fread(void *buf, size_t size, size_t n, FILE *f);
-EMM_API size_t fwrite(const void *buf, size_t size, size_t n, FILE *f);
-
-ssize_t read(int fd, void *buf, size_t n)
-{
-    REAL(read);
-    uint64_t m = io_begin(buf, n);
-    ssize_t r = real_read(fd, buf, n);
-    io_end(m);
-    return r;
-}
-
-ssize_t write(int fd, const void *buf, size_t n)
-{
-    REAL(write);
-    uint64_t m = io_begin(buf, n);
-    ssize_t r = real_write(fd, buf, n);
-    io_end(m);
-    return r;
-}
-
-ssize_t pread(int fd, void *buf, size_t n, off_t off)
-{
-    REAL(pread);
-    uint64_t m = io_begin(buf, n);
-    ssize_t r = real_pread(fd, buf, n, off);
-    io_end(m);
-    return r;
-}
-
-ssize_t pwrite(int fd, const void *buf, size_t n, off_t off)
-{
-    REAL(pwrite);
-    uint64_t m = io_begin(buf, n);
-    ssize_t r = real_pwrite(fd, buf, n, off);
-    io_end(m);
-    return r;
-}
-
-ssize_t recv(int fd, void *buf, size_t n, int flags)
-{
-    REAL(recv);
-    uint64_t m = io_begin(buf, n);
-    ssize_t r = real_recv(fd, buf, n, flags);
-    io_end(m);
-    return r;
-}
-
-ssize_t send(int fd, const void *buf, size_t n, int flags)
-{
-    REAL(send);
-    uint64_t m = io_begin(buf, n);
-    ssize_t r = real_send(fd, buf, n, flags);
-    io_end(m);
-    return r;
-}
-
-size_t fread(void *buf, size_t size, size_t n, FILE *f)
-{
-    REAL(fread);
-    uint64_t m = size && n <= SIZE_MAX / size ? io_begin(buf, size * n) : 0;
-    size_t r = real_fread(buf, size, n, f);
-    io_end(m);
-    return r;
-}
-
-size_t fwrite(const void *buf, size_t size, size_t n, FILE *f)
-{
-    REAL(fwrite);
-    uint64_t m = size && n <= SIZE_MAX / size ? io_begin(buf, size * n) : 0;
-    size_t r = real_fwrite(buf, size, n, f);
-    io_end(m);
-    return r;
-}
+/* Each wrapper opens the pages its buffer touches for the call. */
+#define IO_WRAP(ret, name, params, args, buf, len)                                            \
+    SHIM_API ret name params;                                                                 \
+    ret name params                                                                           \
+    {                                                                                         \
+        REAL(name);                                                                           \
+        uint64_t m = io_begin(buf, len);                                                      \
+        ret r = real_##name args;                                                             \
+        io_end(m);                                                                            \
+        return r;                                                                             \
+    }
+IO_WRAP(ssize_t, read, (int fd, void *b, size_t n), (fd, b, n), b, n)
+IO_WRAP(ssize_t, write, (int fd, const void *b, size_t n), (fd, b, n), b, n)
+IO_WRAP(ssize_t, pread, (int fd, void *b, size_t n, off_t o), (fd, b, n, o), b, n)
+IO_WRAP(ssize_t, pwrite, (int fd, const void *b, size_t n, off_t o), (fd, b, n, o), b, n)
+IO_WRAP(ssize_t, recv, (int fd, void *b, size_t n, int fl), (fd, b, n, fl), b, n)
+IO_WRAP(ssize_t, send, (int fd, const void *b, size_t n, int fl), (fd, b, n, fl), b, n)
+IO_WRAP(size_t, fread, (void *b, size_t s, size_t n, FILE *f), (b, s, n, f), b,
+        s && n <= SIZE_MAX / s ? s * n : 0)
+IO_WRAP(size_t, fwrite, (const void *b, size_t s, size_t n, FILE *f), (b, s, n, f), b,
+        s && n <= SIZE_MAX / s ? s * n : 0)

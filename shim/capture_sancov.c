@@ -12,17 +12,64 @@
  * thread's buffer. Edges between two recorded accesses are counted as the
  * record's `work`. (clang 14's `edge` alone emits no callbacks; trace-pc-guard
  * is edge coverage with a callback.) */
+#include <dlfcn.h>
+#include <errno.h>
+#include <stdio.h>
+
 #include "shim.h"
 
-#define SANCOV_API __attribute__((visibility("default")))
+#define MAX_RANGES SHIM_MAX_TAGS
+
+static uint64_t range_lo[MAX_RANGES], range_len[MAX_RANGES];
+static size_t nranges; /* atomic: the filter's snapshot */
+
+static void ranges_locked(void)
+{
+    uint64_t lo[MAX_RANGES], hi[MAX_RANGES];
+    __atomic_store_n(&nranges, 0, __ATOMIC_RELEASE);
+    size_t n = shim_ranges_locked(lo, hi, MAX_RANGES);
+    for (size_t i = 0; i < n; i++) {
+        __atomic_store_n(&range_lo[i], lo[i], __ATOMIC_RELAXED);
+        __atomic_store_n(&range_len[i], hi[i] - lo[i], __ATOMIC_RELAXED);
+    }
+    __atomic_store_n(&nranges, n, __ATOMIC_RELEASE);
+}
+
+static void fork_child(void)
+{
+    __atomic_store_n(&nranges, 0, __ATOMIC_RELEASE);
+}
+
+/* A program built with emm_sancov_executable links libemmhooks.so. */
+static bool wanted(void)
+{
+    return dlsym(RTLD_DEFAULT, "emm_sancov_hooks_present") != NULL;
+}
+
+static bool init(char *msg, size_t cap)
+{
+    (void)msg; (void)cap;
+    if (!wanted() && shim.config.log >= 1)
+        shim_log("EMM_CAPTURE=sancov, but %s was not built with emm_sancov_executable: "
+                 "no accesses will be seen", program_invocation_short_name);
+    return true;
+}
+
+const struct shim_capture_ops shim_capture_sancov = {
+    .kind = EMM_CAPTURE_SANCOV,
+    .wanted = wanted,
+    .init = init,
+    .ranges_locked = ranges_locked,
+    .fork_child = fork_child,
+};
 
 static inline void hit(const void *p, uint32_t bytes, bool write)
 {
     uint64_t a = (uint64_t)(uintptr_t)p;
-    size_t n = __atomic_load_n(&shim.nranges, __ATOMIC_ACQUIRE);
+    size_t n = __atomic_load_n(&nranges, __ATOMIC_ACQUIRE);
     for (size_t i = 0; i < n; i++) {
-        if (a - __atomic_load_n(&shim.range_lo[i], __ATOMIC_RELAXED)
-            < __atomic_load_n(&shim.range_len[i], __ATOMIC_RELAXED)) {
+        if (a - __atomic_load_n(&range_lo[i], __ATOMIC_RELAXED)
+            < __atomic_load_n(&range_len[i], __ATOMIC_RELAXED)) {
             if (!shim_busy)
                 shim_record(a, bytes, write);
             return;
@@ -30,29 +77,19 @@ static inline void hit(const void *p, uint32_t bytes, bool write)
     }
 }
 
-SANCOV_API void __sanitizer_cov_load1(uint8_t *p);
-SANCOV_API void __sanitizer_cov_load2(uint16_t *p);
-SANCOV_API void __sanitizer_cov_load4(uint32_t *p);
-SANCOV_API void __sanitizer_cov_load8(uint64_t *p);
-SANCOV_API void __sanitizer_cov_load16(__int128 *p);
-SANCOV_API void __sanitizer_cov_store1(uint8_t *p);
-SANCOV_API void __sanitizer_cov_store2(uint16_t *p);
-SANCOV_API void __sanitizer_cov_store4(uint32_t *p);
-SANCOV_API void __sanitizer_cov_store8(uint64_t *p);
-SANCOV_API void __sanitizer_cov_store16(__int128 *p);
-SANCOV_API void __sanitizer_cov_trace_pc_guard(uint32_t *guard);
-SANCOV_API void __sanitizer_cov_trace_pc_guard_init(uint32_t *start, uint32_t *stop);
+#define HOOKS(N, T)                                                                          \
+    SHIM_API void __sanitizer_cov_load##N(T *p);                                              \
+    SHIM_API void __sanitizer_cov_store##N(T *p);                                             \
+    void __sanitizer_cov_load##N(T *p) { hit(p, N, false); }                                  \
+    void __sanitizer_cov_store##N(T *p) { hit(p, N, true); }
+HOOKS(1, uint8_t)
+HOOKS(2, uint16_t)
+HOOKS(4, uint32_t)
+HOOKS(8, uint64_t)
+HOOKS(16, __int128)
 
-void __sanitizer_cov_load1(uint8_t *p) { hit(p, 1, false); }
-void __sanitizer_cov_load2(uint16_t *p) { hit(p, 2, false); }
-void __sanitizer_cov_load4(uint32_t *p) { hit(p, 4, false); }
-void __sanitizer_cov_load8(uint64_t *p) { hit(p, 8, false); }
-void __sanitizer_cov_load16(__int128 *p) { hit(p, 16, false); }
-void __sanitizer_cov_store1(uint8_t *p) { hit(p, 1, true); }
-void __sanitizer_cov_store2(uint16_t *p) { hit(p, 2, true); }
-void __sanitizer_cov_store4(uint32_t *p) { hit(p, 4, true); }
-void __sanitizer_cov_store8(uint64_t *p) { hit(p, 8, true); }
-void __sanitizer_cov_store16(__int128 *p) { hit(p, 16, true); }
+SHIM_API void __sanitizer_cov_trace_pc_guard(uint32_t *guard);
+SHIM_API void __sanitizer_cov_trace_pc_guard_init(uint32_t *start, uint32_t *stop);
 
 void __sanitizer_cov_trace_pc_guard(uint32_t *guard)
 {

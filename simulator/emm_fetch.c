@@ -23,10 +23,11 @@
 
 #include "dma.h"
 #include "error.h"
+#include "fetch_scheme.h"
 #include "model.h"
+#include "parse.h"
 
-#define NONE UINT32_MAX
-#define MAX_FIFO 64u
+#define NONE EMM_LAYOUT_NONE
 
 enum { ARR_VERTICES = 0, ARR_TRIANGLES = 1, ARR_OTHER = 2 };
 
@@ -35,9 +36,16 @@ enum { ARR_VERTICES = 0, ARR_TRIANGLES = 1, ARR_OTHER = 2 };
  * (docs/fetch.md, "Prefetch filter"). */
 enum { CELL_PRESENT = 1u, CELL_PREFETCHED = 2u, CELL_USELESS = 4u };
 
-typedef struct fetch_model {
+/* The schemes, from EMM_FETCH_LIST. */
+#define OPS_(e, n) [EMM_FETCH_##e] = &emm_fetch_##n##_ops,
+static const struct emm_fetch_ops *const schemes[EMM_FETCH_COUNT] = {EMM_FETCH_LIST(OPS_)};
+#undef OPS_
+
+struct fetch_model {
     struct emm_model base;
-    emm_fetch_kind fetch;
+    const struct emm_fetch_ops *scheme;
+    void *scheme_state;    /* scheme->state_bytes */
+    emm_machine_params params;
     emm_layout *layout;
     emm_addr_map map;
 
@@ -56,7 +64,7 @@ typedef struct fetch_model {
     uint64_t residency, predict, issue_instr, local_cycles;
     uint64_t compute_per_access, compute_per_work;
     uint64_t direct_read, direct_write;
-    uint32_t word_shift, fifo_cap;
+    uint32_t word_shift;
     bool filter; /* emm.prefetch_filter */
     uint64_t budget, lookup_bytes;
 
@@ -72,8 +80,6 @@ typedef struct fetch_model {
     uint64_t used;         /* bytes of present cells (resident or in flight) */
     uint32_t cur;          /* the cell of the previous access */
     uint32_t last_tri;     /* the cell of the latest triangle access */
-    uint8_t fifo[MAX_FIFO];
-    uint32_t fifo_len, fifo_pos;
     uint64_t accesses;
     uint64_t cell_changes, demand_fetches, demand_bytes, prefetches, prefetch_bytes;
     uint64_t useful_prefetches, dropped_prefetches, filtered_prefetches, evictions;
@@ -81,7 +87,8 @@ typedef struct fetch_model {
 
     emm_fetch_evict_hook hook;
     void *hook_ctx;
-} fetch_model;
+};
+typedef struct fetch_model fetch_model;
 
 /* ---- the LRU list ---------------------------------------------------------- */
 
@@ -200,7 +207,7 @@ static void demand_fetch(fetch_model *m, uint32_t c)
  * keep pushing the cells in use out. A prefetch that finds no room without
  * evicting a cell in flight is dropped: waiting would stall the core for a
  * guess. */
-static void prefetch(fetch_model *m, uint32_t c, uint32_t entered)
+void emm_fetcher_prefetch(fetch_model *m, uint32_t c, uint32_t entered)
 {
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->lookup_cost[c]);
     if (m->cell_ntri[c] == 0)
@@ -222,46 +229,19 @@ static void prefetch(fetch_model *m, uint32_t c, uint32_t entered)
     m->prefetch_bytes += m->cell_bytes[c];
 }
 
-static void convolution(fetch_model *m, uint32_t c)
+const emm_layout *emm_fetcher_layout(const emm_fetcher *f)
 {
-    const uint32_t *nb;
-    uint32_t n = emm_layout_neighbors(m->layout, c, &nb, NULL);
-    for (uint32_t i = 0; i < n; i++)
-        prefetch(m, nb[i], c);
+    return f->layout;
 }
 
-/* Thesis §4.2.2: the moves between consecutive cells go into a FIFO; the
- * side that most of them point to is where the program goes next. A grid's
- * diagonal move counts for both its sides. Ties go to the side of the most
- * recent move that has one. */
-static void extrapolate(fetch_model *m, uint32_t from, uint32_t to)
+const emm_machine_params *emm_fetcher_params(const emm_fetcher *f)
 {
-    unsigned count[4] = {0, 0, 0, 0}, best = 0, side = 0;
-    const uint32_t *nb;
-    const uint8_t *sides;
-    uint32_t n;
+    return &f->params;
+}
 
-    m->fifo[m->fifo_pos] = (uint8_t)emm_layout_move_side(m->layout, from, to);
-    m->fifo_pos = (m->fifo_pos + 1) % m->fifo_cap;
-    if (m->fifo_len < m->fifo_cap)
-        m->fifo_len++;
-    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->predict);
-    for (uint32_t i = 0; i < m->fifo_len; i++)
-        for (unsigned b = 0; b < 4; b++)
-            if (m->fifo[i] & (1u << b) && ++count[b] > best)
-                best = count[b];
-    for (uint32_t k = 1; k <= m->fifo_len && !side; k++) {
-        uint8_t mv = m->fifo[(m->fifo_pos + m->fifo_cap - k) % m->fifo_cap];
-        for (unsigned b = 0; b < 4 && !side; b++)
-            if (mv & (1u << b) && count[b] == best)
-                side = 1u << b;
-    }
-    if (!side)
-        return;
-    n = emm_layout_neighbors(m->layout, to, &nb, &sides);
-    for (uint32_t i = 0; i < n; i++)
-        if (sides[i] & side)
-            prefetch(m, nb[i], to);
+void emm_fetcher_instructions(emm_fetcher *f, uint64_t cycles)
+{
+    charge(f, EMM_BUCKET_EMM_INSTRUCTIONS, cycles);
 }
 
 /* ---- the record loop --------------------------------------------------------- */
@@ -323,10 +303,8 @@ static void access_one(fetch_model *m, const emm_trace_record *r)
             m->useful_prefetches++;
             m->flags[c] &= (uint8_t)~CELL_PREFETCHED;
         }
-        if (m->fetch == EMM_FETCH_CONVOLUTION)
-            convolution(m, c);
-        else if (m->fetch == EMM_FETCH_EXTRAPOLATED && from != NONE)
-            extrapolate(m, from, c);
+        if (m->scheme->enter)
+            m->scheme->enter(m, m->scheme_state, from, c);
     } else if (!(m->flags[c] & CELL_PRESENT)) {
         demand_fetch(m, c); /* only after a reset of the residency by hand */
     }
@@ -360,7 +338,10 @@ static void fetch_reset(emm_model *model)
     m->head = m->tail = NONE;
     m->used = 0;
     m->cur = m->last_tri = NONE;
-    m->fifo_len = m->fifo_pos = 0;
+    if (m->scheme->state_bytes)
+        memset(m->scheme_state, 0, m->scheme->state_bytes);
+    if (m->scheme->reset)
+        m->scheme->reset(m->scheme_state, &m->params);
     m->accesses = 0;
     m->cell_changes = m->demand_fetches = m->demand_bytes = 0;
     m->prefetches = m->prefetch_bytes = 0;
@@ -413,25 +394,13 @@ static void fetch_destroy(emm_model *model)
     free(m->next);
     free(m->flags);
     free(m->cell_dma);
+    free(m->scheme_state);
     free(m);
 }
 
 static const struct emm_model_ops fetch_ops = {fetch_run, fetch_reset, fetch_result, fetch_destroy};
 
 /* ---- construction ------------------------------------------------------------ */
-
-static char *grouped(uint64_t v, char *buf, size_t cap)
-{
-    char tmp[32];
-    int n = snprintf(tmp, sizeof tmp, "%llu", (unsigned long long)v), o = 0;
-    for (int i = 0; i < n && (size_t)o + 2 < cap; i++) {
-        if (i > 0 && (n - i) % 3 == 0)
-            buf[o++] = ',';
-        buf[o++] = tmp[i];
-    }
-    buf[o] = '\0';
-    return buf;
-}
 
 /* Builds the layout and the local store its cells may use: local.bytes
  * minus the layout's own look-up tables (docs/fetch.md, "The local store").
@@ -465,8 +434,8 @@ static emm_status build_layout(fetch_model *m, const emm_machine_params *p, cons
         return emm_fail(err, EMM_ERR_RANGE,
                         "%s: the layout's look-up tables take %s bytes, more than the %s-byte "
                         "local store (local.bytes)",
-                        name, grouped(m->lookup_bytes, b1, sizeof b1),
-                        grouped(p->local_bytes, b2, sizeof b2));
+                        name, emm_grouped(m->lookup_bytes, b1),
+                        emm_grouped(p->local_bytes, b2));
     m->budget = p->local_bytes - m->lookup_bytes;
     for (uint32_t c = 0; c < emm_layout_cell_count(m->layout); c++)
         if (emm_layout_cell_get(m->layout, c)->bytes > largest)
@@ -475,7 +444,7 @@ static emm_status build_layout(fetch_model *m, const emm_machine_params *p, cons
         emm_layout *again = NULL;
         o.local_store = m->budget;
         snprintf(where, sizeof where, "%s (local store less %s bytes of look-up tables)", name,
-                 grouped(m->lookup_bytes, b1, sizeof b1));
+                 emm_grouped(m->lookup_bytes, b1));
         st = emm_layout_build(g->xyz, (size_t)g->nv, g->tri, (size_t)g->nt, &o, where, &again,
                               err);
         if (st == EMM_OK) { /* cannot happen: the same build, now checked */
@@ -483,8 +452,8 @@ static emm_status build_layout(fetch_model *m, const emm_machine_params *p, cons
             return emm_fail(err, EMM_ERR_RANGE,
                             "%s: a cell of %s bytes does not fit the %s bytes of local store "
                             "left by the look-up tables: use a smaller CELL than %u",
-                            name, grouped(largest, b1, sizeof b1),
-                            grouped(m->budget, b2, sizeof b2), s->cell);
+                            name, emm_grouped(largest, b1),
+                            emm_grouped(m->budget, b2), s->cell);
         }
         return st;
     }
@@ -560,8 +529,15 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
     if (!m)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
     m->base.ops = &fetch_ops;
-    m->fetch = s->fetch;
+    m->scheme = schemes[s->fetch];
+    m->params = *p;
+    m->scheme_state = calloc(1, m->scheme->state_bytes ? m->scheme->state_bytes : 1);
+    if (!m->scheme_state) {
+        free(m);
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+    }
     if ((st = emm_addr_map_init(&m->map, trace, err)) != EMM_OK) {
+        free(m->scheme_state);
         free(m);
         return st;
     }
@@ -600,7 +576,6 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
     while ((1ull << m->word_shift) < p->word_bytes)
         m->word_shift++;
     m->filter = p->emm_prefetch_filter != 0;
-    m->fifo_cap = p->emm_fifo >= 1 && p->emm_fifo <= MAX_FIFO ? (uint32_t)p->emm_fifo : 4;
     emm_dma_init(&m->dma, p);
     fetch_reset(&m->base);
     *out = &m->base;
@@ -636,7 +611,6 @@ const emm_layout *emm_fetch_layout(const emm_model *model)
 emm_status emm_model_cells(const emm_model *model, emm_result *out, emm_error *err)
 {
     const fetch_model *m = (const fetch_model *)model;
-    int axes[2];
     assert(model && out && !out->cells.cell);
     if (model->ops != &fetch_ops)
         return EMM_OK;
@@ -644,7 +618,7 @@ emm_status emm_model_cells(const emm_model *model, emm_result *out, emm_error *e
     if (!out->cells.cell)
         return emm_fail(err, EMM_ERR_NOMEM, "EMM model: out of memory for %u cells", m->ncells);
     out->cells.count = m->ncells;
-    emm_layout_axes(m->layout, axes, out->cells.lo, out->cells.hi);
+    out->cells.dims = emm_layout_axes(m->layout, NULL, out->cells.lo, out->cells.hi);
     for (uint32_t c = 0; c < m->ncells; c++) {
         const emm_layout_cell *cell = emm_layout_cell_get(m->layout, c);
         emm_cell_dma *o = &out->cells.cell[c];

@@ -1,9 +1,9 @@
-/* EMM mesh layouts: grid (thesis §4.1.1), interleaving tiles (§4.1.2) and
- * the parts every layout shares: cells by triangle centroid, vertex copies,
- * layout indices both ways, cell sizes and the packed remote image (§4.1:
- * struct CellData), neighbours and relative sides for the fetch schemes
- * (§4.2). The adaptive quadtree (§4.1.3) is in layout_quadtree.c.
- * docs/layouts.md explains the choices. */
+/* EMM mesh layouts (thesis §4.1): what every layout shares — cells by
+ * triangle centroid, vertex copies, layout indices both ways, cell sizes and
+ * the packed remote image (§4.1: struct CellData), the neighbour lists the
+ * fetch schemes read (§4.2) — and the dispatch to each kind's ops table:
+ * layout_grid.c (§4.1.1), layout_tiles.c (§4.1.2), both on layout_rows.c,
+ * and layout_quadtree.c (§4.1.3). docs/layouts.md explains the choices. */
 #include "layout_internal.h"
 
 #include <assert.h>
@@ -13,17 +13,25 @@
 #include <string.h>
 
 #include "error.h"
+#include "geom.h"
 #include "parse.h"
 
 /* Ids are 32-bit; vertex copies (at most 3 per triangle) must fit too. */
 #define MAX_TRIANGLES (UINT32_MAX / 3u - 1u)
 
+/* The kinds, from EMM_LAYOUT_LIST. */
+#define OPS_(e, n) [EMM_LAYOUT_##e] = &emm_layout_##n##_ops,
+static const struct emm_layout_ops *const kinds[EMM_LAYOUT_COUNT] = {EMM_LAYOUT_LIST(OPS_)};
+#undef OPS_
+
 void emm_layout_free(emm_layout *l)
 {
     if (!l)
         return;
-    free(l->nodes);
-    free(l->leaf_node);
+    if (l->ops && l->ops->destroy)
+        l->ops->destroy(l);
+    else
+        free(l->priv);
     free(l->cells);
     free(l->tri_cell);
     free(l->tri_pos);
@@ -41,13 +49,25 @@ void emm_layout_free(emm_layout *l)
 }
 
 
-static emm_status nomem(emm_error *err, const char *name)
+emm_status emm_layout_nomem(emm_error *err, const char *name)
 {
     return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory building the layout", name);
 }
 
-/* The bounding box of the vertices triangles use, and the two axes along
- * which it is largest (ties keep the lower axis, so a planar mesh uses x, y). */
+emm_status emm_layout_fill_sides(emm_layout *l, const char *name, emm_error *err)
+{
+    uint32_t n = l->nb_start[l->ncells];
+    l->nb_side = malloc((size_t)n + 1);
+    if (!l->nb_side)
+        return emm_layout_nomem(err, name);
+    for (uint32_t c = 0; c < l->ncells; c++)
+        for (uint32_t k = l->nb_start[c]; k < l->nb_start[c + 1]; k++)
+            l->nb_side[k] = (uint8_t)l->ops->move_side(l, c, l->nb[k]);
+    return EMM_OK;
+}
+
+/* The bounding box of the vertices triangles use, and the axes along which
+ * it is largest (core/geom.h: the one choice every layer makes). */
 static void choose_plane(emm_layout *l, const double *xyz, const int32_t *tri)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -60,195 +80,12 @@ static void choose_plane(emm_layout *l, const double *xyz, const int32_t *tri)
                 hi[a] = p[a];
         }
     }
-    int order[3] = {0, 1, 2};
-    for (int i = 0; i < 3; i++)
-        for (int j = i + 1; j < 3; j++)
-            if (hi[order[j]] - lo[order[j]] > hi[order[i]] - lo[order[i]]) {
-                int t = order[i];
-                order[i] = order[j];
-                order[j] = t;
-            }
-    /* Keep the plane's axes in ascending order (x before y before z). */
-    int a0 = order[0] < order[1] ? order[0] : order[1];
-    int a1 = order[0] < order[1] ? order[1] : order[0];
-    l->axes[0] = a0;
-    l->axes[1] = a1;
-    l->lo[0] = lo[a0];
-    l->hi[0] = hi[a0];
-    l->lo[1] = lo[a1];
-    l->hi[1] = hi[a1];
-}
-
-/* Grid and tiles: about ceil(nt / cell) cells, as cols × rows matching the
- * bounding box's aspect ratio so cells come out square-ish. */
-static void choose_dims(emm_layout *l)
-{
-    uint64_t want = (l->nt + l->opt.cell - 1) / l->opt.cell;
-    double w = l->hi[0] - l->lo[0], h = l->hi[1] - l->lo[1];
-    uint64_t cols, rows;
-    if (want <= 1 || (w <= 0 && h <= 0)) {
-        cols = rows = 1;
-    } else if (h <= 0) {
-        cols = want;
-        rows = 1;
-    } else if (w <= 0) {
-        cols = 1;
-        rows = want;
-    } else {
-        double c = sqrt((double)want * w / h);
-        cols = c < 1 ? 1 : c >= (double)want ? want : (uint64_t)llround(c);
-        if (cols < 1)
-            cols = 1;
-        rows = (want + cols - 1) / cols;
+    l->dims = 2;
+    emm_axes_largest(lo, hi, l->dims, l->axes);
+    for (uint32_t k = 0; k < l->dims; k++) {
+        l->lo[k] = lo[l->axes[k]];
+        l->hi[k] = hi[l->axes[k]];
     }
-    l->cols = (uint32_t)cols;
-    l->rows = (uint32_t)rows;
-    /* A flat extent gets unit-size cells: every point falls in cell 0 of
-     * that axis, and nothing divides by zero. */
-    l->cw = w > 0 ? w / (double)cols : 1;
-    l->ch = h > 0 ? h / (double)rows : 1;
-}
-
-static uint32_t clamp_index(double v, uint32_t n)
-{
-    if (!(v >= 0)) /* also NaN */
-        return 0;
-    if (v >= (double)n)
-        return n - 1;
-    return (uint32_t)v;
-}
-
-/* First cell of tiles row r: even rows have cols tiles, odd rows cols + 1. */
-static uint32_t tiles_row_start(const emm_layout *l, uint32_t r)
-{
-    return r * l->cols + r / 2;
-}
-
-static uint32_t tiles_row_len(const emm_layout *l, uint32_t r)
-{
-    return l->cols + (r & 1u);
-}
-
-static uint32_t cell_at_grid(const emm_layout *l, double a, double b)
-{
-    uint32_t r = clamp_index((b - l->lo[1]) / l->ch, l->rows);
-    if (l->opt.kind == EMM_LAYOUT_GRID)
-        return r * l->cols + clamp_index((a - l->lo[0]) / l->cw, l->cols);
-    /* Odd rows start half a tile left of the box. */
-    double x = (a - l->lo[0]) / l->cw + ((r & 1u) ? 0.5 : 0.0);
-    return tiles_row_start(l, r) + clamp_index(x, tiles_row_len(l, r));
-}
-
-static void grid_cells(emm_layout *l, const double *cx, const double *cy)
-{
-    for (uint32_t r = 0; r < l->rows; r++) {
-        uint32_t n = l->opt.kind == EMM_LAYOUT_GRID ? l->cols : tiles_row_len(l, r);
-        uint32_t first = l->opt.kind == EMM_LAYOUT_GRID ? r * l->cols : tiles_row_start(l, r);
-        double shift = (l->opt.kind == EMM_LAYOUT_TILES && (r & 1u)) ? -0.5 : 0.0;
-        for (uint32_t c = 0; c < n; c++) {
-            emm_layout_cell *cell = &l->cells[first + c];
-            cell->col = (int32_t)c;
-            cell->row = (int32_t)r;
-            cell->lo[0] = l->lo[0] + ((double)c + shift) * l->cw;
-            cell->hi[0] = l->lo[0] + ((double)c + 1 + shift) * l->cw;
-            cell->lo[1] = l->lo[1] + (double)r * l->ch;
-            cell->hi[1] = l->lo[1] + (double)(r + 1) * l->ch;
-        }
-    }
-    for (size_t t = 0; t < l->nt; t++)
-        l->tri_cell[t] = cell_at_grid(l, cx[t], cy[t]);
-}
-
-/* Doubled cell centres, exact in integers: tiles of odd rows sit half a
- * tile left of the even rows' tiles with the same column. */
-static void grid_centre2(const emm_layout *l, uint32_t c, int64_t *x2, int64_t *y2)
-{
-    const emm_layout_cell *cell = &l->cells[c];
-    int64_t shift = (l->opt.kind == EMM_LAYOUT_TILES && (cell->row & 1)) ? 0 : 1;
-    *x2 = 2 * (int64_t)cell->col + shift;
-    *y2 = 2 * (int64_t)cell->row + 1;
-}
-
-unsigned emm_layout_move_side(const emm_layout *l, uint32_t from, uint32_t to)
-{
-    assert(from < l->ncells && to < l->ncells);
-    unsigned s = 0;
-    if (l->opt.kind == EMM_LAYOUT_QUADTREE) {
-        /* Leaf squares in units of the finest level, exact. */
-        const emm_qt_node *na = &l->nodes[l->leaf_node[from]], *nb = &l->nodes[l->leaf_node[to]];
-        uint32_t sa = EMM_LAYOUT_MAX_DEPTH - na->depth, sb = EMM_LAYOUT_MAX_DEPTH - nb->depth;
-        uint64_t ax0 = (uint64_t)na->ix << sa, ax1 = (uint64_t)(na->ix + 1) << sa;
-        uint64_t ay0 = (uint64_t)na->iy << sa, ay1 = (uint64_t)(na->iy + 1) << sa;
-        uint64_t bx0 = (uint64_t)nb->ix << sb, bx1 = (uint64_t)(nb->ix + 1) << sb;
-        uint64_t by0 = (uint64_t)nb->iy << sb, by1 = (uint64_t)(nb->iy + 1) << sb;
-        if (bx1 <= ax0)
-            s |= EMM_SIDE_LEFT;
-        if (bx0 >= ax1)
-            s |= EMM_SIDE_RIGHT;
-        if (by1 <= ay0)
-            s |= EMM_SIDE_BOTTOM;
-        if (by0 >= ay1)
-            s |= EMM_SIDE_TOP;
-        return s;
-    }
-    int64_t fx, fy, tx, ty;
-    grid_centre2(l, from, &fx, &fy);
-    grid_centre2(l, to, &tx, &ty);
-    if (tx < fx)
-        s |= EMM_SIDE_LEFT;
-    if (tx > fx)
-        s |= EMM_SIDE_RIGHT;
-    if (ty < fy)
-        s |= EMM_SIDE_BOTTOM;
-    if (ty > fy)
-        s |= EMM_SIDE_TOP;
-    return s;
-}
-
-/* Grid: the 8 surrounding cells; tiles: 2 in the row, and the 2 tiles of
- * each adjacent row that overlap this one horizontally. */
-static emm_status grid_neighbors(emm_layout *l, const char *name, emm_error *err)
-{
-    size_t cap = (size_t)l->ncells * 8u;
-    l->nb_start = malloc(((size_t)l->ncells + 1) * sizeof *l->nb_start);
-    l->nb = malloc((size_t)cap * sizeof *l->nb);
-    l->nb_side = malloc((size_t)cap * sizeof *l->nb_side);
-    if (!l->nb_start || !l->nb || !l->nb_side)
-        return nomem(err, name);
-    uint32_t n = 0;
-    for (uint32_t c = 0; c < l->ncells; c++) {
-        l->nb_start[c] = n;
-        uint32_t r = (uint32_t)l->cells[c].row, k = (uint32_t)l->cells[c].col;
-        for (int dr = -1; dr <= 1; dr++) {
-            int64_t rr = (int64_t)r + dr;
-            if (rr < 0 || rr >= l->rows)
-                continue;
-            int64_t lo, hi; /* columns of row rr that touch cell c */
-            if (l->opt.kind == EMM_LAYOUT_GRID || dr == 0) {
-                lo = (int64_t)k - 1;
-                hi = (int64_t)k + 1;
-            } else if (r & 1u) { /* odd row: tile k spans [k-1/2, k+1/2) */
-                lo = (int64_t)k - 1;
-                hi = (int64_t)k;
-            } else { /* even row: tile k spans [k, k+1), odd neighbours k, k+1 */
-                lo = (int64_t)k;
-                hi = (int64_t)k + 1;
-            }
-            uint32_t len = l->opt.kind == EMM_LAYOUT_GRID ? l->cols : tiles_row_len(l, (uint32_t)rr);
-            uint32_t first = l->opt.kind == EMM_LAYOUT_GRID ? (uint32_t)rr * l->cols
-                                                            : tiles_row_start(l, (uint32_t)rr);
-            for (int64_t kk = lo; kk <= hi; kk++) {
-                if (kk < 0 || kk >= len || (dr == 0 && kk == k))
-                    continue;
-                uint32_t o = first + (uint32_t)kk;
-                l->nb[n] = o;
-                l->nb_side[n] = (uint8_t)emm_layout_move_side(l, c, o);
-                n++;
-            }
-        }
-    }
-    l->nb_start[l->ncells] = n;
-    return EMM_OK;
 }
 
 /* Counting sort of the triangles by cell: positions follow ascending ids. */
@@ -258,14 +95,14 @@ static emm_status fill_triangles(emm_layout *l, const char *name, emm_error *err
     l->cell_tris = malloc(l->nt * sizeof *l->cell_tris);
     l->tri_pos = malloc(l->nt * sizeof *l->tri_pos);
     if (!l->cell_tri_start || !l->cell_tris || !l->tri_pos)
-        return nomem(err, name);
+        return emm_layout_nomem(err, name);
     for (size_t t = 0; t < l->nt; t++)
         l->cell_tri_start[l->tri_cell[t] + 1]++;
     for (uint32_t c = 0; c < l->ncells; c++)
         l->cell_tri_start[c + 1] += l->cell_tri_start[c];
     uint32_t *next = malloc((size_t)l->ncells * sizeof *next);
     if (!next)
-        return nomem(err, name);
+        return emm_layout_nomem(err, name);
     memcpy(next, l->cell_tri_start, (size_t)l->ncells * sizeof *next);
     for (size_t t = 0; t < l->nt; t++) {
         uint32_t c = l->tri_cell[t];
@@ -289,7 +126,7 @@ static emm_status fill_vertices(emm_layout *l, const int32_t *tri, const char *n
     l->vcopy_start = calloc(l->nv + 1, sizeof *l->vcopy_start);
     if (!stamp || !l->cell_vert_start || !l->cell_verts || !l->vcopy_start) {
         free(stamp);
-        return nomem(err, name);
+        return emm_layout_nomem(err, name);
     }
     memset(stamp, 0xff, l->nv * sizeof *stamp);
     uint32_t n = 0;
@@ -323,7 +160,7 @@ static emm_status fill_vertices(emm_layout *l, const int32_t *tri, const char *n
     uint32_t *next = malloc((l->nv + 1) * sizeof *next);
     if (!l->vcopy || !next) {
         free(next);
-        return nomem(err, name);
+        return emm_layout_nomem(err, name);
     }
     memcpy(next, l->vcopy_start, (l->nv + 1) * sizeof *next);
     for (uint32_t c = 0; c < l->ncells; c++)
@@ -335,7 +172,7 @@ static emm_status fill_vertices(emm_layout *l, const int32_t *tri, const char *n
     if (l->nunused > 0) {
         l->unused_rank = malloc(l->nv * sizeof *l->unused_rank);
         if (!l->unused_rank)
-            return nomem(err, name);
+            return emm_layout_nomem(err, name);
         uint32_t k = 0;
         for (size_t v = 0; v < l->nv; v++)
             l->unused_rank[v] = l->vcopy_start[v + 1] == l->vcopy_start[v] ? k++ : UINT32_MAX;
@@ -389,62 +226,40 @@ static emm_status build_once(const double *xyz, size_t nv, const int32_t *tri, s
     emm_status st = EMM_OK;
     emm_layout *l = calloc(1, sizeof *l);
     if (!l)
-        return nomem(err, name);
+        return emm_layout_nomem(err, name);
     l->opt = *opt;
+    l->ops = kinds[opt->kind];
     l->nv = nv;
     l->nt = nt;
     choose_plane(l, xyz, tri);
 
-    double *cx = malloc(nt * sizeof *cx), *cy = malloc(nt * sizeof *cy);
+    double *c[EMM_MAX_DIMS] = {NULL, NULL, NULL};
     l->tri_cell = malloc(nt * sizeof *l->tri_cell);
-    if (!cx || !cy || !l->tri_cell) {
-        st = nomem(err, name);
+    for (uint32_t k = 0; k < l->dims; k++)
+        c[k] = malloc(nt * sizeof *c[k]);
+    if (!l->tri_cell || !c[0] || !c[1] || (l->dims > 2 && !c[2])) {
+        st = emm_layout_nomem(err, name);
         goto done;
     }
     for (size_t t = 0; t < nt; t++) {
         const int32_t *v = tri + 3 * t;
-        for (int k = 0; k < 2; k++) {
+        for (uint32_t k = 0; k < l->dims; k++) {
             int a = l->axes[k];
-            double s = (xyz[3 * (size_t)v[0] + a] + xyz[3 * (size_t)v[1] + a] +
-                        xyz[3 * (size_t)v[2] + a]) / 3.0;
-            (k == 0 ? cx : cy)[t] = s;
+            c[k][t] = (xyz[3 * (size_t)v[0] + a] + xyz[3 * (size_t)v[1] + a] +
+                       xyz[3 * (size_t)v[2] + a]) / 3.0;
         }
     }
-
-    if (l->opt.kind == EMM_LAYOUT_QUADTREE) {
-        st = emm_layout_quadtree_build(l, cx, cy, name, err);
-        if (st != EMM_OK)
-            goto done;
-    } else {
-        choose_dims(l);
-        uint64_t ncells = l->opt.kind == EMM_LAYOUT_GRID
-                              ? (uint64_t)l->cols * l->rows
-                              : (uint64_t)l->cols * l->rows + l->rows / 2;
-        if (ncells * 8 > UINT32_MAX) { /* neighbour lists are 32-bit indexed */
-            st = emm_fail(err, EMM_ERR_RANGE, "%s: %llu cells are too many; use a larger CELL",
-                          name, (unsigned long long)ncells);
-            goto done;
-        }
-        l->ncells = (uint32_t)ncells;
-        l->cells = calloc(ncells, sizeof *l->cells);
-        if (!l->cells) {
-            st = nomem(err, name);
-            goto done;
-        }
-        grid_cells(l, cx, cy);
-        st = grid_neighbors(l, name, err);
-        if (st != EMM_OK)
-            goto done;
-    }
-    st = fill_triangles(l, name, err);
+    st = l->ops->build(l, (const double *const *)c, name, err);
+    if (st == EMM_OK)
+        st = fill_triangles(l, name, err);
     if (st == EMM_OK)
         st = fill_vertices(l, tri, name, err);
     if (st == EMM_OK)
         fill_sizes(l);
 
 done:
-    free(cx);
-    free(cy);
+    for (uint32_t k = 0; k < EMM_MAX_DIMS; k++)
+        free(c[k]);
     if (st != EMM_OK) {
         emm_layout_free(l);
         return st;
@@ -503,9 +318,7 @@ static emm_status too_large(const double *xyz, size_t nv, const int32_t *tri, si
                         "%s: %s cell %u takes %s bytes, more than the %s-byte local store, "
                         "and no CELL makes every %s cell fit%s",
                         name, layout, worst, emm_grouped(bytes, b1), emm_grouped(local, b2), layout,
-                        l->opt.kind == EMM_LAYOUT_QUADTREE
-                            ? ""
-                            : " (the quadtree bounds triangles per cell)");
+                        l->ops->bounded ? "" : " (the quadtree bounds triangles per cell)");
     const char *fetch = l->opt.fetch != EMM_FETCH_NONE ? emm_fetch_name(l->opt.fetch) : "FETCH";
     return emm_fail(err, EMM_ERR_RANGE,
                     "%s: %s cell %u takes %s bytes, more than the %s-byte local store: "
@@ -519,8 +332,7 @@ emm_status emm_layout_build(const double *xyz, size_t nv, const int32_t *tri, si
                             emm_error *err)
 {
     assert(opt && out && (xyz || nv == 0) && (tri || nt == 0));
-    assert(opt->kind == EMM_LAYOUT_GRID || opt->kind == EMM_LAYOUT_TILES ||
-           opt->kind == EMM_LAYOUT_QUADTREE);
+    assert(opt->kind > EMM_LAYOUT_ORIGINAL && opt->kind < EMM_LAYOUT_COUNT);
     *out = NULL;
     if (!name)
         name = "mesh";
@@ -565,9 +377,10 @@ size_t emm_layout_vertex_count(const emm_layout *l)
     return l->nv;
 }
 
-void emm_layout_axes(const emm_layout *l, int axes[2], double lo[2], double hi[2])
+uint32_t emm_layout_axes(const emm_layout *l, int axes[EMM_MAX_DIMS], double lo[EMM_MAX_DIMS],
+                         double hi[EMM_MAX_DIMS])
 {
-    for (int k = 0; k < 2; k++) {
+    for (uint32_t k = 0; k < l->dims; k++) {
         if (axes)
             axes[k] = l->axes[k];
         if (lo)
@@ -575,15 +388,18 @@ void emm_layout_axes(const emm_layout *l, int axes[2], double lo[2], double hi[2
         if (hi)
             hi[k] = l->hi[k];
     }
+    return l->dims;
 }
 
-void emm_layout_dims(const emm_layout *l, uint32_t *cols, uint32_t *rows)
+uint32_t emm_layout_cells_per_axis(const emm_layout *l, uint32_t n[EMM_MAX_DIMS])
 {
-    int q = l->opt.kind == EMM_LAYOUT_QUADTREE;
-    if (cols)
-        *cols = q ? 0 : l->cols;
-    if (rows)
-        *rows = q ? 0 : l->rows;
+    return l->ops->per_axis ? l->ops->per_axis(l, n) : 0;
+}
+
+unsigned emm_layout_move_side(const emm_layout *l, uint32_t from, uint32_t to)
+{
+    assert(from < l->ncells && to < l->ncells);
+    return l->ops->move_side(l, from, to);
 }
 
 const emm_layout_cell *emm_layout_cell_get(const emm_layout *l, uint32_t c)
@@ -619,14 +435,9 @@ uint32_t emm_layout_neighbors(const emm_layout *l, uint32_t c, const uint32_t **
     return l->nb_start[c + 1] - l->nb_start[c];
 }
 
-uint32_t emm_layout_cell_at(const emm_layout *l, double a, double b, uint32_t *levels)
+uint32_t emm_layout_cell_at(const emm_layout *l, const double *p, uint32_t *levels)
 {
-    if (l->opt.kind == EMM_LAYOUT_QUADTREE)
-        return emm_layout_quadtree_cell_at(l, emm_layout_quadtree_quantise(l, 0, a),
-                                           emm_layout_quadtree_quantise(l, 1, b), levels);
-    if (levels)
-        *levels = 0;
-    return cell_at_grid(l, a, b);
+    return l->ops->cell_at(l, p, levels);
 }
 
 emm_layout_index emm_layout_triangle_index(const emm_layout *l, uint32_t t)
@@ -706,9 +517,7 @@ uint64_t emm_layout_vertex_address(const emm_layout *l, uint32_t v, uint32_t fro
 uint64_t emm_layout_lookup_bytes(const emm_layout *l)
 {
     uint64_t b = 4 * (uint64_t)l->nt + 4 * (uint64_t)l->nv + 8 * (uint64_t)l->ncells;
-    if (l->opt.kind == EMM_LAYOUT_QUADTREE)
-        b += 16 * (uint64_t)l->nnodes;
-    return b;
+    return b + (l->ops->lookup_bytes ? l->ops->lookup_bytes(l) : 0);
 }
 
 static int cmp_u64(const void *a, const void *b)
@@ -761,10 +570,8 @@ void emm_layout_get_stats(const emm_layout *l, emm_layout_stats *out)
     out->duplicated_vertices = l->ncopies - (l->nv - l->nunused);
     out->image_bytes = emm_layout_image_bytes(l);
     out->lookup_bytes = emm_layout_lookup_bytes(l);
-    if (l->opt.kind == EMM_LAYOUT_QUADTREE) {
-        out->quadtree_nodes = l->nnodes;
-        out->overfull_leaves = l->overfull;
-    } else {
+    if (l->ops->stats)
+        l->ops->stats(l, out);
+    else
         out->depth_min = out->depth_max = 0;
-    }
 }

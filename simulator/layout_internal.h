@@ -1,39 +1,51 @@
-/* Internal to the layouts (runtime/layout.c, runtime/layout_quadtree.c):
- * the layout object and the quadtree's build, neighbour and look-up
- * helpers. */
+/* Internal to the layouts (simulator/layout*.c): the layout object and the
+ * ops table each kind of layout fills (docs/architecture.md, "Adding a
+ * layout"). layout.c holds what every layout shares — validation, the plane,
+ * centroids, triangles and vertex copies per cell, sizes, the image, the
+ * public queries — and dispatches to the kind's ops for what differs: how
+ * cells are cut, neighbours, relative sides, point location. */
 #ifndef EMM_INTERNAL_LAYOUT_H
 #define EMM_INTERNAL_LAYOUT_H
 
 #include "emm/layout.h"
 
-/* A quadtree node. (ix, iy) is the node's square at its own depth: it
- * spans [ix, ix + 1) * 2^-depth of the bounding square in each axis. */
-typedef struct emm_qt_node {
-    uint32_t ix, iy;
-    uint32_t depth;
-    int32_t child;  /* index of the first of 4 consecutive children; -1 for a leaf */
-    uint32_t first; /* the node's triangles: [first, first + count) of the Morton order */
-    uint32_t count;
-    uint32_t cell;  /* leaf: its cell */
-    uint64_t path;  /* child indices from the root, 2 bits per level */
-} emm_qt_node;
+struct emm_layout_ops {
+    /* Cuts the cells from the triangles' centroids (c[a][t]: coordinate a
+     * of triangle t's centroid in the layout's space): fills l->ncells,
+     * l->cells' geometry (lo, hi, coord, depth, path), l->tri_cell and the
+     * neighbour lists (l->nb_start, l->nb, l->nb_side), and l->priv. */
+    emm_status (*build)(emm_layout *l, const double *const *c, const char *name, emm_error *err);
+    /* EMM_SIDE_* bits of where `to` lies seen from `from`. */
+    unsigned (*move_side)(const emm_layout *l, uint32_t from, uint32_t to);
+    /* The cell holding point p (clamped); *levels: tree levels descended. */
+    uint32_t (*cell_at)(const emm_layout *l, const double *p, uint32_t *levels);
+    /* Cells along each axis of a regular array, or 0 (NULL: 0). */
+    uint32_t (*per_axis)(const emm_layout *l, uint32_t n[EMM_MAX_DIMS]);
+    /* Bytes of the kind's own look-up tables in the local store, beyond the
+     * id tables every layout has (NULL: none). */
+    uint64_t (*lookup_bytes)(const emm_layout *l);
+    /* The kind's own statistics (NULL: none). */
+    void (*stats)(const emm_layout *l, emm_layout_stats *out);
+    /* Frees l->priv (NULL: free()). */
+    void (*destroy)(emm_layout *l);
+    /* Nonzero when CELL bounds the triangles of every cell (a tree that
+     * splits until it does); used to suggest a layout in messages. */
+    int bounded;
+};
+
+/* One table per kind, named from EMM_LAYOUT_LIST: emm_layout_grid_ops, ... */
+#define EMM_LAYOUT_OPS_DECL_(e, n) extern const struct emm_layout_ops emm_layout_##n##_ops;
+EMM_LAYOUT_LIST(EMM_LAYOUT_OPS_DECL_)
+#undef EMM_LAYOUT_OPS_DECL_
 
 struct emm_layout {
     emm_layout_options opt;
+    const struct emm_layout_ops *ops;
     size_t nv, nt;
-    int axes[2];
-    double lo[2], hi[2];
-
-    /* grid and tiles */
-    uint32_t cols, rows;
-    double cw, ch; /* a cell's width and height */
-
-    /* quadtree */
-    emm_qt_node *nodes;
-    uint32_t nnodes;
-    uint32_t *leaf_node;  /* ncells: each cell's leaf */
-    double qlo[2], qside; /* the bounding square */
-    uint32_t overfull;
+    uint32_t dims;                    /* axes of the layout's space */
+    int axes[EMM_MAX_DIMS];
+    double lo[EMM_MAX_DIMS], hi[EMM_MAX_DIMS];
+    void *priv;                       /* the kind's own data */
 
     uint32_t ncells;
     emm_layout_cell *cells;
@@ -54,16 +66,17 @@ struct emm_layout {
     uint8_t *nb_side;
 };
 
-/* Builds the quadtree over the triangles' centroids (cx, cy in the layout
- * plane), balances it, numbers its leaves as cells (filling l->ncells,
- * l->cells' geometry fields, l->tri_cell) and its neighbour lists. */
-emm_status emm_layout_quadtree_build(emm_layout *l, const double *cx, const double *cy,
-                                     const char *name, emm_error *err);
-/* The leaf containing quantised point (qx, qy) at EMM_LAYOUT_MAX_DEPTH. */
-uint32_t emm_layout_quadtree_cell_at(const emm_layout *l, uint32_t qx, uint32_t qy,
-                                     uint32_t *levels);
-/* Quantises a coordinate of the layout plane onto the quadtree's finest
- * level (clamped). */
-uint32_t emm_layout_quadtree_quantise(const emm_layout *l, int axis, double v);
+/* "NAME: out of memory building the layout". */
+emm_status emm_layout_nomem(emm_error *err, const char *name);
+/* Fills l->nb_side from the kind's move_side, for lists already in l->nb. */
+emm_status emm_layout_fill_sides(emm_layout *l, const char *name, emm_error *err);
+
+/* Rows of equal boxes, shared by the grid and the interleaving tiles
+ * (layout_rows.c): `shift` nonzero shifts odd rows by half a cell. */
+emm_status emm_rows_build(emm_layout *l, const double *const *c, int shift, const char *name,
+                          emm_error *err);
+unsigned emm_rows_move_side(const emm_layout *l, uint32_t from, uint32_t to);
+uint32_t emm_rows_cell_at(const emm_layout *l, const double *p, uint32_t *levels);
+uint32_t emm_rows_per_axis(const emm_layout *l, uint32_t n[EMM_MAX_DIMS]);
 
 #endif

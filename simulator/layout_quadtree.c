@@ -26,8 +26,35 @@
 #define MAXD EMM_LAYOUT_MAX_DEPTH
 #define FINEST (1u << MAXD)
 
+/* A node. (ix, iy) is the node's square at its own depth: it spans
+ * [ix, ix + 1) * 2^-depth of the bounding square in each axis. */
+typedef struct qt_node {
+    uint32_t ix, iy;
+    uint32_t depth;
+    int32_t child;  /* index of the first of 4 consecutive children; -1 for a leaf */
+    uint32_t first; /* the node's triangles: [first, first + count) of the Morton order */
+    uint32_t count;
+    uint32_t cell;  /* leaf: its cell */
+    uint64_t path;  /* child indices from the root, 2 bits per level */
+} qt_node;
+
+/* The layout's priv. */
+typedef struct quadtree {
+    qt_node *nodes;
+    uint32_t nnodes;
+    uint32_t *leaf_node;  /* ncells: each cell's leaf */
+    double qlo[2], qside; /* the bounding square */
+    uint32_t overfull;
+} quadtree;
+
+static quadtree *Q(const emm_layout *l)
+{
+    return l->priv;
+}
+
 typedef struct qt_build {
     emm_layout *l;
+    quadtree *q;
     uint64_t *code;  /* Morton codes, sorted */
     uint32_t *id;    /* the triangle of each code */
     uint32_t cap;    /* nodes allocated */
@@ -36,9 +63,10 @@ typedef struct qt_build {
     int oom;
 } qt_build;
 
-uint32_t emm_layout_quadtree_quantise(const emm_layout *l, int axis, double v)
+/* A coordinate of the layout's space on the finest level (clamped). */
+static uint32_t quantise(const quadtree *t, int axis, double v)
 {
-    double q = (v - l->qlo[axis]) / l->qside * (double)FINEST;
+    double q = (v - t->qlo[axis]) / t->qside * (double)FINEST;
     if (!(q >= 0))
         return 0;
     if (q >= (double)(FINEST - 1))
@@ -99,20 +127,20 @@ static int radix_sort(uint64_t *code, uint32_t *id, size_t n)
 /* Splits leaf i into 4 children; returns -1 when out of memory. */
 static int split(qt_build *b, uint32_t i)
 {
-    emm_layout *l = b->l;
-    if (l->nnodes + 4 > b->cap) {
+    quadtree *q = b->q;
+    if (q->nnodes + 4 > b->cap) {
         uint32_t cap = b->cap * 2;
-        emm_qt_node *n = realloc(l->nodes, (size_t)cap * sizeof *n);
+        qt_node *n = realloc(q->nodes, (size_t)cap * sizeof *n);
         if (!n)
             return -1;
-        l->nodes = n;
+        q->nodes = n;
         b->cap = cap;
     }
-    emm_qt_node p = l->nodes[i];
+    qt_node p = q->nodes[i];
     assert(p.child < 0 && p.depth < MAXD);
     unsigned shift = 2 * (MAXD - 1 - p.depth);
     uint32_t start = p.first, end = p.first + p.count;
-    uint32_t first = l->nnodes;
+    uint32_t first = q->nnodes;
     for (uint32_t k = 0; k < 4; k++) {
         /* The first triangle whose digit at this level is above k. */
         uint32_t lo = start, hi = end;
@@ -123,7 +151,7 @@ static int split(qt_build *b, uint32_t i)
             else
                 hi = mid;
         }
-        l->nodes[first + k] = (emm_qt_node){
+        q->nodes[first + k] = (qt_node){
             .ix = 2 * p.ix + (k & 1u),
             .iy = 2 * p.iy + (k >> 1),
             .depth = p.depth + 1,
@@ -135,8 +163,8 @@ static int split(qt_build *b, uint32_t i)
         };
         start = lo;
     }
-    l->nodes[i].child = (int32_t)first;
-    l->nnodes += 4;
+    q->nodes[i].child = (int32_t)first;
+    q->nnodes += 4;
     return 0;
 }
 
@@ -159,7 +187,7 @@ static void tmp_push(qt_build *b, uint32_t v)
  * neighbour to the left (dx = -1) touches with its right column, and so on. */
 static void touching_inside(qt_build *b, uint32_t i, int dx, int dy)
 {
-    const emm_qt_node *n = &b->l->nodes[i];
+    const qt_node *n = &b->q->nodes[i];
     if (n->child < 0) {
         tmp_push(b, i);
         return;
@@ -178,8 +206,8 @@ static void touching_inside(qt_build *b, uint32_t i, int dx, int dy)
  * coarser leaf may appear more than once). */
 static void touching(qt_build *b, uint32_t i)
 {
-    const emm_layout *l = b->l;
-    emm_qt_node n = l->nodes[i];
+    const quadtree *q = b->q;
+    qt_node n = q->nodes[i];
     int64_t side = (int64_t)1 << n.depth;
     b->ntmp = 0;
     for (int dy = -1; dy <= 1; dy++)
@@ -191,12 +219,12 @@ static void touching(qt_build *b, uint32_t i)
                 continue;
             /* Descend to the node of i's size at (x, y), or the leaf above it. */
             uint32_t j = 0;
-            for (uint32_t d = 0; d < n.depth && l->nodes[j].child >= 0; d++) {
+            for (uint32_t d = 0; d < n.depth && q->nodes[j].child >= 0; d++) {
                 unsigned bit = n.depth - 1 - d;
                 uint32_t k = (uint32_t)(((x >> bit) & 1) | (((y >> bit) & 1) << 1));
-                j = (uint32_t)l->nodes[j].child + k;
+                j = (uint32_t)q->nodes[j].child + k;
             }
-            if (l->nodes[j].depth < n.depth)
+            if (q->nodes[j].depth < n.depth)
                 tmp_push(b, j);
             else
                 touching_inside(b, j, dx, dy);
@@ -212,6 +240,7 @@ static int cmp_u32(const void *a, const void *b)
 static int subdivide(qt_build *b)
 {
     emm_layout *l = b->l;
+    quadtree *q = b->q;
     uint32_t *stack = malloc(64 * sizeof *stack);
     size_t n = 0, cap = 64;
     if (!stack)
@@ -219,7 +248,7 @@ static int subdivide(qt_build *b)
     stack[n++] = 0;
     while (n > 0) {
         uint32_t i = stack[--n];
-        if (l->nodes[i].count <= l->opt.cell || l->nodes[i].depth >= MAXD)
+        if (q->nodes[i].count <= l->opt.cell || q->nodes[i].depth >= MAXD)
             continue;
         if (split(b, i) < 0)
             goto fail;
@@ -231,7 +260,7 @@ static int subdivide(qt_build *b)
             stack = s;
         }
         for (uint32_t k = 0; k < 4; k++)
-            stack[n++] = (uint32_t)l->nodes[i].child + k;
+            stack[n++] = (uint32_t)q->nodes[i].child + k;
     }
     free(stack);
     return 0;
@@ -246,25 +275,25 @@ fail:
  * are what goes back on the work list. */
 static int balance(qt_build *b)
 {
-    emm_layout *l = b->l;
-    size_t cap = (size_t)l->nnodes + 64, n = 0;
+    quadtree *q = b->q;
+    size_t cap = (size_t)q->nnodes + 64, n = 0;
     uint32_t *work = malloc(cap * sizeof *work);
     if (!work)
         return -1;
-    for (uint32_t i = 0; i < l->nnodes; i++)
-        if (l->nodes[i].child < 0)
+    for (uint32_t i = 0; i < q->nnodes; i++)
+        if (q->nodes[i].child < 0)
             work[n++] = i;
     while (n > 0) {
         uint32_t i = work[--n];
-        if (l->nodes[i].child >= 0)
+        if (q->nodes[i].child >= 0)
             continue;
         touching(b, i);
         if (b->oom)
             goto fail;
-        uint32_t d = l->nodes[i].depth, deepest = 0;
+        uint32_t d = q->nodes[i].depth, deepest = 0;
         for (size_t k = 0; k < b->ntmp; k++)
-            if (l->nodes[b->tmp[k]].depth > deepest)
-                deepest = l->nodes[b->tmp[k]].depth;
+            if (q->nodes[b->tmp[k]].depth > deepest)
+                deepest = q->nodes[b->tmp[k]].depth;
         if (deepest <= d + EMM_LAYOUT_MAX_LEVEL_GAP)
             continue;
         if (split(b, i) < 0)
@@ -277,10 +306,10 @@ static int balance(qt_build *b)
             work = w;
         }
         for (size_t k = 0; k < b->ntmp; k++)
-            if (l->nodes[b->tmp[k]].depth + EMM_LAYOUT_MAX_LEVEL_GAP < d + 1)
+            if (q->nodes[b->tmp[k]].depth + EMM_LAYOUT_MAX_LEVEL_GAP < d + 1)
                 work[n++] = b->tmp[k];
         for (uint32_t k = 0; k < 4; k++)
-            work[n++] = (uint32_t)l->nodes[i].child + k;
+            work[n++] = (uint32_t)q->nodes[i].child + k;
     }
     free(work);
     return 0;
@@ -293,42 +322,43 @@ fail:
 static int number_leaves(qt_build *b)
 {
     emm_layout *l = b->l;
+    quadtree *q = b->q;
     uint32_t leaves = 0;
-    for (uint32_t i = 0; i < l->nnodes; i++)
-        leaves += l->nodes[i].child < 0;
+    for (uint32_t i = 0; i < q->nnodes; i++)
+        leaves += q->nodes[i].child < 0;
     l->ncells = leaves;
     l->cells = calloc(leaves, sizeof *l->cells);
-    l->leaf_node = malloc((size_t)leaves * sizeof *l->leaf_node);
+    q->leaf_node = malloc((size_t)leaves * sizeof *q->leaf_node);
     /* A depth-first stack holds at most 3 pending siblings per level. */
     uint32_t stack[4 * (MAXD + 1)];
-    if (!l->cells || !l->leaf_node)
+    if (!l->cells || !q->leaf_node)
         return -1;
     size_t n = 0;
     uint32_t c = 0;
     stack[n++] = 0;
     while (n > 0) {
         uint32_t i = stack[--n];
-        emm_qt_node *node = &l->nodes[i];
+        qt_node *node = &q->nodes[i];
         if (node->child >= 0) {
             for (int k = 3; k >= 0; k--)
                 stack[n++] = (uint32_t)node->child + (uint32_t)k;
             continue;
         }
         node->cell = c;
-        l->leaf_node[c] = i;
+        q->leaf_node[c] = i;
         emm_layout_cell *cell = &l->cells[c];
-        double size = l->qside / (double)(1u << node->depth);
-        cell->lo[0] = l->qlo[0] + node->ix * size;
-        cell->lo[1] = l->qlo[1] + node->iy * size;
+        double size = q->qside / (double)(1u << node->depth);
+        cell->lo[0] = q->qlo[0] + node->ix * size;
+        cell->lo[1] = q->qlo[1] + node->iy * size;
         cell->hi[0] = cell->lo[0] + size;
         cell->hi[1] = cell->lo[1] + size;
-        cell->col = cell->row = -1;
+        cell->coord[0] = cell->coord[1] = -1;
         cell->depth = node->depth;
         cell->path = node->path;
         for (uint32_t k = node->first; k < node->first + node->count; k++)
             l->tri_cell[b->id[k]] = c;
         if (node->count > l->opt.cell)
-            l->overfull++;
+            q->overfull++;
         c++;
     }
     return 0;
@@ -337,6 +367,7 @@ static int number_leaves(qt_build *b)
 static int neighbors(qt_build *b)
 {
     emm_layout *l = b->l;
+    quadtree *q = b->q;
     size_t cap = (size_t)l->ncells * 8 + 16, n = 0;
     l->nb_start = malloc(((size_t)l->ncells + 1) * sizeof *l->nb_start);
     l->nb = malloc(cap * sizeof *l->nb);
@@ -344,11 +375,11 @@ static int neighbors(qt_build *b)
         return -1;
     for (uint32_t c = 0; c < l->ncells; c++) {
         l->nb_start[c] = (uint32_t)n;
-        touching(b, l->leaf_node[c]);
+        touching(b, q->leaf_node[c]);
         if (b->oom)
             return -1;
         for (size_t k = 0; k < b->ntmp; k++)
-            b->tmp[k] = l->nodes[b->tmp[k]].cell;
+            b->tmp[k] = q->nodes[b->tmp[k]].cell;
         if (b->ntmp > 1)
             qsort(b->tmp, b->ntmp, sizeof *b->tmp, cmp_u32);
         if (n + b->ntmp > UINT32_MAX)
@@ -365,64 +396,115 @@ static int neighbors(qt_build *b)
                 l->nb[n++] = b->tmp[k];
     }
     l->nb_start[l->ncells] = (uint32_t)n;
-    l->nb_side = malloc(n + 1);
-    if (!l->nb_side)
-        return -1;
-    for (uint32_t c = 0; c < l->ncells; c++)
-        for (uint32_t k = l->nb_start[c]; k < l->nb_start[c + 1]; k++)
-            l->nb_side[k] = (uint8_t)emm_layout_move_side(l, c, l->nb[k]);
     return 0;
 }
 
-emm_status emm_layout_quadtree_build(emm_layout *l, const double *cx, const double *cy,
-                                     const char *name, emm_error *err)
+static emm_status build(emm_layout *l, const double *const *c, const char *name, emm_error *err)
 {
-    qt_build b = {.l = l};
+    quadtree *q = calloc(1, sizeof *q);
+    if (!q)
+        return emm_layout_nomem(err, name);
+    l->priv = q;
+    qt_build b = {.l = l, .q = q};
     emm_status st = EMM_OK;
     double w = l->hi[0] - l->lo[0], h = l->hi[1] - l->lo[1];
-    l->qside = w > h ? w : h;
-    if (!(l->qside > 0))
-        l->qside = 1; /* all centroids in one point: one leaf */
-    l->qlo[0] = l->lo[0];
-    l->qlo[1] = l->lo[1];
+    q->qside = w > h ? w : h;
+    if (!(q->qside > 0))
+        q->qside = 1; /* all centroids in one point: one leaf */
+    q->qlo[0] = l->lo[0];
+    q->qlo[1] = l->lo[1];
 
     b.code = malloc(l->nt * sizeof *b.code);
     b.id = malloc(l->nt * sizeof *b.id);
     b.cap = 1024;
-    l->nodes = malloc(b.cap * sizeof *l->nodes);
-    if (!b.code || !b.id || !l->nodes)
+    q->nodes = malloc(b.cap * sizeof *q->nodes);
+    if (!b.code || !b.id || !q->nodes)
         goto oom;
     for (size_t t = 0; t < l->nt; t++) {
-        b.code[t] = spread(emm_layout_quadtree_quantise(l, 0, cx[t])) |
-                    spread(emm_layout_quadtree_quantise(l, 1, cy[t])) << 1;
+        b.code[t] = spread(quantise(q, 0, c[0][t])) | spread(quantise(q, 1, c[1][t])) << 1;
         b.id[t] = (uint32_t)t;
     }
     if (radix_sort(b.code, b.id, l->nt) < 0)
         goto oom;
-    l->nodes[0] = (emm_qt_node){0, 0, 0, -1, 0, (uint32_t)l->nt, EMM_LAYOUT_NONE, 0};
-    l->nnodes = 1;
+    q->nodes[0] = (qt_node){0, 0, 0, -1, 0, (uint32_t)l->nt, EMM_LAYOUT_NONE, 0};
+    q->nnodes = 1;
     if (subdivide(&b) < 0 || balance(&b) < 0 || number_leaves(&b) < 0 || neighbors(&b) < 0)
         goto oom;
-    goto done;
+    free(b.code);
+    free(b.id);
+    free(b.tmp);
+    return emm_layout_fill_sides(l, name, err);
 oom:
     st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory building the quadtree layout", name);
-done:
     free(b.code);
     free(b.id);
     free(b.tmp);
     return st;
 }
 
-uint32_t emm_layout_quadtree_cell_at(const emm_layout *l, uint32_t qx, uint32_t qy,
-                                     uint32_t *levels)
+static uint32_t cell_at(const emm_layout *l, const double *p, uint32_t *levels)
 {
-    uint32_t i = 0;
-    while (l->nodes[i].child >= 0) {
-        unsigned bit = MAXD - 1 - l->nodes[i].depth;
+    const quadtree *q = Q(l);
+    uint32_t qx = quantise(q, 0, p[0]), qy = quantise(q, 1, p[1]), i = 0;
+    while (q->nodes[i].child >= 0) {
+        unsigned bit = MAXD - 1 - q->nodes[i].depth;
         uint32_t k = ((qx >> bit) & 1u) | (((qy >> bit) & 1u) << 1);
-        i = (uint32_t)l->nodes[i].child + k;
+        i = (uint32_t)q->nodes[i].child + k;
     }
     if (levels)
-        *levels = l->nodes[i].depth;
-    return l->nodes[i].cell;
+        *levels = q->nodes[i].depth;
+    return q->nodes[i].cell;
 }
+
+/* Leaf squares in units of the finest level, exact: a side bit when `to`
+ * lies wholly beyond that edge of `from`. */
+static unsigned move_side(const emm_layout *l, uint32_t from, uint32_t to)
+{
+    const quadtree *q = Q(l);
+    const qt_node *na = &q->nodes[q->leaf_node[from]], *nb = &q->nodes[q->leaf_node[to]];
+    uint32_t sa = MAXD - na->depth, sb = MAXD - nb->depth;
+    uint64_t a0[2] = {(uint64_t)na->ix << sa, (uint64_t)na->iy << sa};
+    uint64_t a1[2] = {(uint64_t)(na->ix + 1) << sa, (uint64_t)(na->iy + 1) << sa};
+    uint64_t b0[2] = {(uint64_t)nb->ix << sb, (uint64_t)nb->iy << sb};
+    uint64_t b1[2] = {(uint64_t)(nb->ix + 1) << sb, (uint64_t)(nb->iy + 1) << sb};
+    unsigned s = 0;
+    for (int a = 0; a < 2; a++) {
+        if (b1[a] <= a0[a])
+            s |= EMM_SIDE_MINUS(a);
+        if (b0[a] >= a1[a])
+            s |= EMM_SIDE_PLUS(a);
+    }
+    return s;
+}
+
+/* The look-ups descend the tree: 16 bytes per node in the local store. */
+static uint64_t lookup_bytes(const emm_layout *l)
+{
+    return 16 * (uint64_t)Q(l)->nnodes;
+}
+
+static void stats(const emm_layout *l, emm_layout_stats *out)
+{
+    out->quadtree_nodes = Q(l)->nnodes;
+    out->overfull_leaves = Q(l)->overfull;
+}
+
+static void destroy(emm_layout *l)
+{
+    quadtree *q = Q(l);
+    if (q) {
+        free(q->nodes);
+        free(q->leaf_node);
+        free(q);
+    }
+}
+
+const struct emm_layout_ops emm_layout_quadtree_ops = {
+    .build = build,
+    .move_side = move_side,
+    .cell_at = cell_at,
+    .lookup_bytes = lookup_bytes,
+    .stats = stats,
+    .destroy = destroy,
+    .bounded = 1,
+};

@@ -53,13 +53,13 @@ static void print_stats(const emm_layout *l, const char *path, const emm_strateg
     printf("mesh            %s: %s triangles, %s vertices\n", path,
            emm_grouped(emm_layout_triangle_count(l), a), emm_grouped(emm_layout_vertex_count(l), b));
     printf("layout          %s, CELL %u", emm_layout_name(s->layout), s->cell);
-    uint32_t cols, rows;
-    emm_layout_dims(l, &cols, &rows);
+    uint32_t n[EMM_MAX_DIMS];
+    emm_layout_cells_per_axis(l, n);
     if (s->layout == EMM_LAYOUT_GRID)
-        printf(" (%u columns x %u rows)", cols, rows);
+        printf(" (%u columns x %u rows)", n[0], n[1]);
     else if (s->layout == EMM_LAYOUT_TILES)
-        printf(" (%u rows of %u and %u tiles)", rows, cols, cols + 1);
-    int axes[2];
+        printf(" (%u rows of %u and %u tiles)", n[1], n[0], n[0] + 1);
+    int axes[EMM_MAX_DIMS];
     emm_layout_axes(l, axes, NULL, NULL);
     printf(", over %c and %c\n", "xyz"[axes[0]], "xyz"[axes[1]]);
     printf("cells           %s (%s without triangles)\n", emm_grouped(st.cells, a),
@@ -129,8 +129,8 @@ static void write_svg_body(FILE *f, const emm_layout *l, const double *xyz, cons
                            const char *path, const emm_strategy *s, const unsigned char *col)
 {
     uint32_t n = emm_layout_cell_count(l);
-    int axes[2];
-    double lo[2], hi[2];
+    int axes[EMM_MAX_DIMS];
+    double lo[EMM_MAX_DIMS], hi[EMM_MAX_DIMS];
     emm_layout_axes(l, axes, lo, hi);
     /* The view covers every cell (tiles at a row's end and the quadtree's
      * square reach past the mesh's box). */

@@ -137,7 +137,7 @@ static emm_status window_profile(const emm_trace_info *info, const emm_trace_rec
         if (!*D) {
             err->status = st = EMM_ERR_NOMEM;
             snprintf(err->message, sizeof err->message, "%.300s: out of memory", name);
-        } else if ((st = emm_profile_compute(xy, np, *D, exact, err)) == EMM_OK)
+        } else if ((st = emm_profile_compute(xy, np, *D, exact, NULL, err)) == EMM_OK)
             *nD = np;
     }
     if (st != EMM_OK) {
@@ -267,7 +267,8 @@ int emm_cmd_profile(int argc, char **argv)
         goto done;
     }
     emm_window_decision w;
-    if (emm_decide_window(t, m, info, recs, n, trace, threshold, simulate, &w, &err) != EMM_OK) {
+    emm_decide_options dopt = {threshold, simulate, NULL};
+    if (emm_decide_window(t, m, info, recs, n, trace, &dopt, &w, &err) != EMM_OK) {
         rc = cli_fail(&err);
         goto done;
     }

@@ -13,9 +13,8 @@
 #include <unistd.h>
 
 #include "cli.h"
-#include "env.h"
-#include "emm/strategy.h"
-#include "parse.h"
+#include "emm/config.h"
+#include "emm/session.h"
 
 #define SHIM_NAME "libemmshim.so"
 
@@ -30,29 +29,15 @@ static void usage(FILE *out)
             "simulated under that strategy and the baselines (direct reads, the cache).\n"
             "A summary goes to stderr at exit; PROGRAM's output and exit status are its own.\n"
             "\n"
-            "  --strategy S     use strategy S instead of deciding (EMM_STRATEGY)\n"
-            "  --profile N      profiling window: N element accesses (16384, 16K) or\n"
-            "                   Nit iterations marked by emm_iteration() (EMM_PROFILE)\n"
-            "  --compare C      baselines (default), all (the whole sweep) or none (EMM_COMPARE)\n"
-            "  --capture C      auto (default), sancov, fault or api (EMM_CAPTURE)\n"
-            "  --tag RULES      tag rules, e.g. 'vertices:site=read_mesh,stride=80,xyz=8:f64'\n"
-            "                   (EMM_TAG)\n"
-            "  --report FILE    JSON report, docs/report.md (EMM_REPORT)\n"
-            "  --dump FILE      the window's distance profile as CSV i,D (EMM_PROFILE_DUMP)\n"
-            "  --trace FILE     the access trace, for emm replay (EMM_TRACE)\n"
-            "  --machine FILE   machine file (EMM_MACHINE)\n"
-            "  --table FILE     a strategy table added to the shipped one (EMM_TABLE)\n"
-            "  --quiet          no summary (EMM_LOG=0)\n"
-            "  --verbose        more detail (EMM_LOG=2)\n"
-            "  --strict         a bad EMM_* value stops the program instead of the shim\n"
-            "                   stepping aside (EMM_STRICT=1)\n"
+            "Options (each sets its EMM_* variable; %%p in a FILE becomes the process id):\n");
+    emm_config_help(out, 1);
+    fprintf(out,
             "\n"
-            "%%p in a FILE becomes the process id. EMM_* variables already in the\n"
-            "environment apply unless an option sets them. The shim is looked for beside\n"
-            "this executable: <bindir>/../lib/" SHIM_NAME " (build tree and install), and\n"
-            "<bindir>/../lib64 and <bindir>/../lib/<multiarch>/ when installed there.\n"
-            "\n");
-    shim_env_help(out);
+            "EMM_* variables already in the environment apply unless an option sets them.\n"
+            "A bad option or variable is refused (exit status 2) before PROGRAM starts.\n"
+            "The shim is looked for beside this executable: <bindir>/../lib/" SHIM_NAME
+            " (build\n"
+            "tree and install), and <bindir>/../lib64 and <bindir>/../lib/<multiarch>/.\n");
 }
 
 /* out = a + b + c; false when it does not fit. */
@@ -111,52 +96,24 @@ static char *find_shim(char *tried, size_t cap)
     return NULL;
 }
 
-static bool valid_window(const char *v)
+static const char *get_env(const char *name)
 {
-    uint64_t x;
-    size_t n = strlen(v);
-    if (n > 2 && strcmp(v + n - 2, "it") == 0) {
-        char buf[64];
-        if (n - 2 >= sizeof buf)
-            return false;
-        memcpy(buf, v, n - 2);
-        buf[n - 2] = '\0';
-        return emm_parse_u64(buf, &x) && x > 0;
-    }
-    return emm_parse_size(v, &x) && x > 0;
+    return getenv(name);
 }
-
-static bool one_of(const char *v, const char *const *words)
-{
-    for (; *words; words++)
-        if (strcmp(v, *words) == 0)
-            return true;
-    return false;
-}
-
-struct setting {
-    const char *opt;
-    const char *var;
-};
-
-static const struct setting settings[] = {
-    {"--strategy", "EMM_STRATEGY"}, {"--profile", "EMM_PROFILE"},
-    {"--compare", "EMM_COMPARE"},   {"--capture", "EMM_CAPTURE"},
-    {"--tag", "EMM_TAG"},           {"--report", "EMM_REPORT"},
-    {"--dump", "EMM_PROFILE_DUMP"}, {"--trace", "EMM_TRACE"},
-    {"--machine", "EMM_MACHINE"},   {"--table", "EMM_TABLE"},
-};
 
 int emm_cmd_run(int argc, char **argv)
 {
-    static const char *const compares[] = {"baselines", "all", "none", NULL};
-    static const char *const captures[] = {"auto", "sancov", "fault", "api", NULL};
-    const char *values[sizeof settings / sizeof settings[0]] = {0};
-    const char *log = NULL, *strict = NULL;
+    emm_config cfg;
+    const char *values[EMM_CONFIG_COUNT] = {0};
+    unsigned given = 0;
+    emm_error err;
     int i;
 
+    /* The options, each parsed by its row of the configuration table: a bad
+     * one stops here, naming the option, before the program starts. */
+    emm_config_init(&cfg);
     for (i = 1; i < argc; i++) {
-        const char *a = argv[i];
+        const char *a = argv[i], *fixed;
         if (strcmp(a, "--") == 0) {
             i++;
             break;
@@ -165,56 +122,31 @@ int emm_cmd_run(int argc, char **argv)
             usage(stdout);
             return EMM_EXIT_OK;
         }
-        if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
-            log = "0";
-            continue;
-        }
-        if (strcmp(a, "--verbose") == 0 || strcmp(a, "-v") == 0) {
-            log = "2";
-            continue;
-        }
-        if (strcmp(a, "--strict") == 0) {
-            strict = "1";
-            continue;
-        }
         if (a[0] != '-')
             break; /* the program, without "--" */
-        size_t k = 0;
-        while (k < sizeof settings / sizeof settings[0] && strcmp(a, settings[k].opt) != 0)
-            k++;
-        if (k == sizeof settings / sizeof settings[0])
+        emm_config_key k = emm_config_find_option(a, &fixed);
+        if (k == EMM_CONFIG_COUNT)
             return cli_usage_error("run", "unknown option '%s'", a);
-        const char *v = cli_value("run", argc, argv, &i);
+        const char *v = fixed ? fixed : cli_value("run", argc, argv, &i);
         if (!v)
             return EMM_EXIT_USAGE;
-        if (!*v)
-            return cli_usage_error("run", "%s: empty value", a);
+        if (emm_config_set(&cfg, k, v, a, (long)getpid(), &err) != EMM_OK)
+            return cli_usage_error("run", "%s", err.message);
         values[k] = v;
+        given |= 1u << k;
     }
     if (i >= argc)
         return cli_usage_error("run", "missing PROGRAM (emm run [OPTIONS] -- PROGRAM [ARGS...])");
-
-    /* Mistakes the shim would only report from inside the program are
-     * usage errors here. */
-    for (size_t k = 0; k < sizeof settings / sizeof settings[0]; k++) {
-        const char *v = values[k];
-        emm_strategy s;
-        emm_error err;
-        if (!v)
-            continue;
-        if (strcmp(settings[k].opt, "--strategy") == 0 && emm_strategy_parse(v, &s, &err) != EMM_OK)
-            return cli_usage_error("run", "--strategy: %s", err.message);
-        if (strcmp(settings[k].opt, "--profile") == 0 && !valid_window(v))
-            return cli_usage_error("run",
-                                   "--profile '%s': expected a count of accesses (16384, 16K) or "
-                                   "of iterations (5it), at least 1",
-                                   v);
-        if (strcmp(settings[k].opt, "--compare") == 0 && !one_of(v, compares))
-            return cli_usage_error("run", "--compare '%s': expected baselines, all or none", v);
-        if (strcmp(settings[k].opt, "--capture") == 0 && !one_of(v, captures))
-            return cli_usage_error("run", "--capture '%s': expected auto, sancov, fault or api",
-                                   v);
-    }
+    /* The variables the options leave alone, as the shim will read them;
+     * then what only a session can check (a machine file's keys, a table's
+     * samples), as the shim will start it. */
+    if (emm_config_from_env(&cfg, get_env, (long)getpid(), given, &err) != EMM_OK)
+        return cli_usage_error("run", "%s", err.message);
+    emm_session_config sc = {&cfg, cfg.capture, argv[i], 0, {1, NULL, NULL}};
+    emm_session *probe;
+    if (emm_session_new(&sc, &probe, &err) != EMM_OK)
+        return cli_usage_error("run", "%s", err.message);
+    emm_session_free(probe);
 
     char tried[4096];
     char *shim = find_shim(tried, sizeof tried);
@@ -237,13 +169,9 @@ int emm_cmd_run(int argc, char **argv)
     free(shim);
     int bad = setenv("LD_PRELOAD", preload, 1);
     free(preload);
-    for (size_t k = 0; k < sizeof settings / sizeof settings[0]; k++)
+    for (int k = 0; k < EMM_CONFIG_COUNT; k++)
         if (values[k])
-            bad |= setenv(settings[k].var, values[k], 1);
-    if (log)
-        bad |= setenv("EMM_LOG", log, 1);
-    if (strict)
-        bad |= setenv("EMM_STRICT", strict, 1);
+            bad |= setenv(emm_config_row_get((emm_config_key)k)->var, values[k], 1);
     if (bad) {
         cli_error("run: cannot set the environment: %s", strerror(errno));
         return EMM_EXIT_FAIL;

@@ -106,7 +106,7 @@ static emm_status window_features(emm_trace_reader *r, uint64_t window, const ch
         snprintf(err->message, sizeof err->message, "%.300s: out of memory", name);
     }
     if (st == EMM_OK)
-        st = emm_profile_compute(xy, *n, D, NULL, err);
+        st = emm_profile_compute(xy, *n, D, NULL, NULL, err);
     if (st == EMM_OK)
         st = emm_profile_features(D, *n, name, f, err);
     free(xy);
@@ -131,9 +131,10 @@ static int table_add_swept(const char *trace, const char *table, uint64_t window
     emm_trace_record *recs = NULL;
     size_t n = 0;
     emm_window_decision w;
+    emm_decide_options dopt = {0, 1, NULL};
     rc = EMM_EXIT_OK;
     if (emm_profile_trace_window(r, window, trace, &recs, &n, &err) != EMM_OK ||
-        emm_decide_window(NULL, m, emm_trace_reader_info(r), recs, n, trace, 0, 1, &w, &err) !=
+        emm_decide_window(NULL, m, emm_trace_reader_info(r), recs, n, trace, &dopt, &w, &err) !=
             EMM_OK) {
         rc = cli_fail(&err);
     } else {
@@ -285,12 +286,9 @@ static int add_trace_samples(emm_table *t, const emm_machine *m, const char *tra
     int rc = EMM_EXIT_OK;
     emm_trace_record *all = NULL;
     size_t nall = 0;
-    emm_sweep *sw = malloc(sizeof *sw);
-    if (!sw) {
-        cli_error("%s: out of memory", trace);
-        rc = EMM_EXIT_FAIL;
-    } else if (emm_profile_trace_window(r, UINT64_MAX, trace, &all, &nall, &err) != EMM_OK ||
-               emm_sweep_records(m, emm_trace_reader_info(r), all, nall, sw, &err) != EMM_OK) {
+    emm_sweep *sw = NULL;
+    if (emm_profile_trace_window(r, UINT64_MAX, trace, &all, &nall, &err) != EMM_OK ||
+        emm_sweep_records(m, emm_trace_reader_info(r), all, nall, NULL, &sw, &err) != EMM_OK) {
         rc = cli_fail(&err);
     }
     free(all);
@@ -321,7 +319,7 @@ static int add_trace_samples(emm_table *t, const emm_machine *m, const char *tra
                (unsigned long long)sw->result[sw->cache].total);
         fflush(stdout);
     }
-    free(sw);
+    emm_sweep_free(sw);
     emm_trace_reader_close(r);
     return rc;
 }

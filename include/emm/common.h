@@ -47,6 +47,12 @@ typedef enum emm_scalar {
     EMM_I64
 } emm_scalar;
 
+/* The most coordinates a layout, a cell or a point of the interface has.
+ * Layouts work in the plane of the mesh's two largest extents today
+ * (emm_layout_axes says how many they use); the interface is the same for
+ * a layout over all three. */
+#define EMM_MAX_DIMS 3
+
 /* What the records of a tagged or traced array hold. */
 typedef enum emm_array_kind {
     EMM_ARRAY_VERTICES = 0,  /* records hold a vertex's coordinates */
@@ -60,6 +66,18 @@ typedef enum emm_array_kind {
  * is 28 bytes (thesis §3.1). */
 #define EMM_THESIS_VERTEX_BYTES 80u
 #define EMM_THESIS_TRIANGLE_BYTES 28u
+
+/* How a library call may use threads. A call that takes a `const
+ * emm_threads *` accepts NULL for the defaults (every online CPU, no hook).
+ * Helper threads start with every signal blocked, so the program's signals
+ * never land on them, and call on_start (when set) before anything else:
+ * libemmshim.so marks them there as its own, so their allocations are never
+ * taken for the program's. Results never depend on the number of threads. */
+typedef struct emm_threads {
+    unsigned jobs;               /* threads in all, the caller included; 0: the online CPUs */
+    void (*on_start)(void *ctx); /* called first in each helper thread; may be NULL */
+    void *ctx;
+} emm_threads;
 
 /* A short, static description of a status ("malformed file", ...). */
 EMM_API const char *emm_strerror(emm_status status);

@@ -15,8 +15,10 @@
  *   at most `cell` triangles per leaf, leaves that touch (by an edge or a
  *   corner) differ by at most 3 levels; cells in leaf (Morton) order.
  *
- * Geometry is 2D: the two axes along which the bounding box is largest (x
- * and y for a planar mesh). The remote "image" packs the cells one after
+ * Geometry is in the layout's own space: today the two axes along which the
+ * bounding box is largest (x and y for a planar mesh); every coordinate,
+ * side and path of this interface is written for up to EMM_MAX_DIMS axes
+ * (emm_layout_axes says how many a layout uses). The remote "image" packs the cells one after
  * the other in cell order; each cell is a 12-byte header (the thesis'
  * struct CellData: verNr, triNr, length), its vertex records, then its
  * triangle records. docs/layouts.md explains every choice. */
@@ -42,15 +44,24 @@ typedef struct emm_layout emm_layout;
 /* "No cell": a vertex that no triangle uses. */
 #define EMM_LAYOUT_NONE UINT32_MAX
 
-/* Relative positions of a cell seen from another (thesis §4.2.2: left 1,
- * top 2, right 3, bottom 4), as bits: a grid's corner neighbour is two
- * sides at once. Top is +y. */
+/* Relative positions of a cell seen from another, as bits: a grid's corner
+ * neighbour is two sides at once. In the plane the bits follow the
+ * thesis' numbering of the sides (§4.2.2: left 1, top 2, right 3, bottom
+ * 4); a third axis adds near and far. EMM_SIDE_MINUS(a) and EMM_SIDE_PLUS(a)
+ * are the sides below and above along axis a of the layout's space (top is
+ * +y). */
 enum {
     EMM_SIDE_LEFT = 1u << 0,
     EMM_SIDE_TOP = 1u << 1,
     EMM_SIDE_RIGHT = 1u << 2,
-    EMM_SIDE_BOTTOM = 1u << 3
+    EMM_SIDE_BOTTOM = 1u << 3,
+    EMM_SIDE_NEAR = 1u << 4,
+    EMM_SIDE_FAR = 1u << 5
 };
+#define EMM_SIDE_BITS (2 * EMM_MAX_DIMS)
+#define EMM_SIDE_MINUS(axis) \
+    ((axis) == 0 ? EMM_SIDE_LEFT : (axis) == 1 ? EMM_SIDE_BOTTOM : EMM_SIDE_NEAR)
+#define EMM_SIDE_PLUS(axis) ((axis) == 0 ? EMM_SIDE_RIGHT : (axis) == 1 ? EMM_SIDE_TOP : EMM_SIDE_FAR)
 
 typedef struct emm_layout_options {
     emm_layout_kind kind;    /* GRID, TILES or QUADTREE (ORIGINAL is a misuse) */
@@ -62,20 +73,23 @@ typedef struct emm_layout_options {
     emm_fetch_kind fetch;    /* only to name a strategy in that error; NONE if unknown */
 } emm_layout_options;
 
-/* One cell. Coordinates are in the layout's 2D plane (emm_layout_axes). */
+/* One cell. Coordinates are in the layout's space (emm_layout_axes); only
+ * the first `dims` entries of each array are used. */
 typedef struct emm_layout_cell {
-    uint32_t ntri;       /* triangles */
-    uint32_t nvert;      /* vertex copies */
-    uint64_t bytes;      /* header + nvert * vertex_bytes + ntri * triangle_bytes */
-    uint64_t offset;     /* byte offset of the cell in the remote image */
-    double lo[2], hi[2]; /* the cell's rectangle (tiles at a row's ends
-                            reach half a tile past the bounding box) */
-    int32_t col, row;    /* grid and tiles: position in the cell array; -1 for quadtree */
-    uint32_t depth;      /* quadtree: the leaf's depth (root 0); 0 otherwise */
-    uint64_t path;       /* quadtree: child indices from the root, 2 bits per
-                            level, the root's child in the highest pair used;
-                            child 0 lower-left, 1 lower-right, 2 upper-left,
-                            3 upper-right (thesis Fig. 4.7) */
+    uint32_t ntri;                /* triangles */
+    uint32_t nvert;               /* vertex copies */
+    uint64_t bytes;               /* header + nvert * vertex_bytes + ntri * triangle_bytes */
+    uint64_t offset;              /* byte offset of the cell in the remote image */
+    double lo[EMM_MAX_DIMS];      /* the cell's box (tiles at a row's ends reach */
+    double hi[EMM_MAX_DIMS];      /* half a tile past the bounding box) */
+    int32_t coord[EMM_MAX_DIMS];  /* grid and tiles: position in the cell array along
+                                     each axis (column, row); -1 for a tree layout */
+    uint32_t depth;               /* quadtree: the leaf's depth (root 0); 0 otherwise */
+    uint64_t path;                /* quadtree: child indices from the root, `dims` bits
+                                     per level, the root's child in the highest group
+                                     used; bit a of a child index: the upper half along
+                                     axis a (in the plane: 0 lower-left, 1 lower-right,
+                                     2 upper-left, 3 upper-right, thesis Fig. 4.7) */
 } emm_layout_cell;
 
 /* A layout index: cell and position in the cell. */
@@ -118,12 +132,15 @@ EMM_API const emm_layout_options *emm_layout_get_options(const emm_layout *l);
 EMM_API uint32_t emm_layout_cell_count(const emm_layout *l);
 EMM_API size_t emm_layout_triangle_count(const emm_layout *l);
 EMM_API size_t emm_layout_vertex_count(const emm_layout *l);
-/* The two coordinate axes (0 x, 1 y, 2 z) the layout works in, and the
- * bounding box of the triangles' vertices in that plane. */
-EMM_API void emm_layout_axes(const emm_layout *l, int axes[2], double lo[2], double hi[2]);
-/* Grid and tiles: the cell array's columns (tiles: of the even rows; odd
- * rows have one more) and rows. Quadtree: 0, 0. */
-EMM_API void emm_layout_dims(const emm_layout *l, uint32_t *cols, uint32_t *rows);
+/* The coordinate axes (0 x, 1 y, 2 z) the layout works in, ascending, and
+ * the bounding box of the triangles' vertices in that space; returns how
+ * many axes (the layout's dims). Any pointer may be NULL. */
+EMM_API uint32_t emm_layout_axes(const emm_layout *l, int axes[EMM_MAX_DIMS],
+                                 double lo[EMM_MAX_DIMS], double hi[EMM_MAX_DIMS]);
+/* Grid and tiles: the cell array's extent along each axis (columns — for
+ * tiles, of the even rows; odd rows have one more — then rows); returns the
+ * layout's dims. A tree layout (quadtree) has no array: returns 0. */
+EMM_API uint32_t emm_layout_cells_per_axis(const emm_layout *l, uint32_t n[EMM_MAX_DIMS]);
 
 /* Cell c (< emm_layout_cell_count). The pointer lives as long as l. */
 EMM_API const emm_layout_cell *emm_layout_cell_get(const emm_layout *l, uint32_t c);
@@ -143,11 +160,11 @@ EMM_API uint32_t emm_layout_neighbors(const emm_layout *l, uint32_t c, const uin
  * emm_layout_neighbors. Grid and tiles compare cell centres; the quadtree
  * compares leaf squares (a side bit when `to` lies wholly beyond that edge). */
 EMM_API unsigned emm_layout_move_side(const emm_layout *l, uint32_t from, uint32_t to);
-/* The cell containing point (a, b) of the layout plane (clamped into the
- * bounding box), by arithmetic for grid and tiles and by descending the
+/* The cell containing point p (the layout's dims coordinates, clamped into
+ * the bounding box), by arithmetic for grid and tiles and by descending the
  * quadtree; *levels (may be NULL) gets the levels descended (0 for grid
  * and tiles). */
-EMM_API uint32_t emm_layout_cell_at(const emm_layout *l, double a, double b, uint32_t *levels);
+EMM_API uint32_t emm_layout_cell_at(const emm_layout *l, const double *p, uint32_t *levels);
 
 /* Triangle t's layout index. */
 EMM_API emm_layout_index emm_layout_triangle_index(const emm_layout *l, uint32_t t);

@@ -20,6 +20,7 @@
 #define EMM_PROFILE_H
 
 #include "emm/common.h"
+#include "emm/config.h"
 #include "emm/trace.h"
 
 #ifdef __cplusplus
@@ -38,7 +39,7 @@ extern "C" {
  * meet. docs/profile.md. */
 #define EMM_PROFILE_THETA 0.45
 /* The default profile window, in element accesses. */
-#define EMM_PROFILE_DEFAULT_WINDOW 16384u
+#define EMM_PROFILE_DEFAULT_WINDOW EMM_CONFIG_DEFAULT_WINDOW
 /* The shortest profile that has features. */
 #define EMM_PROFILE_MIN 256u
 
@@ -46,8 +47,8 @@ extern "C" {
  * values (D[0] = 0). Double precision throughout: the result differs from a
  * naive double loop only by summation order (relative 1e-12 at most for any
  * n this is meant for). Uses AVX2 when the processor has it, SSE2 otherwise,
- * and up to two threads (one when a thread cannot be started). */
-EMM_API void emm_profile_exact(const double *xy, size_t n, double *D);
+ * and up to two threads (`threads` may allow fewer; NULL: two). */
+EMM_API void emm_profile_exact(const double *xy, size_t n, double *D, const emm_threads *threads);
 
 /* The fast method's bound on the relative error of every D_i for opening
  * angle theta (0 < theta < 1): each term ‖p − q‖ a node's aggregate stands
@@ -64,12 +65,12 @@ EMM_API double emm_profile_fast_bound(double theta);
  * emm_profile_fast_bound(theta). Two threads, each with its own tree over
  * its half of the queries. Fails only when memory runs out. */
 EMM_API emm_status emm_profile_fast(const double *xy, size_t n, double theta, double *D,
-                                    emm_error *err);
+                                    const emm_threads *threads, emm_error *err);
 
 /* Exact when n ≤ EMM_PROFILE_EXACT_MAX, fast with EMM_PROFILE_THETA beyond.
  * *exact (may be NULL) tells which ran. */
 EMM_API emm_status emm_profile_compute(const double *xy, size_t n, double *D, int *exact,
-                                       emm_error *err);
+                                       const emm_threads *threads, emm_error *err);
 
 /* Reduces a profile of n ≥ EMM_PROFILE_MIN values to EMM_FEATURES numbers
  * (documented in docs/profile.md): the shape of the mean distance

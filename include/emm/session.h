@@ -26,7 +26,7 @@
 #include <stdio.h>
 
 #include "emm/common.h"
-#include "emm/tag.h"
+#include "emm/config.h"
 #include "emm/trace.h"
 
 #ifdef __cplusplus
@@ -35,27 +35,14 @@ extern "C" {
 
 typedef struct emm_session emm_session;
 
-typedef enum emm_compare {
-    EMM_COMPARE_BASELINES = 0, /* the chosen strategy, direct and cache */
-    EMM_COMPARE_ALL,           /* the whole standard sweep */
-    EMM_COMPARE_NONE           /* the chosen strategy only */
-} emm_compare;
-
 typedef struct emm_session_config {
-    const char *strategy;        /* NULL: decide from the profile (EMM_STRATEGY) */
-    uint64_t window_accesses;    /* profile window in element accesses (0: use iterations) */
-    uint64_t window_iterations;  /* profile window in emm_iteration() calls, when accesses == 0 */
-    emm_compare compare;
-    const char *machine_path;    /* NULL: defaults (EMM_MACHINE) */
-    const char *table_path;      /* NULL: the shipped table only (EMM_TABLE adds a user table) */
-    int table_only;              /* 1: table_path replaces the shipped table instead of adding
-                                  * to it (for tests and experiments with a table of one's own) */
-    const char *report_path;     /* NULL: no JSON report (EMM_REPORT); already %p-expanded */
-    const char *profile_dump;    /* NULL: no CSV (EMM_PROFILE_DUMP) */
-    const char *trace_path;      /* NULL: no trace (EMM_TRACE) */
-    const char *capture;         /* the capture backend's name, for the report */
-    const char *program;         /* the program's name, for the summary and report */
-    int log;                     /* 0 quiet, 1 summary (default), 2 verbose */
+    const emm_config *config; /* the settings (emm/config.h), copied; NULL: the defaults */
+    emm_capture capture;      /* the backend that captures, for the report */
+    const char *program;      /* the program's name, for the summary and report */
+    int table_only;           /* 1: config->table replaces the shipped table instead of adding
+                               * to it (for tests and experiments with a table of one's own) */
+    emm_threads threads;      /* the session's helper threads: how many (0: the online CPUs)
+                               * and the hook that marks them (libemmshim.so's own) */
 } emm_session_config;
 
 /* One captured access, as the capture backends record it: the address, the
@@ -78,6 +65,9 @@ typedef enum emm_session_state {
                                   capturing more is useless */
 } emm_session_state;
 
+/* Validates everything once: the machine file, the tables, the output
+ * directories; a failure names the variable or option the bad value came
+ * from (emm_config.source). */
 EMM_API emm_status emm_session_new(const emm_session_config *cfg, emm_session **out,
                                    emm_error *err);
 
@@ -92,8 +82,10 @@ EMM_API int emm_session_tag(emm_session *s, emm_array_kind kind, const void *bas
  * accesses. Call it while the memory is still readable: before the
  * decision, the session copies the array's coordinates or indices when the
  * window holds accesses to it (a short program that frees its mesh before
- * exit is still decided at finish). */
-EMM_API void emm_session_untag(emm_session *s, const void *base);
+ * exit is still decided at finish). When the last array of its kind leaves
+ * before the window is full, the answer is EMM_SESSION_DECIDE: the caller
+ * then makes the arrays readable and calls emm_session_decide. */
+EMM_API emm_session_state emm_session_untag(emm_session *s, const void *base);
 
 /* The address ranges of the tagged arrays, for the capture backends' fast
  * filter: fills up to cap [lo, hi) pairs and returns how many there are. */

@@ -100,8 +100,8 @@ EMM_API const char *emm_bucket_name(emm_bucket b);
 
 /* One layout cell of an EMM strategy and the DMA traffic it caused. */
 typedef struct emm_cell_dma {
-    double lo[2], hi[2]; /* the cell's rectangle in the layout's plane (emm_layout_axes) */
-    uint64_t bytes;      /* bytes DMA moved for the cell: its demand fetches and prefetches */
+    double lo[EMM_MAX_DIMS], hi[EMM_MAX_DIMS]; /* the cell's box in the layout's space */
+    uint64_t bytes; /* bytes DMA moved for the cell: its demand fetches and prefetches */
 } emm_cell_dma;
 
 typedef struct emm_result {
@@ -150,7 +150,8 @@ typedef struct emm_result {
      * cells' bytes equals dma.bytes. */
     struct {
         uint32_t count;      /* the layout's cells: cell[0..count), in cell order */
-        double lo[2], hi[2]; /* the layout's bounding box in its plane */
+        uint32_t dims;       /* coordinates per box (emm_layout_axes) */
+        double lo[EMM_MAX_DIMS], hi[EMM_MAX_DIMS]; /* the layout's bounding box */
         emm_cell_dma *cell;
     } cells;
 } emm_result;

@@ -21,19 +21,33 @@ typedef enum emm_strategy_kind {
     EMM_STRATEGY_EMM
 } emm_strategy_kind;
 
+/* The EMM layouts (thesis §4.1) and fetch schemes (§4.2), one entry each:
+ * X(ENUM, name) gives the value EMM_LAYOUT_ENUM or EMM_FETCH_ENUM and the
+ * name strategy strings use. Adding a layout or a fetch scheme is a line
+ * here, its ops file in simulator/ (layout_NAME.c, fetch_NAME.c) and its
+ * documentation (docs/architecture.md, "Adding a part"): the enums, the
+ * names, the parser, the standard sweep and the simulator's tables of ops
+ * all follow these lists. */
+#define EMM_LAYOUT_LIST(X) X(GRID, grid) X(TILES, tiles) X(QUADTREE, quadtree)
+#define EMM_FETCH_LIST(X) X(NAIVE, naive) X(CONVOLUTION, convolution) X(EXTRAPOLATED, extrapolated)
+
+#define EMM_LAYOUT_ENUM_(e, n) EMM_LAYOUT_##e,
+#define EMM_FETCH_ENUM_(e, n) EMM_FETCH_##e,
+
 typedef enum emm_layout_kind {
     EMM_LAYOUT_ORIGINAL = 0, /* the program's own arrays (cache only) */
-    EMM_LAYOUT_GRID,
-    EMM_LAYOUT_TILES,
-    EMM_LAYOUT_QUADTREE
+    EMM_LAYOUT_LIST(EMM_LAYOUT_ENUM_)
+    EMM_LAYOUT_COUNT         /* the EMM layouts are 1 .. EMM_LAYOUT_COUNT - 1 */
 } emm_layout_kind;
 
 typedef enum emm_fetch_kind {
     EMM_FETCH_NONE = 0, /* direct and cache */
-    EMM_FETCH_NAIVE,
-    EMM_FETCH_CONVOLUTION,
-    EMM_FETCH_EXTRAPOLATED
+    EMM_FETCH_LIST(EMM_FETCH_ENUM_)
+    EMM_FETCH_COUNT     /* the fetch schemes are 1 .. EMM_FETCH_COUNT - 1 */
 } emm_fetch_kind;
+
+#undef EMM_LAYOUT_ENUM_
+#undef EMM_FETCH_ENUM_
 
 /* Triangles per cell when an EMM strategy string gives no @CELL, and for
  * cache@LAYOUT. */
@@ -59,10 +73,13 @@ EMM_API size_t emm_strategy_format(const emm_strategy *s, char *buf, size_t cap)
 EMM_API const char *emm_layout_name(emm_layout_kind k);
 EMM_API const char *emm_fetch_name(emm_fetch_kind k);
 
-/* The standard sweep: 3 layouts × 3 fetch schemes × cells 16, 32, 64, 128,
- * 256, then direct, cache and cache@ each layout (50 strategies). Fills up to
- * cap entries and returns the sweep's full length. */
+/* The standard sweep: every layout × every fetch scheme × the sweep's cell
+ * sizes (emm_strategy_sweep_cells), then direct, cache and cache@ each
+ * layout. Fills up to cap entries (out may be NULL when cap is 0) and
+ * returns the sweep's full length. */
 EMM_API size_t emm_strategy_sweep(emm_strategy *out, size_t cap);
+/* The sweep's cell sizes, ascending; returns their count. */
+EMM_API size_t emm_strategy_sweep_cells(const uint32_t **cells);
 
 #ifdef __cplusplus
 }

@@ -108,26 +108,26 @@ EMM_API emm_status emm_table_decide(const emm_table *t, const double f[EMM_FEATU
 
 /* ---- simulating the candidates (thesis §5: a novel profile) -------------- */
 
-/* The standard sweep's size (emm_strategy_sweep). */
-#define EMM_SWEEP_MAX 64
-
 typedef struct emm_sweep {
-    size_t count;                     /* strategies in the sweep */
-    emm_result result[EMM_SWEEP_MAX]; /* per strategy; meaningful where ran[i] */
-    int ran[EMM_SWEEP_MAX];           /* 0: this build cannot simulate it on this trace */
-    size_t simulated;                 /* how many ran */
-    size_t best;                      /* index of the fewest cycles (ties: the earlier) */
-    size_t cache;                     /* index of plain `cache`, the baseline */
+    size_t count;        /* strategies in the sweep (emm_strategy_sweep) */
+    emm_result *result;  /* count results; meaningful where ran[i] */
+    int *ran;            /* count flags; 0: this strategy cannot run on this trace */
+    size_t simulated;    /* how many ran */
+    size_t best;         /* index of the fewest cycles (ties: the earlier) */
+    size_t cache;        /* index of plain `cache`, the baseline */
 } emm_sweep;
 
 /* Simulates every strategy of the standard sweep on recs[0..n), records of
- * a trace described by `info`, on machine m (validated), over two threads;
- * deterministic. Strategies whose model cannot be built (EMM strategies or
- * cache@LAYOUT before this build has them; a layout the mesh does not
- * allow) are skipped. EMM_ERR_UNSUPPORTED when none ran. */
+ * a trace described by `info`, on machine m (validated), with the threads
+ * `threads` allows (NULL: the online CPUs); deterministic. Strategies whose
+ * model cannot be built (a layout the mesh does not allow, an EMM strategy
+ * on an address-only trace) are skipped. On success *out is a new sweep
+ * (emm_sweep_free). EMM_ERR_UNSUPPORTED when none ran. */
 EMM_API emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
-                                     const emm_trace_record *recs, size_t n, emm_sweep *out,
+                                     const emm_trace_record *recs, size_t n,
+                                     const emm_threads *threads, emm_sweep **out,
                                      emm_error *err);
+EMM_API void emm_sweep_free(emm_sweep *sw);
 
 /* How a window's strategy was decided. */
 typedef enum emm_decided_how {
@@ -161,31 +161,39 @@ typedef struct emm_window_decision {
 /* A short word for how: "table", "checked", "window" ("none"). */
 EMM_API const char *emm_decided_name(emm_decided_how how);
 
+/* How a decision runs; zero-initialise, then set what you need. */
+typedef struct emm_decide_options {
+    double threshold;           /* novelty threshold; <= 0: EMM_NOVELTY_THRESHOLD */
+    int simulate;               /* sweep the window even when a sample matches */
+    const emm_threads *threads; /* NULL: the online CPUs, no start hook */
+} emm_decide_options;
+
 /* The session's decision on a window (thesis §5, and beyond it: see
- * docs/profile.md "The decision"): profiles recs[0..n) (records of a trace
- * described by `info`; the window is all of them) and takes the nearest
+ * docs/profile.md "The decision"), for features the caller computed from
+ * the window's profile (`accesses` element accesses): takes the nearest
  * sample of t (may be NULL or empty). When the profile is novel (distance >
- * threshold; threshold <= 0 means EMM_NOVELTY_THRESHOLD), when there is no
- * sample, or when `simulate` is set, it simulates the standard sweep on the
- * window with machine m and takes the best (how = WINDOW). Otherwise, when
- * the sample has a synthetic recipe and the trace has geometry, the
+ * threshold), when there is no sample, or when opt->simulate is set, it
+ * simulates the standard sweep on recs[0..n) (records of a trace described
+ * by `info`) with machine m and takes the best (how = WINDOW). Otherwise,
+ * when the sample has a synthetic recipe and the trace has geometry, the
  * sample's pattern is simulated over this mesh and weighed with the window
- * (how = CHECKED); else the sample's strategy stands (how = TABLE). `name` names the window in messages. Fails with EMM_ERR_RANGE
- * when the window has fewer than EMM_PROFILE_MIN element accesses. To learn
- * a novel profile, append a sample made of out->f and out->strategy
+ * (how = CHECKED); else the sample's strategy stands (how = TABLE). m may be
+ * NULL only when nothing is to be simulated (then the table's strategy
+ * stands). `name` names the window in messages; opt may be NULL. To learn a
+ * novel profile, append a sample made of out->f and out->strategy
  * (emm_table_append). */
-/* The same decision for features the caller already computed from the
- * window's profile (`accesses` element accesses); m may be NULL only when
- * nothing is to be simulated (then the table's strategy stands). */
 EMM_API emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
                                        const emm_trace_info *info, const emm_trace_record *recs,
                                        size_t n, const double f[EMM_FEATURES], size_t accesses,
-                                       const char *name, double threshold, int simulate,
+                                       const char *name, const emm_decide_options *opt,
                                        emm_window_decision *out, emm_error *err);
 
+/* The same, profiling recs[0..n) first (the window is all of them, less a
+ * leading index-order sweep, as in the session). Fails with EMM_ERR_RANGE
+ * when the window has fewer than EMM_PROFILE_MIN element accesses. */
 EMM_API emm_status emm_decide_window(const emm_table *t, const emm_machine *m,
                                      const emm_trace_info *info, const emm_trace_record *recs,
-                                     size_t n, const char *name, double threshold, int simulate,
+                                     size_t n, const char *name, const emm_decide_options *opt,
                                      emm_window_decision *out, emm_error *err);
 
 #ifdef __cplusplus

@@ -130,9 +130,9 @@ static void check_layout(const emm_layout *l, const mesh *g)
     const emm_layout_options *opt = emm_layout_get_options(l);
     uint32_t nc = emm_layout_cell_count(l);
     REQUIRE(nc >= 1);
-    int axes[2];
-    double blo[2], bhi[2];
-    emm_layout_axes(l, axes, blo, bhi);
+    int axes[EMM_MAX_DIMS];
+    double blo[EMM_MAX_DIMS], bhi[EMM_MAX_DIMS];
+    CHECK(emm_layout_axes(l, axes, blo, bhi) == 2);
 
     /* Every triangle in exactly one cell, and the index round trip. */
     uint32_t *seen = calloc(g->nt, sizeof *seen);
@@ -163,7 +163,7 @@ static void check_layout(const emm_layout *l, const mesh *g)
             for (int k = 0; k < 2; k++)
                 if (cen[k] < cell->lo[k] - eps || cen[k] > cell->hi[k] + eps)
                     bad_inside++;
-            if (emm_layout_cell_at(l, cen[0], cen[1], NULL) != c)
+            if (emm_layout_cell_at(l, cen, NULL) != c)
                 bad_at++;
         }
         /* The cell's vertices are exactly its triangles' vertices, once each. */
@@ -350,15 +350,16 @@ static void check_layout(const emm_layout *l, const mesh *g)
 /* Interior grid cells have 8 neighbours, interior tiles 6; sides per §4.2.2. */
 static void check_grid_shape(const emm_layout *l)
 {
-    uint32_t cols, rows;
-    emm_layout_dims(l, &cols, &rows);
+    uint32_t per[EMM_MAX_DIMS];
+    CHECK(emm_layout_cells_per_axis(l, per) == 2);
+    uint32_t cols = per[0], rows = per[1];
     int tiles = emm_layout_get_options(l)->kind == EMM_LAYOUT_TILES;
     int interior = 0, bad = 0;
     for (uint32_t c = 0; c < emm_layout_cell_count(l); c++) {
         const emm_layout_cell *cell = emm_layout_cell_get(l, c);
-        uint32_t len = tiles ? cols + ((uint32_t)cell->row & 1u) : cols;
-        if (cell->row == 0 || (uint32_t)cell->row + 1 >= rows || cell->col == 0 ||
-            (uint32_t)cell->col + 1 >= len)
+        uint32_t len = tiles ? cols + ((uint32_t)cell->coord[1] & 1u) : cols;
+        if (cell->coord[1] == 0 || (uint32_t)cell->coord[1] + 1 >= rows || cell->coord[0] == 0 ||
+            (uint32_t)cell->coord[0] + 1 >= len)
             continue;
         interior++;
         const uint8_t *side;
@@ -412,10 +413,10 @@ static void check_quadtree(const emm_layout *l, uint32_t cell_limit, uint32_t *d
         }
         uint32_t levels;
         double mid[2] = {(cell->lo[0] + cell->hi[0]) / 2, (cell->lo[1] + cell->hi[1]) / 2};
-        if (emm_layout_cell_at(l, mid[0], mid[1], &levels) != c || levels != cell->depth)
+        if (emm_layout_cell_at(l, mid, &levels) != c || levels != cell->depth)
             bad_path++;
         double size = cell->hi[0] - cell->lo[0];
-        double lo[2], hi[2];
+        double lo[EMM_MAX_DIMS], hi[EMM_MAX_DIMS];
         emm_layout_axes(l, NULL, lo, hi);
         double tol = 1e-12 * (1 + hi[0] - lo[0] + hi[1] - lo[1]);
         if (fabs(cell->lo[0] - (lo[0] + ix * size)) > tol ||
@@ -462,8 +463,9 @@ static void test_cell_counts(void)
     for (uint32_t cell = 16; cell <= 256; cell *= 2) {
         emm_layout *l = build(&g, EMM_LAYOUT_GRID, cell);
         REQUIRE(l);
-        uint32_t want = (uint32_t)((g.nt + cell - 1) / cell), cols, rows;
-        emm_layout_dims(l, &cols, &rows);
+        uint32_t want = (uint32_t)((g.nt + cell - 1) / cell), n[EMM_MAX_DIMS];
+        emm_layout_cells_per_axis(l, n);
+        uint32_t cols = n[0];
         CHECKF(emm_layout_cell_count(l) >= want && emm_layout_cell_count(l) < want + cols + 1,
                "cell %u: %u cells for %u wanted", cell, emm_layout_cell_count(l), want);
         const emm_layout_cell *c0 = emm_layout_cell_get(l, 0);
@@ -574,7 +576,7 @@ static void test_degenerate(void)
     }
     emm_layout *l = build(&xz, EMM_LAYOUT_GRID, 8);
     REQUIRE(l);
-    int axes[2];
+    int axes[EMM_MAX_DIMS];
     emm_layout_axes(l, axes, NULL, NULL);
     CHECK(axes[0] == 0 && axes[1] == 2);
     check_layout(l, &xz);

@@ -60,7 +60,7 @@ static double *profile_of(const emm_mesh *m, emm_pattern p, uint64_t seed, size_
     remove(path);
     double *D = malloc(*n * sizeof *D);
     REQUIRE(D);
-    REQUIRE(emm_profile_compute(xy, *n, D, NULL, &err) == EMM_OK);
+    REQUIRE(emm_profile_compute(xy, *n, D, NULL, NULL, &err) == EMM_OK);
     free(xy);
     return D;
 }

@@ -91,7 +91,7 @@ static void test_exact(void)
             double *xy = malloc((2 * n + 2) * sizeof *xy);
             double *D = malloc((n + 1) * sizeof *D), *R = malloc((n + 1) * sizeof *R);
             points(kind, xy, n);
-            emm_profile_exact(xy, n, D);
+            emm_profile_exact(xy, n, D, NULL);
             brute(xy, n, R);
             double e = max_rel(D, R, n);
             CHECKF(e <= 1e-12, "exact n=%zu kind=%d: relative error %g", n, kind, e);
@@ -111,10 +111,10 @@ static void test_fast(void)
         double *xy = malloc(2 * n * sizeof *xy);
         double *D = malloc(n * sizeof *D), *R = malloc(n * sizeof *R);
         points(kind, xy, n);
-        emm_profile_exact(xy, n, R);
+        emm_profile_exact(xy, n, R, NULL);
         for (size_t t = 0; t < sizeof thetas / sizeof thetas[0]; t++) {
             emm_error err;
-            REQUIRE(emm_profile_fast(xy, n, thetas[t], D, &err) == EMM_OK);
+            REQUIRE(emm_profile_fast(xy, n, thetas[t], D, NULL, &err) == EMM_OK);
             double e = max_rel(D, R, n), bound = emm_profile_fast_bound(thetas[t]);
             printf("fast kind=%d n=%zu theta=%.3f: max relative error %.3g (bound %.3g)\n", kind,
                    n, thetas[t], e, bound);
@@ -134,10 +134,10 @@ static void test_fast(void)
 
     emm_error err;
     double xy[4] = {0, 0, 1, 1}, D[2];
-    CHECK(emm_profile_fast(xy, 2, 0.0, D, &err) == EMM_ERR_RANGE);
-    CHECK(emm_profile_fast(xy, 2, 1.0, D, &err) == EMM_ERR_RANGE);
+    CHECK(emm_profile_fast(xy, 2, 0.0, D, NULL, &err) == EMM_ERR_RANGE);
+    CHECK(emm_profile_fast(xy, 2, 1.0, D, NULL, &err) == EMM_ERR_RANGE);
     CHECK(strstr(err.message, "opening angle") != NULL);
-    CHECK(emm_profile_fast(xy, 2, 0.5, D, &err) == EMM_OK);
+    CHECK(emm_profile_fast(xy, 2, 0.5, D, NULL, &err) == EMM_OK);
     CHECK(D[0] == 0 && fabs(D[1] - sqrt(2.0)) < 1e-15);
 }
 
@@ -148,12 +148,12 @@ static void test_compute(void)
     points(UNIFORM, xy, n);
     int exact = -1;
     emm_error err;
-    REQUIRE(emm_profile_compute(xy, 1000, D, &exact, &err) == EMM_OK);
+    REQUIRE(emm_profile_compute(xy, 1000, D, &exact, NULL, &err) == EMM_OK);
     CHECK(exact == 1);
-    REQUIRE(emm_profile_compute(xy, n, D, &exact, &err) == EMM_OK);
+    REQUIRE(emm_profile_compute(xy, n, D, &exact, NULL, &err) == EMM_OK);
     CHECK(exact == 0);
     double *R = malloc(n * sizeof *R);
-    emm_profile_exact(xy, n, R);
+    emm_profile_exact(xy, n, R, NULL);
     CHECK(max_rel(D, R, n) <= emm_profile_fast_bound(EMM_PROFILE_THETA));
     free(R);
     free(xy);

@@ -106,7 +106,7 @@ static void setup(void)
     REQUIRE(n == WINDOW);
     D = malloc(n * sizeof *D);
     REQUIRE(D);
-    REQUIRE(emm_profile_compute(xy, n, D, NULL, &err) == EMM_OK);
+    REQUIRE(emm_profile_compute(xy, n, D, NULL, NULL, &err) == EMM_OK);
     REQUIRE(emm_profile_features(D, n, "expect", feat, &err) == EMM_OK);
     free(xy);
     free(D);
@@ -139,16 +139,29 @@ static void write_table(const char *path, const char *near, int only_far)
     write_table_synth(path, near, "-", only_far);
 }
 
+/* The settings the sessions of these tests start from (reset by each
+ * base_config); tests change fields of tcfg, or set them through the
+ * configuration table where the parsing is what they test. */
+static emm_config tcfg;
+
 static emm_session_config base_config(void)
 {
     emm_session_config c = {0};
-    c.window_accesses = WINDOW;
-    c.compare = EMM_COMPARE_BASELINES;
-    c.table_path = "table.txt";
-    c.capture = "test";
+    emm_config_init(&tcfg);
+    tcfg.window_accesses = WINDOW;
+    tcfg.compare = EMM_COMPARE_BASELINES;
+    strcpy(tcfg.table, "table.txt");
+    tcfg.log = 1;
+    c.config = &tcfg;
+    c.capture = EMM_CAPTURE_API;
     c.program = "test_session";
-    c.log = 1;
     return c;
+}
+
+static void set_strategy(const char *text)
+{
+    emm_error err;
+    REQUIRE(emm_config_set(&tcfg, EMM_CONFIG_STRATEGY, text, NULL, 0, &err) == EMM_OK);
 }
 
 static void tag_all(emm_session *s)
@@ -232,9 +245,9 @@ static void test_decide_from_table(void)
     emm_session *s;
     write_table("table.txt", "direct", 0);
     emm_session_config c = base_config();
-    c.report_path = "run.json";
-    c.profile_dump = "run.csv";
-    c.trace_path = "run.emmt";
+    strcpy(tcfg.report, "run.json");
+    strcpy(tcfg.profile_dump, "run.csv");
+    strcpy(tcfg.trace, "run.emmt");
     remove("run.json");
     remove("run.csv");
     remove("run.emmt");
@@ -266,7 +279,7 @@ static void test_decide_from_table(void)
     CHECK(has(json, "\"nearest\": \"mine\""));
     CHECK(has(json, "\"novel\": false"));
     CHECK(has(json, "\"source\": \"table\""));
-    CHECK(has(json, "\"capture\": \"test\""));
+    CHECK(has(json, "\"capture\": \"api\""));
     CHECK(has_u64(json, "element_accesses", WINDOW));
     CHECK(has_u64(json, "accesses", nrecs));
     CHECK(has_u64(json, "total", expect_direct.total));
@@ -320,7 +333,7 @@ static void test_decide_checked(void)
     emm_session *s;
     write_table_synth("table.txt", "direct", "region", 0);
     emm_session_config c = base_config();
-    c.report_path = "checked.json";
+    strcpy(tcfg.report, "checked.json");
     remove("checked.json");
     REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
     tag_all(s);
@@ -359,10 +372,10 @@ static void test_window_not_filled(void)
     emm_session *s;
     write_table("table.txt", "direct", 0);
     emm_session_config c = base_config();
-    c.window_accesses = 1000000000;
-    c.report_path = "short.json";
-    c.strategy = "cache";
-    c.compare = EMM_COMPARE_NONE;
+    tcfg.window_accesses = 1000000000;
+    strcpy(tcfg.report, "short.json");
+    set_strategy("cache");
+    tcfg.compare = EMM_COMPARE_NONE;
     remove("short.json");
     REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
     tag_all(s);
@@ -401,9 +414,9 @@ static void test_novel(void)
     emm_session *s;
     write_table("far.txt", NULL, 1);
     emm_session_config c = base_config();
-    c.table_path = "far.txt";
+    strcpy(tcfg.table, "far.txt");
     c.table_only = 1; /* the shipped table may hold a sample near this window */
-    c.report_path = "novel.json";
+    strcpy(tcfg.report, "novel.json");
     remove("novel.json");
     REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
     tag_all(s);
@@ -426,9 +439,9 @@ static void test_compare_all(void)
     emm_error err;
     emm_session *s;
     emm_session_config c = base_config();
-    c.strategy = "direct";
-    c.compare = EMM_COMPARE_ALL;
-    c.report_path = "all.json";
+    set_strategy("direct");
+    tcfg.compare = EMM_COMPARE_ALL;
+    strcpy(tcfg.report, "all.json");
     remove("all.json");
     REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
     tag_all(s);
@@ -454,9 +467,9 @@ static void test_iterations(void)
     emm_error err;
     emm_session *s;
     emm_session_config c = base_config();
-    c.window_accesses = 0;
-    c.window_iterations = 3;
-    c.strategy = "direct";
+    tcfg.window_accesses = 0;
+    tcfg.window_iterations = 3;
+    set_strategy("direct");
     REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
     tag_all(s);
     CHECK(feed(s, 500, 1) == 1);
@@ -471,12 +484,12 @@ static void test_report_whole_or_absent(void)
     emm_error err;
     emm_session *s;
     emm_session_config c = base_config();
-    c.report_path = "no-such-dir/r.json";
-    CHECK(emm_session_new(&c, &s, &err) == EMM_ERR_IO);
+    CHECK(emm_config_set(&tcfg, EMM_CONFIG_REPORT, "no-such-dir/r.json", NULL, 0, &err) ==
+          EMM_ERR_INVALID);
     CHECKF(has(err.message, "EMM_REPORT") && has(err.message, "no-such-dir"), "%s", err.message);
 
     mkdir("gone", 0755);
-    c.report_path = "gone/r.json";
+    strcpy(tcfg.report, "gone/r.json");
     REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
     tag_all(s);
     feed(s, 2048, 0);
@@ -492,15 +505,18 @@ static void test_bad_config(void)
     emm_error err;
     emm_session *s;
     emm_session_config c = base_config();
-    c.strategy = "grid+sideways";
-    CHECK(emm_session_new(&c, &s, &err) == EMM_ERR_INVALID);
+    CHECK(emm_config_set(&tcfg, EMM_CONFIG_STRATEGY, "grid+sideways", NULL, 0, &err) ==
+          EMM_ERR_INVALID);
     CHECKF(has(err.message, "EMM_STRATEGY"), "%s", err.message);
+    CHECK(emm_config_set(&tcfg, EMM_CONFIG_MACHINE, "no-such-machine.ini", "--machine", 0, &err) ==
+          EMM_ERR_INVALID);
+    CHECKF(has(err.message, "--machine='no-such-machine.ini'"), "%s", err.message);
     c = base_config();
-    c.machine_path = "no-such-machine.ini";
+    strcpy(tcfg.machine, "no-such-machine.ini");
     CHECK(emm_session_new(&c, &s, &err) != EMM_OK);
     CHECKF(has(err.message, "EMM_MACHINE"), "%s", err.message);
     c = base_config();
-    c.table_path = "no-such-table.txt";
+    strcpy(tcfg.table, "no-such-table.txt");
     CHECK(emm_session_new(&c, &s, &err) != EMM_OK);
     CHECKF(has(err.message, "EMM_TABLE"), "%s", err.message);
 }
@@ -512,7 +528,7 @@ static void test_bad_geometry(void)
     emm_error err;
     emm_session *s;
     emm_session_config c = base_config();
-    c.report_path = "bad.json";
+    strcpy(tcfg.report, "bad.json");
     remove("bad.json");
     REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
     CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_F64) >= 0);
@@ -543,7 +559,7 @@ static void test_tags(void)
     emm_error err;
     emm_session *s;
     emm_session_config c = base_config();
-    c.strategy = "direct";
+    set_strategy("direct");
     REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
     CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 78, EMM_F64) < 0);
     CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_I32) < 0);
@@ -553,11 +569,22 @@ static void test_tags(void)
     CHECK(a >= 0 && b >= 0);
     uint64_t lo[4], hi[4];
     CHECK(emm_session_ranges(s, lo, hi, 4) == 1 && hi[0] == vbase + nv * VSTRIDE);
-    emm_session_untag(s, vmem);
+    /* The last vertex array leaves before the window is full: the session
+     * asks for the decision now, on the array's fields copied as it left. */
+    CHECK(emm_session_untag(s, vmem) == EMM_SESSION_DECIDE);
     CHECK(emm_session_ranges(s, lo, hi, 4) == 0);
     emm_raw_access x = {vbase + 8, 8, 0};
     emm_session_access(s, &x, 1);
-    CHECK(emm_session_finish(s, NULL, &err) != EMM_OK); /* nothing tagged at the decision */
+    CHECK(emm_session_decide(s, &err) == EMM_OK);
+    CHECK(emm_session_finish(s, NULL, &err) == EMM_OK);
+    emm_session_free(s);
+
+    /* Nothing tagged at the decision. */
+    c = base_config();
+    set_strategy("direct");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    emm_session_access(s, &x, 1);
+    CHECK(emm_session_finish(s, NULL, &err) != EMM_OK);
     CHECKF(has(err.message, "no vertex array was tagged"), "%s", err.message);
     emm_session_free(s);
 }

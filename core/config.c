@@ -1,0 +1,447 @@
+/* The configuration table (include/emm/config.h; STYLE.md §8, after
+ * mimalloc's options.c). Each row names a variable, its `emm run` option,
+ * what it accepts, its default, its help and the function that parses it;
+ * everything else — the environment, the options, validation messages,
+ * `emm run --help`, the EMM_LOG=2 dump — reads the rows. */
+#include "emm/config.h"
+
+#include <errno.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "error.h"
+#include "parse.h"
+
+/* Parses v into c; false with `why` filled (or left empty for "expected
+ * <accepts>"). */
+typedef bool (*row_parser)(emm_config *c, const char *v, long pid, char *why, size_t cap);
+
+static const char *const capture_names[EMM_CAPTURE_COUNT] = {"auto", "sancov", "fault", "api"};
+static const char *const compare_names[EMM_COMPARE_COUNT] = {"baselines", "all", "none"};
+static const char *const log_words[] = {"quiet", "summary", "verbose"};
+
+const char *emm_capture_name(emm_capture c)
+{
+    return (unsigned)c < EMM_CAPTURE_COUNT ? capture_names[c] : "?";
+}
+
+const char *emm_compare_name(emm_compare c)
+{
+    return (unsigned)c < EMM_COMPARE_COUNT ? compare_names[c] : "?";
+}
+
+/* The index of v in words[0..n), or -1. */
+static int word(const char *v, const char *const *words, int n)
+{
+    for (int i = 0; i < n; i++)
+        if (strcmp(v, words[i]) == 0)
+            return i;
+    return -1;
+}
+
+static bool parse_strict(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid; (void)why; (void)cap;
+    if (strcmp(v, "0") != 0 && strcmp(v, "1") != 0)
+        return false;
+    c->strict = v[0] == '1';
+    return true;
+}
+
+static bool parse_tag(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid;
+    emm_error e;
+    if (emm_tag_rules_parse(v, &c->tags, &e) != EMM_OK) {
+        snprintf(why, cap, "%s", e.message);
+        return false;
+    }
+    return true;
+}
+
+static bool parse_capture(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid; (void)why; (void)cap;
+    int k = word(v, capture_names, EMM_CAPTURE_COUNT);
+    if (k < 0)
+        return false;
+    c->capture = (emm_capture)k;
+    return true;
+}
+
+/* N[K|M|G] accesses, or Nit iterations; N >= 1. */
+static bool parse_window(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid; (void)why; (void)cap;
+    size_t n = strlen(v);
+    uint64_t x;
+    if (n > 2 && strcmp(v + n - 2, "it") == 0) {
+        char digits[32];
+        if (n - 2 >= sizeof digits)
+            return false;
+        memcpy(digits, v, n - 2);
+        digits[n - 2] = '\0';
+        if (!emm_parse_u64(digits, &x) || x == 0)
+            return false;
+        c->window_accesses = 0;
+        c->window_iterations = x;
+        return true;
+    }
+    if (!emm_parse_size(v, &x) || x == 0)
+        return false;
+    c->window_accesses = x;
+    c->window_iterations = 0;
+    return true;
+}
+
+static bool parse_strategy(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid;
+    emm_error e;
+    if (emm_strategy_parse(v, &c->strategy, &e) != EMM_OK) {
+        snprintf(why, cap, "%s", e.message);
+        return false;
+    }
+    c->has_strategy = 1;
+    return true;
+}
+
+static bool parse_compare(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid; (void)why; (void)cap;
+    int k = word(v, compare_names, EMM_COMPARE_COUNT);
+    if (k < 0)
+        return false;
+    c->compare = (emm_compare)k;
+    return true;
+}
+
+/* An input file: it must exist, be readable and not be a directory. Its
+ * content is the session's to check. */
+static bool input_path(const char *v, char out[EMM_CONFIG_PATH_MAX], char *why, size_t cap)
+{
+    struct stat st;
+    if (strlen(v) >= EMM_CONFIG_PATH_MAX) {
+        snprintf(why, cap, "path too long");
+        return false;
+    }
+    if (stat(v, &st) != 0) {
+        snprintf(why, cap, "%s", strerror(errno));
+        return false;
+    }
+    if (S_ISDIR(st.st_mode)) {
+        snprintf(why, cap, "is a directory, expected a file");
+        return false;
+    }
+    if (access(v, R_OK) != 0) {
+        snprintf(why, cap, "not readable");
+        return false;
+    }
+    strcpy(out, v);
+    return true;
+}
+
+static bool parse_machine(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid;
+    return input_path(v, c->machine, why, cap);
+}
+
+static bool parse_table(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid;
+    return input_path(v, c->table, why, cap);
+}
+
+/* An output path: %p becomes the pid, %% a percent sign; its directory must
+ * exist and be writable now, so a report is not lost at exit. */
+static bool output_path(const char *v, long pid, char out[EMM_CONFIG_PATH_MAX], char *why,
+                        size_t cap)
+{
+    char path[EMM_CONFIG_PATH_MAX];
+    size_t o = 0;
+    for (const char *p = v; *p; p++) {
+        char piece[32];
+        size_t len;
+        if (p[0] == '%' && p[1] == 'p') {
+            len = (size_t)snprintf(piece, sizeof piece, "%ld", pid);
+            p++;
+        } else if (p[0] == '%' && p[1] == '%') {
+            piece[0] = '%';
+            len = 1;
+            p++;
+        } else {
+            piece[0] = *p;
+            len = 1;
+        }
+        if (o + len >= sizeof path) {
+            snprintf(why, cap, "path too long");
+            return false;
+        }
+        memcpy(path + o, piece, len);
+        o += len;
+    }
+    path[o] = '\0';
+    if (path[o - 1] == '/') {
+        snprintf(why, cap, "expected a file path, not a directory");
+        return false;
+    }
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        snprintf(why, cap, "is a directory, expected a file path");
+        return false;
+    }
+    char dir[EMM_CONFIG_PATH_MAX];
+    const char *slash = strrchr(path, '/');
+    if (!slash) {
+        strcpy(dir, ".");
+    } else if (slash == path) {
+        strcpy(dir, "/");
+    } else {
+        memcpy(dir, path, (size_t)(slash - path));
+        dir[slash - path] = '\0';
+    }
+    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        snprintf(why, cap, "directory %s does not exist", dir);
+        return false;
+    }
+    if (access(dir, W_OK | X_OK) != 0) {
+        snprintf(why, cap, "directory %s is not writable", dir);
+        return false;
+    }
+    strcpy(out, path);
+    return true;
+}
+
+static bool parse_report(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    return output_path(v, pid, c->report, why, cap);
+}
+
+static bool parse_dump(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    return output_path(v, pid, c->profile_dump, why, cap);
+}
+
+static bool parse_trace(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    return output_path(v, pid, c->trace, why, cap);
+}
+
+static bool parse_log(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid; (void)why; (void)cap;
+    for (int i = 0; i < 3; i++) {
+        char digit[2] = {(char)('0' + i), '\0'};
+        if (strcmp(v, digit) == 0 || strcmp(v, log_words[i]) == 0) {
+            c->log = i;
+            return true;
+        }
+    }
+    return false;
+}
+
+struct row {
+    emm_config_row pub;
+    row_parser parse;
+};
+
+/* The table, in emm_config_key order. */
+static const struct row rows[EMM_CONFIG_COUNT] = {
+    [EMM_CONFIG_STRICT] = {{"EMM_STRICT", NULL, NULL, "0 or 1", "0",
+        "1: a bad EMM_* value or a session that cannot start stops the program (exit 125)\n"
+        "instead of letting it run without emm",
+        {{"--strict", "1", "a bad value stops the program instead of the shim stepping aside"}}},
+        parse_strict},
+    [EMM_CONFIG_TAG] = {{"EMM_TAG", "--tag", "RULES", "rules KIND:key=value,...;... (see below)",
+        "(none)", "tag arrays by rule, e.g. vertices:site=read_mesh,stride=80,xyz=8:f64", {{0}}},
+        parse_tag},
+    [EMM_CONFIG_CAPTURE] = {{"EMM_CAPTURE", "--capture", "C", "auto, sancov, fault or api", "auto",
+        "how accesses are seen: sancov (a build with emm_sancov_executable), fault (page\n"
+        "protection, profiling window only), api (programs using emm_mesh_*); auto picks", {{0}}},
+        parse_capture},
+    [EMM_CONFIG_PROFILE] = {{"EMM_PROFILE", "--profile", "N",
+        "a count of accesses (16384, 16K) or of iterations (5it), at least 1", "16384",
+        "the profiling window: element accesses, or emm_iteration() calls with 'it'", {{0}}},
+        parse_window},
+    [EMM_CONFIG_STRATEGY] = {{"EMM_STRATEGY", "--strategy", "S",
+        "a strategy: direct, cache[@LAYOUT] or LAYOUT+FETCH[@CELL]", "(decide)",
+        "skip the decision and simulate this strategy, e.g. tiles+convolution@64", {{0}}},
+        parse_strategy},
+    [EMM_CONFIG_COMPARE] = {{"EMM_COMPARE", "--compare", "C", "baselines, all or none", "baselines",
+        "also simulate direct reads and the cache (baselines), the whole sweep (all) or nothing",
+        {{0}}}, parse_compare},
+    [EMM_CONFIG_MACHINE] = {{"EMM_MACHINE", "--machine", "FILE", "a readable machine file",
+        "(built-in)", "the machine model's parameters (see emm machine --help)", {{0}}},
+        parse_machine},
+    [EMM_CONFIG_TABLE] = {{"EMM_TABLE", "--table", "FILE", "a readable strategy table file",
+        "(shipped table only)", "a user table of sample profiles, consulted with the shipped one",
+        {{0}}}, parse_table},
+    [EMM_CONFIG_REPORT] = {{"EMM_REPORT", "--report", "FILE",
+        "a file path in a writable directory (%p: pid)", "(none)",
+        "write the JSON report there at exit (docs/report.md)", {{0}}}, parse_report},
+    [EMM_CONFIG_PROFILE_DUMP] = {{"EMM_PROFILE_DUMP", "--dump", "FILE",
+        "a file path in a writable directory (%p: pid)", "(none)",
+        "write the window's distance profile as CSV (i,D_i)", {{0}}}, parse_dump},
+    [EMM_CONFIG_TRACE] = {{"EMM_TRACE", "--trace", "FILE",
+        "a file path in a writable directory (%p: pid)", "(none)",
+        "write the access trace, for emm replay", {{0}}}, parse_trace},
+    [EMM_CONFIG_LOG] = {{"EMM_LOG", "--log", "LEVEL", "0, 1, 2, quiet, summary or verbose", "1",
+        "0: nothing on stderr; 1: the summary at exit; 2: also what the shim does",
+        {{"--quiet", "0", "no summary"}, {"-q", "0", "the same as --quiet"},
+         {"--verbose", "2", "more detail"}, {"-v", "2", "the same as --verbose"}}},
+        parse_log},
+};
+
+const emm_config_row *emm_config_row_get(emm_config_key k)
+{
+    return (unsigned)k < EMM_CONFIG_COUNT ? &rows[k].pub : NULL;
+}
+
+void emm_config_init(emm_config *c)
+{
+    memset(c, 0, sizeof *c);
+    c->capture = EMM_CAPTURE_AUTO;
+    c->window_accesses = EMM_CONFIG_DEFAULT_WINDOW;
+    c->compare = EMM_COMPARE_BASELINES;
+    c->log = 1;
+}
+
+emm_status emm_config_set(emm_config *c, emm_config_key k, const char *value, const char *source,
+                          long pid, emm_error *err)
+{
+    char why[400] = "", q[EMM_CLIP + 1];
+    if ((unsigned)k >= EMM_CONFIG_COUNT)
+        return emm_fail(err, EMM_ERR_INVALID, "%s: not a setting", source ? source : "?");
+    const struct row *r = &rows[k];
+    if (!source)
+        source = r->pub.var;
+    /* Parsed into a copy: a bad value leaves c as it was. The copy is large
+     * (five paths), so it lives on the heap when it can. */
+    emm_config *t = malloc(sizeof *t);
+    emm_config local;
+    bool heap = t != NULL;
+    if (!heap)
+        t = &local;
+    *t = *c;
+    bool ok = *value != '\0' && r->parse(t, value, pid, why, sizeof why);
+    if (ok) {
+        t->source[k] = source;
+        *c = *t;
+    }
+    if (heap)
+        free(t);
+    if (ok)
+        return EMM_OK;
+    emm_clip(value, strlen(value), q);
+    if (why[0])
+        return emm_fail(err, EMM_ERR_INVALID, "%s='%s': %s", source, q, why);
+    return emm_fail(err, EMM_ERR_INVALID, "%s='%s': expected %s", source, q, r->pub.accepts);
+}
+
+emm_status emm_config_from_env(emm_config *c, const char *(*get)(const char *name), long pid,
+                               unsigned skip, emm_error *err)
+{
+    for (int k = 0; k < EMM_CONFIG_COUNT; k++) {
+        if (skip & (1u << k))
+            continue;
+        const char *v = get(rows[k].pub.var);
+        if (!v)
+            continue;
+        emm_status st = emm_config_set(c, (emm_config_key)k, v, rows[k].pub.var, pid, err);
+        if (st != EMM_OK)
+            return st;
+    }
+    return EMM_OK;
+}
+
+emm_config_key emm_config_find_option(const char *arg, const char **fixed)
+{
+    for (int k = 0; k < EMM_CONFIG_COUNT; k++) {
+        const emm_config_row *r = &rows[k].pub;
+        if (r->option && strcmp(arg, r->option) == 0) {
+            *fixed = NULL;
+            return (emm_config_key)k;
+        }
+        for (int i = 0; i < EMM_CONFIG_SWITCHES && r->switches[i].option; i++)
+            if (strcmp(arg, r->switches[i].option) == 0) {
+                *fixed = r->switches[i].value;
+                return (emm_config_key)k;
+            }
+    }
+    *fixed = NULL;
+    return EMM_CONFIG_COUNT;
+}
+
+/* The help's lines under a row, indented. */
+static void help_lines(FILE *out, const char *h, int indent)
+{
+    while (*h) {
+        const char *nl = strchr(h, '\n');
+        size_t len = nl ? (size_t)(nl - h) : strlen(h);
+        fprintf(out, "%*s%.*s\n", indent, "", (int)len, h);
+        h += len + (nl ? 1 : 0);
+    }
+}
+
+void emm_config_help(FILE *out, int options)
+{
+    if (options) {
+        for (int k = 0; k < EMM_CONFIG_COUNT; k++) {
+            const emm_config_row *r = &rows[k].pub;
+            char head[64];
+            if (r->option) {
+                snprintf(head, sizeof head, "%s %s", r->option, r->metavar);
+                fprintf(out, "  %-18s %s (%s; default %s)\n", head, r->accepts, r->var, r->def);
+                help_lines(out, r->help, 21);
+            }
+            for (int i = 0; i < EMM_CONFIG_SWITCHES && r->switches[i].option; i++)
+                fprintf(out, "  %-18s %s (%s=%s)\n", r->switches[i].option, r->switches[i].help,
+                        r->var, r->switches[i].value);
+        }
+        fprintf(out, "\n");
+        emm_tag_rules_help(out);
+        return;
+    }
+    fprintf(out, "Environment (read by libemmshim.so; emm run's options set them):\n");
+    for (int k = 0; k < EMM_CONFIG_COUNT; k++) {
+        const emm_config_row *r = &rows[k].pub;
+        fprintf(out, "  %-17s %s (default: %s)\n", r->var, r->accepts, r->def);
+        help_lines(out, r->help, 21);
+    }
+    fprintf(out, "\n");
+    emm_tag_rules_help(out);
+    fprintf(out, "A bad value gets one line on stderr and the program runs without emm.\n");
+}
+
+void emm_config_dump(const emm_config *c, FILE *out)
+{
+    char s[96] = "";
+    fprintf(out, "emm:   EMM_STRICT=%d\n", c->strict ? 1 : 0);
+    fprintf(out, "emm:   EMM_TAG=%zu rule%s\n", c->tags.n, c->tags.n == 1 ? "" : "s");
+    for (size_t i = 0; i < c->tags.n; i++) {
+        const emm_tag_rule *r = &c->tags.rule[i];
+        fprintf(out, "emm:     rule %zu: %s site=%s min=%llu nth=%llu stride=%u offset=%u\n",
+                i + 1, r->kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles",
+                r->site[0] ? r->site : "(any)", (unsigned long long)r->min,
+                (unsigned long long)r->nth, r->stride, r->offset);
+    }
+    fprintf(out, "emm:   EMM_CAPTURE=%s\n", emm_capture_name(c->capture));
+    if (c->window_accesses)
+        fprintf(out, "emm:   EMM_PROFILE=%llu\n", (unsigned long long)c->window_accesses);
+    else
+        fprintf(out, "emm:   EMM_PROFILE=%lluit\n", (unsigned long long)c->window_iterations);
+    if (c->has_strategy)
+        emm_strategy_format(&c->strategy, s, sizeof s);
+    fprintf(out, "emm:   EMM_STRATEGY=%s\n", s);
+    fprintf(out, "emm:   EMM_COMPARE=%s\n", emm_compare_name(c->compare));
+    fprintf(out, "emm:   EMM_MACHINE=%s\n", c->machine);
+    fprintf(out, "emm:   EMM_TABLE=%s\n", c->table);
+    fprintf(out, "emm:   EMM_REPORT=%s\n", c->report);
+    fprintf(out, "emm:   EMM_PROFILE_DUMP=%s\n", c->profile_dump);
+    fprintf(out, "emm:   EMM_TRACE=%s\n", c->trace);
+    fprintf(out, "emm:   EMM_LOG=%d\n", c->log);
+}

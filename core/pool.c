@@ -1,0 +1,156 @@
+/* The thread pool (pool.h). Helpers wait on a condition variable for a
+ * round of work; in a round every thread, the caller included, takes the
+ * next index from a shared counter until none is left, so long and short
+ * items balance themselves. The caller returns when every helper has
+ * finished the round. */
+#include "pool.h"
+
+#include <pthread.h>
+#include <signal.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+struct emm_pool {
+    pthread_mutex_t mu;
+    pthread_cond_t work, done;
+    emm_threads t;
+    unsigned want;       /* helpers wanted */
+    unsigned started;    /* helpers running */
+    bool tried;          /* the helpers were started (or could not be) */
+    pthread_t *tids;
+
+    /* the round */
+    unsigned long round; /* bumped for each emm_pool_for */
+    void (*fn)(void *ctx, size_t i);
+    void *ctx;
+    size_t n, next;
+    unsigned busy;       /* helpers still in the round */
+    bool stop;
+};
+
+unsigned emm_threads_jobs(const emm_threads *t)
+{
+    if (t && t->jobs)
+        return t->jobs;
+    long c = sysconf(_SC_NPROCESSORS_ONLN);
+    return c > 0 ? (unsigned)c : 1;
+}
+
+emm_pool *emm_pool_new(const emm_threads *t, unsigned max_jobs)
+{
+    emm_pool *p = calloc(1, sizeof *p);
+    if (!p)
+        return NULL;
+    unsigned jobs = emm_threads_jobs(t);
+    if (max_jobs && jobs > max_jobs)
+        jobs = max_jobs;
+    p->want = jobs - 1;
+    if (t)
+        p->t = *t;
+    pthread_mutex_init(&p->mu, NULL);
+    pthread_cond_init(&p->work, NULL);
+    pthread_cond_init(&p->done, NULL);
+    return p;
+}
+
+/* Takes indices of the current round until none is left. Called with the
+ * lock held; returns with it held. */
+static void take(emm_pool *p)
+{
+    while (p->next < p->n) {
+        size_t i = p->next++;
+        pthread_mutex_unlock(&p->mu);
+        p->fn(p->ctx, i);
+        pthread_mutex_lock(&p->mu);
+    }
+}
+
+static void *helper(void *arg)
+{
+    emm_pool *p = arg;
+    if (p->t.on_start)
+        p->t.on_start(p->t.ctx);
+    unsigned long seen = 0;
+    pthread_mutex_lock(&p->mu);
+    for (;;) {
+        while (p->round == seen && !p->stop)
+            pthread_cond_wait(&p->work, &p->mu);
+        if (p->stop)
+            break;
+        seen = p->round;
+        take(p);
+        if (--p->busy == 0)
+            pthread_cond_signal(&p->done);
+    }
+    pthread_mutex_unlock(&p->mu);
+    return NULL;
+}
+
+/* Starts the helpers, once. The program's signals must never land on them:
+ * every signal is blocked while they are created, so they inherit a full
+ * mask. */
+static void start(emm_pool *p)
+{
+    p->tried = true;
+    if (p->want == 0)
+        return;
+    p->tids = calloc(p->want, sizeof *p->tids);
+    if (!p->tids)
+        return;
+    sigset_t all, old;
+    sigfillset(&all);
+    pthread_sigmask(SIG_SETMASK, &all, &old);
+    while (p->started < p->want && pthread_create(&p->tids[p->started], NULL, helper, p) == 0)
+        p->started++;
+    pthread_sigmask(SIG_SETMASK, &old, NULL);
+}
+
+unsigned emm_pool_jobs(emm_pool *p)
+{
+    if (!p)
+        return 1;
+    if (!p->tried)
+        start(p);
+    return p->started + 1;
+}
+
+void emm_pool_for(emm_pool *p, size_t n, void (*fn)(void *ctx, size_t i), void *ctx)
+{
+    if (n == 0)
+        return;
+    if (!p || n == 1 || emm_pool_jobs(p) == 1) {
+        for (size_t i = 0; i < n; i++)
+            fn(ctx, i);
+        return;
+    }
+    pthread_mutex_lock(&p->mu);
+    p->fn = fn;
+    p->ctx = ctx;
+    p->n = n;
+    p->next = 0;
+    p->busy = p->started;
+    p->round++;
+    pthread_cond_broadcast(&p->work);
+    take(p);
+    while (p->busy > 0)
+        pthread_cond_wait(&p->done, &p->mu);
+    pthread_mutex_unlock(&p->mu);
+}
+
+void emm_pool_free(emm_pool *p)
+{
+    if (!p)
+        return;
+    pthread_mutex_lock(&p->mu);
+    p->stop = true;
+    pthread_cond_broadcast(&p->work);
+    pthread_mutex_unlock(&p->mu);
+    for (unsigned i = 0; i < p->started; i++)
+        pthread_join(p->tids[i], NULL);
+    pthread_cond_destroy(&p->work);
+    pthread_cond_destroy(&p->done);
+    pthread_mutex_destroy(&p->mu);
+    free(p->tids);
+    free(p);
+}

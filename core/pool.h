@@ -1,0 +1,36 @@
+/* Internal: the one place the library starts threads (docs/architecture.md,
+ * "Threads"). A pool of helper threads, started with every signal blocked
+ * and calling the caller's on_start hook first (emm_threads), runs
+ * fn(ctx, i) for i in [0, n) on the helpers and the calling thread, each i
+ * once, in no fixed order. Everything that runs work in parallel — the model
+ * runner, the profile's two halves — goes through it. */
+#ifndef EMM_INTERNAL_POOL_H
+#define EMM_INTERNAL_POOL_H
+
+#include <stddef.h>
+
+#include "emm/common.h"
+
+typedef struct emm_pool emm_pool;
+
+/* The threads `t` asks for (NULL: the online CPUs), at least 1. */
+unsigned emm_threads_jobs(const emm_threads *t);
+
+/* A pool of up to min(jobs, max_jobs) - 1 helpers (max_jobs 0: no limit),
+ * started on first use. NULL when memory runs out: the caller then runs its
+ * work inline (emm_pool_for accepts a NULL pool and does just that). */
+emm_pool *emm_pool_new(const emm_threads *t, unsigned max_jobs);
+
+/* Threads that take part in emm_pool_for, the caller included (1 for a NULL
+ * pool, or when no helper could be started). */
+unsigned emm_pool_jobs(emm_pool *p);
+
+/* Calls fn(ctx, i) once for every i in [0, n), spread over the helpers and
+ * the calling thread, and returns when all are done. Not reentrant: one
+ * emm_pool_for at a time per pool. */
+void emm_pool_for(emm_pool *p, size_t n, void (*fn)(void *ctx, size_t i), void *ctx);
+
+/* Stops and joins the helpers. NULL is allowed. */
+void emm_pool_free(emm_pool *p);
+
+#endif

@@ -1,0 +1,281 @@
+/* EMM_TAG's grammar (DESIGN.md "The shim", Tagging): which allocations are
+ * mesh arrays and where the coordinates or vertex indices sit in each
+ * record.
+ *
+ *   vertices:site=read_mesh,stride=80,xyz=8:f64;triangles:site=read_mesh,stride=28,vidx=4:i32
+ *
+ * Parsed here, below the shim, so `emm run` refuses a bad rule before the
+ * program starts and the shim keeps only the matching (call stacks, ranks).
+ * Messages quote at most EMM_CLIP characters of the text, so the explanation
+ * always fits the one line. */
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "emm/config.h"
+#include "error.h"
+#include "parse.h"
+
+/* Without min=, a rule looks at blocks of at least this many bytes (and at
+ * least one record): the shim's fast path skips the unwinding for the small
+ * blocks that make up most allocations. */
+#define DEFAULT_MIN 4096u
+static bool parse_field(const char *v, size_t len, bool vertices, uint32_t *offset,
+                        emm_scalar *type)
+{
+    char buf[64];
+    if (len >= sizeof buf)
+        return false;
+    memcpy(buf, v, len);
+    buf[len] = '\0';
+    char *colon = strchr(buf, ':');
+    if (!colon)
+        return false;
+    *colon = '\0';
+    uint64_t off;
+    if (!emm_parse_u64(buf, &off) || off > UINT32_MAX)
+        return false;
+    const char *t = colon + 1;
+    if (vertices && strcmp(t, "f32") == 0)
+        *type = EMM_F32;
+    else if (vertices && strcmp(t, "f64") == 0)
+        *type = EMM_F64;
+    else if (!vertices && strcmp(t, "i32") == 0)
+        *type = EMM_I32;
+    else if (!vertices && strcmp(t, "u32") == 0)
+        *type = EMM_U32;
+    else if (!vertices && strcmp(t, "i64") == 0)
+        *type = EMM_I64;
+    else
+        return false;
+    *offset = (uint32_t)off;
+    return true;
+}
+
+static size_t scalar_size(emm_scalar t)
+{
+    return t == EMM_F64 || t == EMM_I64 ? 8 : 4;
+}
+
+static bool is_key(const char *p, size_t kl, const char *key)
+{
+    return kl == strlen(key) && memcmp(p, key, kl) == 0;
+}
+
+/* One rule, text[0..len). */
+static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_error *err)
+{
+    char q[EMM_CLIP + 1];
+    memset(r, 0, sizeof *r);
+    const char *colon = memchr(text, ':', len);
+    if (!colon)
+        return emm_fail(err, EMM_ERR_INVALID, "rule '%s' has no KIND: (vertices: or triangles:)",
+                        emm_clip(text, len, q));
+    size_t klen = (size_t)(colon - text);
+    if (is_key(text, klen, "vertices"))
+        r->kind = EMM_ARRAY_VERTICES;
+    else if (is_key(text, klen, "triangles"))
+        r->kind = EMM_ARRAY_TRIANGLES;
+    else
+        return emm_fail(err, EMM_ERR_INVALID, "unknown kind '%s' (expected vertices or triangles)",
+                        emm_clip(text, klen, q));
+    bool vertices = r->kind == EMM_ARRAY_VERTICES;
+    bool have_min = false, have_field = false;
+    const char *p = colon + 1, *end = text + len;
+    while (p < end) {
+        const char *comma = memchr(p, ',', (size_t)(end - p));
+        const char *e = comma ? comma : end;
+        const char *eq = memchr(p, '=', (size_t)(e - p));
+        size_t plen = (size_t)(e - p);
+        if (!eq || eq == p)
+            return emm_fail(err, EMM_ERR_INVALID, "'%s' is not key=value", emm_clip(p, plen, q));
+        size_t kl = (size_t)(eq - p), vl = (size_t)(e - eq - 1);
+        const char *v = eq + 1;
+        char num[32] = "";
+        uint64_t x = 0;
+        bool numeric = is_key(p, kl, "min") || is_key(p, kl, "nth") || is_key(p, kl, "stride");
+        if (numeric) {
+            if (vl == 0 || vl >= sizeof num)
+                return emm_fail(err, EMM_ERR_INVALID, "'%s' needs a number", emm_clip(p, plen, q));
+            memcpy(num, v, vl);
+            num[vl] = '\0';
+        }
+        if (is_key(p, kl, "site")) {
+            if (vl == 0 || vl >= EMM_TAG_SITE_MAX)
+                return emm_fail(err, EMM_ERR_INVALID,
+                                "'%s' needs a function name of 1 to %d characters",
+                                emm_clip(p, plen, q), EMM_TAG_SITE_MAX - 1);
+            memcpy(r->site, v, vl);
+            r->site[vl] = '\0';
+        } else if (is_key(p, kl, "min")) {
+            if (!emm_parse_size(num, &x))
+                return emm_fail(err, EMM_ERR_INVALID,
+                                "'%s' is not a size in bytes (K/M/G allowed)", emm_clip(p, plen, q));
+            r->min = x;
+            have_min = true;
+        } else if (is_key(p, kl, "nth")) {
+            if (!emm_parse_u64(num, &x) || x == 0)
+                return emm_fail(err, EMM_ERR_INVALID, "'%s' is not a rank from 1",
+                                emm_clip(p, plen, q));
+            r->nth = x;
+        } else if (is_key(p, kl, "stride")) {
+            if (!emm_parse_size(num, &x) || x == 0 || x > UINT32_MAX)
+                return emm_fail(err, EMM_ERR_INVALID, "'%s' is not a record size in bytes",
+                                emm_clip(p, plen, q));
+            r->stride = (uint32_t)x;
+        } else if (is_key(p, kl, "xyz") && vertices) {
+            if (!parse_field(v, vl, true, &r->offset, &r->type))
+                return emm_fail(err, EMM_ERR_INVALID, "'%s': expected xyz=OFFSET:f32|f64",
+                                emm_clip(p, plen, q));
+            have_field = true;
+        } else if (is_key(p, kl, "vidx") && !vertices) {
+            if (!parse_field(v, vl, false, &r->offset, &r->type))
+                return emm_fail(err, EMM_ERR_INVALID, "'%s': expected vidx=OFFSET:i32|u32|i64",
+                                emm_clip(p, plen, q));
+            have_field = true;
+        } else {
+            return emm_fail(err, EMM_ERR_INVALID, "unknown key in '%s' (%s rules take %s)",
+                            emm_clip(p, plen, q), vertices ? "vertices" : "triangles",
+                            vertices ? "site, min, nth, stride, xyz"
+                                     : "site, min, nth, stride, vidx");
+        }
+        p = comma ? comma + 1 : end;
+    }
+    if (r->stride == 0)
+        return emm_fail(err, EMM_ERR_INVALID, "rule '%s' needs stride=BYTES", emm_clip(text, len, q));
+    if (!have_field)
+        return emm_fail(err, EMM_ERR_INVALID,
+                        vertices ? "rule '%s' needs xyz=OFFSET:f32|f64"
+                                 : "rule '%s' needs vidx=OFFSET:i32|u32|i64",
+                        emm_clip(text, len, q));
+    if ((uint64_t)r->offset + 3 * scalar_size(r->type) > r->stride)
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "rule '%s': the three fields do not fit in stride bytes",
+                        emm_clip(text, len, q));
+    if (!have_min)
+        r->min = r->stride > DEFAULT_MIN ? r->stride : DEFAULT_MIN;
+    if (r->min < r->stride)
+        r->min = r->stride;
+    return EMM_OK;
+}
+
+emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *err)
+{
+    emm_tag_rules rs;
+    memset(&rs, 0, sizeof rs);
+    const char *p = text;
+    while (*p) {
+        const char *semi = strchr(p, ';');
+        size_t len = semi ? (size_t)(semi - p) : strlen(p);
+        if (len > 0) {
+            if (rs.n == EMM_TAG_RULES_MAX)
+                return emm_fail(err, EMM_ERR_INVALID, "more than %d rules", EMM_TAG_RULES_MAX);
+            emm_status st = parse_rule(p, len, &rs.rule[rs.n], err);
+            if (st != EMM_OK)
+                return st;
+            rs.n++;
+        }
+        p += len + (semi ? 1 : 0);
+    }
+    if (rs.n == 0)
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "expected rules KIND:key=value,... split by ';' (see emm run --help)");
+    *out = rs;
+    return EMM_OK;
+}
+
+void emm_tag_rules_help(FILE *out)
+{
+    fprintf(out,
+            "EMM_TAG rules are split by ';', each KIND:key=value,... with KIND vertices or\n"
+            "triangles. Selectors: site=FUNCTION (the function that makes the allocation,\n"
+            "looking past allocator and C++ standard-library frames such as std::vector's),\n"
+            "min=BYTES (K/M/G; default max(stride, 4K)), nth=N (the Nth block the other\n"
+            "selectors select, from 1). Record: stride=BYTES (required), xyz=OFFSET:f32|f64\n"
+            "(vertices), vidx=OFFSET:i32|u32|i64 (triangles). Count = block size / stride;\n"
+            "a block must be a whole number of records. A rule with site= follows the first\n"
+            "allocation call in that function it selects (a growing std::vector reallocates\n"
+            "from that same call); the function's other allocations go to later rules, so\n"
+            "list the rules in the order the program allocates the arrays.\n");
+}
+
+/* ---- call sites ------------------------------------------------------------ */
+
+/* Reads one <length><identifier> of the Itanium mangling at *p. */
+static bool mangled_id(const char **p, const char **id, size_t *len)
+{
+    size_t n = 0;
+    if (**p < '0' || **p > '9')
+        return false;
+    while (**p >= '0' && **p <= '9')
+        n = n * 10 + (size_t)(*(*p)++ - '0');
+    if (n == 0 || strnlen(*p, n) < n)
+        return false;
+    *id = *p;
+    *len = n;
+    *p += n;
+    return true;
+}
+
+void emm_tag_site_name(const char *symbol, char *out, size_t cap)
+{
+    char buf[1024];
+    snprintf(buf, sizeof buf, "%s", symbol);
+    char *dot = strchr(buf, '.');
+    if (dot && dot != buf)
+        *dot = '\0';
+    const char *p = buf, *id = NULL;
+    size_t len = 0;
+    if (p[0] == '_' && p[1] == 'Z') {
+        p += 2;
+        if (*p == 'L')
+            p++;
+        if (*p == 'N') {
+            p++;
+            while (*p == 'K' || *p == 'V' || *p == 'r')
+                p++;
+            if (p[0] == 'S' && p[1] == 't')
+                p += 2;
+            const char *cid;
+            size_t clen;
+            while (mangled_id(&p, &cid, &clen)) {
+                id = cid;
+                len = clen;
+            }
+        } else {
+            mangled_id(&p, &id, &len);
+        }
+    }
+    if (cap == 0)
+        return;
+    if (id && len < cap) {
+        memcpy(out, id, len);
+        out[len] = '\0';
+    } else {
+        /* Too long for any site= (EMM_TAG_SITE_MAX): cut, it will match nothing. */
+        size_t n = strnlen(buf, cap - 1);
+        memcpy(out, buf, n);
+        out[n] = '\0';
+    }
+}
+
+int emm_tag_site_is_library(const char *symbol, const char *object)
+{
+    static const char *const prefixes[] = {"_ZNSt", "_ZNKSt", "_ZSt", "_Znw", "_Zna",
+                                           "_ZN9__gnu_cxx", "_ZNK9__gnu_cxx", "__libc_"};
+    static const char *const libs[] = {"libc.so", "libstdc++.so", "libgcc_s.so", "ld-linux",
+                                       "libemmshim.so", "libunwind.so"};
+    if (symbol)
+        for (size_t i = 0; i < sizeof prefixes / sizeof *prefixes; i++)
+            if (strncmp(symbol, prefixes[i], strlen(prefixes[i])) == 0)
+                return 1;
+    if (!object)
+        return 0;
+    const char *base = strrchr(object, '/');
+    base = base ? base + 1 : object;
+    for (size_t i = 0; i < sizeof libs / sizeof *libs; i++)
+        if (strncmp(base, libs[i], strlen(libs[i])) == 0)
+            return 1;
+    return 0;
+}

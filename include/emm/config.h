@@ -1,0 +1,191 @@
+/* emm — the configuration: every EMM_* variable and `emm run` option, one
+ * table (STYLE.md §8, after mimalloc's options.c; DESIGN.md "The shim").
+ *
+ * Each row names the environment variable, the `emm run` option, what it
+ * accepts, its default and its help, and parses its value into an
+ * emm_config that holds *parsed* values (an emm_strategy, not text). The
+ * shim reads the environment through it, `emm run` its options, and both
+ * print their help and their verbose dump from the same rows. What a row
+ * can check from the value alone (a file exists, a directory is writable, a
+ * strategy or a tag rule is well formed) it checks; the content of a
+ * machine file or a table is checked when a session starts with the
+ * config, and every message names the variable or the option the value
+ * came from (emm_config.source). */
+#ifndef EMM_CONFIG_H
+#define EMM_CONFIG_H
+
+#include <stdio.h>
+
+#include "emm/common.h"
+#include "emm/strategy.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* How accesses are captured (the shim's backends). */
+typedef enum emm_capture {
+    EMM_CAPTURE_AUTO = 0, /* the shim picks */
+    EMM_CAPTURE_SANCOV,   /* a build with emm_sancov_executable */
+    EMM_CAPTURE_FAULT,    /* page protection, the profiling window only */
+    EMM_CAPTURE_API,      /* programs using emm_mesh_* */
+    EMM_CAPTURE_COUNT
+} emm_capture;
+
+/* "auto", "sancov", ... ("?" for other values). */
+EMM_API const char *emm_capture_name(emm_capture c);
+
+/* What the session simulates beside the chosen strategy. */
+typedef enum emm_compare {
+    EMM_COMPARE_BASELINES = 0, /* direct reads and the cache */
+    EMM_COMPARE_ALL,           /* the whole standard sweep */
+    EMM_COMPARE_NONE,          /* the chosen strategy only */
+    EMM_COMPARE_COUNT
+} emm_compare;
+
+/* "baselines", "all", "none" ("?" for other values). */
+EMM_API const char *emm_compare_name(emm_compare c);
+
+/* ---- EMM_TAG rules ------------------------------------------------------- */
+
+#define EMM_TAG_RULES_MAX 16
+#define EMM_TAG_SITE_MAX 128
+
+/* One rule: which allocations are a mesh array (site, min, nth) and where
+ * the coordinates or vertex indices sit in each record. */
+typedef struct emm_tag_rule {
+    emm_array_kind kind;          /* VERTICES or TRIANGLES */
+    char site[EMM_TAG_SITE_MAX];  /* a function on the allocation's stack; "" for any */
+    uint64_t min;                 /* the smallest block selected, in bytes (>= stride) */
+    uint64_t nth;                 /* only the nth block the other selectors select; 0: all */
+    uint32_t stride;              /* bytes per record */
+    uint32_t offset;              /* where the three scalars start in a record */
+    emm_scalar type;              /* f32|f64 for vertices, i32|u32|i64 for triangles */
+} emm_tag_rule;
+
+typedef struct emm_tag_rules {
+    size_t n;
+    emm_tag_rule rule[EMM_TAG_RULES_MAX];
+} emm_tag_rules;
+
+/* Parses EMM_TAG's grammar: rules split by ';', each KIND:key=value,...
+ * (docs in emm_tag_rules_help). On failure err says what is wrong in one
+ * line that quotes at most a bounded part of the text. */
+EMM_API emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *err);
+/* The grammar, as `emm run --help` prints it. */
+EMM_API void emm_tag_rules_help(FILE *out);
+
+/* A function's name as a rule's site= spells it, from its symbol: compiler
+ * clone suffixes (.constprop.0, .isra.0, .part.0, .cold) dropped, and a C++
+ * name reduced to its unqualified identifier (_ZN4mesh4loadEv -> load).
+ * Writes at most cap bytes (NUL included) into out. */
+EMM_API void emm_tag_site_name(const char *symbol, char *out, size_t cap);
+/* Whether a frame is not a program's allocation site: one of the C
+ * library, the C++ runtime, the loader, emm's own libraries, or a standard
+ * library template instantiated in the program (std::vector's growth,
+ * operator new). `symbol` (may be NULL) is the frame's raw symbol, `object`
+ * (may be NULL) the file of the object that holds it. */
+EMM_API int emm_tag_site_is_library(const char *symbol, const char *object);
+
+/* ---- the configuration table --------------------------------------------- */
+
+typedef enum emm_config_key {
+    EMM_CONFIG_STRICT = 0, /* first: it decides what a later bad value does */
+    EMM_CONFIG_TAG,
+    EMM_CONFIG_CAPTURE,
+    EMM_CONFIG_PROFILE,
+    EMM_CONFIG_STRATEGY,
+    EMM_CONFIG_COMPARE,
+    EMM_CONFIG_MACHINE,
+    EMM_CONFIG_TABLE,
+    EMM_CONFIG_REPORT,
+    EMM_CONFIG_PROFILE_DUMP,
+    EMM_CONFIG_TRACE,
+    EMM_CONFIG_LOG,
+    EMM_CONFIG_COUNT
+} emm_config_key;
+
+#define EMM_CONFIG_PATH_MAX 4096
+/* The profile window when EMM_PROFILE is unset, in element accesses. */
+#define EMM_CONFIG_DEFAULT_WINDOW 16384u
+
+/* Every setting, parsed. Paths are "" when unset; output paths have %p
+ * (the pid) and %% expanded. */
+typedef struct emm_config {
+    int strict;                   /* EMM_STRICT */
+    emm_tag_rules tags;           /* EMM_TAG; tags.n == 0 when unset */
+    emm_capture capture;          /* EMM_CAPTURE */
+    uint64_t window_accesses;     /* EMM_PROFILE in element accesses, 0 when in iterations */
+    uint64_t window_iterations;   /* EMM_PROFILE in emm_iteration() calls */
+    int has_strategy;             /* EMM_STRATEGY given: no decision */
+    emm_strategy strategy;
+    emm_compare compare;          /* EMM_COMPARE */
+    char machine[EMM_CONFIG_PATH_MAX];      /* EMM_MACHINE; "": built-in */
+    char table[EMM_CONFIG_PATH_MAX];        /* EMM_TABLE; "": the shipped table only */
+    char report[EMM_CONFIG_PATH_MAX];       /* EMM_REPORT */
+    char profile_dump[EMM_CONFIG_PATH_MAX]; /* EMM_PROFILE_DUMP */
+    char trace[EMM_CONFIG_PATH_MAX];        /* EMM_TRACE */
+    int log;                      /* EMM_LOG: 0 quiet, 1 summary, 2 verbose */
+    /* Where each value came from — the variable or the option that set it
+     * (static strings of the table), NULL for a default — so that every
+     * message names what the user typed. */
+    const char *source[EMM_CONFIG_COUNT];
+} emm_config;
+
+#define EMM_CONFIG_SWITCHES 4
+
+/* An `emm run` option that sets a fixed value (--quiet is EMM_LOG=0). */
+typedef struct emm_config_switch {
+    const char *option; /* "--quiet" */
+    const char *value;  /* "0" */
+    const char *help;
+} emm_config_switch;
+
+/* One row of the table. */
+typedef struct emm_config_row {
+    const char *var;      /* "EMM_TAG" */
+    const char *option;   /* "--tag" (NULL: no option with a value) */
+    const char *metavar;  /* "RULES" */
+    const char *accepts;  /* what a value may be, printed after "expected" */
+    const char *def;      /* the default, as text */
+    const char *help;     /* may hold several lines */
+    emm_config_switch switches[EMM_CONFIG_SWITCHES]; /* fixed-value options; NULL ends them */
+} emm_config_row;
+
+EMM_API const emm_config_row *emm_config_row_get(emm_config_key k);
+
+/* Every row at its default. */
+EMM_API void emm_config_init(emm_config *c);
+
+/* Sets row k from `value`, given as `source` (the variable or the option:
+ * it names the value in messages and is recorded in c->source[k]; it must
+ * outlive c — a row's var or option does). `pid` expands %p. On failure c
+ * is unchanged and err reads "SOURCE='value': problem", one line, the
+ * value cut (with "...") so the problem always fits. */
+EMM_API emm_status emm_config_set(emm_config *c, emm_config_key k, const char *value,
+                                  const char *source, long pid, emm_error *err);
+
+/* Reads every row's variable through `get` (getenv, or a test's own; an
+ * unset variable is NULL) in table order, skipping the rows whose bit is
+ * set in `skip` (1u << key: set by options that override them). Stops at
+ * the first bad value; c->strict is set even then when EMM_STRICT was
+ * valid. */
+EMM_API emm_status emm_config_from_env(emm_config *c, const char *(*get)(const char *name),
+                                       long pid, unsigned skip, emm_error *err);
+
+/* The row whose option or switch is `arg` ("--tag", "--quiet"); *fixed gets
+ * the switch's value, or NULL for an option that takes one. Returns
+ * EMM_CONFIG_COUNT when no row has it. */
+EMM_API emm_config_key emm_config_find_option(const char *arg, const char **fixed);
+
+/* The table for --help: `options` nonzero lists the `emm run` options with
+ * their variables, zero the variables alone. */
+EMM_API void emm_config_help(FILE *out, int options);
+
+/* The values in force, one "emm:   EMM_X=value" line each (EMM_LOG=2). */
+EMM_API void emm_config_dump(const emm_config *c, FILE *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

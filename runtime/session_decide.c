@@ -1,0 +1,299 @@
+/* The session's decision (DESIGN.md "The shim", Session; thesis §5): at
+ * the end of the window, "freeze the data" — read the positions and the
+ * triangles' vertex indices from the tagged arrays — profile the window
+ * (Eq. 5.1), choose the strategy (runtime/table.c, docs/profile.md "The
+ * decision"), build the models and replay the window through them. */
+#include "session_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "error.h"
+
+static double read_coord(const unsigned char *p, emm_scalar t)
+{
+    if (t == EMM_F32) {
+        float f;
+        memcpy(&f, p, sizeof f);
+        return f;
+    }
+    double d;
+    memcpy(&d, p, sizeof d);
+    return d;
+}
+
+static int64_t read_index(const unsigned char *p, emm_scalar t)
+{
+    if (t == EMM_I32) {
+        int32_t v;
+        memcpy(&v, p, sizeof v);
+        return v;
+    }
+    if (t == EMM_U32) {
+        uint32_t v;
+        memcpy(&v, p, sizeof v);
+        return v;
+    }
+    int64_t v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+
+/* The live array of `kind` with the most records: the mesh itself; other
+ * arrays of the kind are per-element data beside it. */
+static int largest(const emm_session *s, emm_array_kind kind)
+{
+    int best = -1;
+    for (int i = 0; i < s->narrays; i++)
+        if (session_usable(&s->arrays[i]) && s->arrays[i].kind == kind &&
+            (best < 0 || s->arrays[i].count > s->arrays[best].count))
+            best = i;
+    return best;
+}
+
+/* "Freeze the data": copies the positions and the triangles' vertex indices
+ * out of the program's arrays, checking them. */
+static emm_status read_geometry(emm_session *s, emm_error *err)
+{
+    int gv = largest(s, EMM_ARRAY_VERTICES), gt = largest(s, EMM_ARRAY_TRIANGLES);
+    if (gv < 0)
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "%s: no vertex array was tagged (emm_tag_vertices or an EMM_TAG "
+                        "'vertices:' rule), so there is no geometry to lay out",
+                        s->program);
+    const session_array *v = &s->arrays[gv];
+    if (v->count > INT32_MAX)
+        return emm_fail(err, EMM_ERR_RANGE, "%s: the vertex array has %llu records (at most %d)",
+                        s->program, (unsigned long long)v->count, INT32_MAX);
+    s->xyz = malloc(3 * v->count * sizeof *s->xyz);
+    if (!s->xyz)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
+    for (uint64_t i = 0; i < v->count; i++) {
+        const unsigned char *p = session_field_at(v, i);
+        for (int c = 0; c < 3; c++) {
+            double x = read_coord(p + (size_t)c * session_scalar_bytes(v->type), v->type);
+            if (!isfinite(x))
+                return emm_fail(err, EMM_ERR_MESH,
+                                "%s: tagged vertex array at 0x%llx: vertex %llu has a non-finite "
+                                "coordinate (is xyz's offset or type wrong?)",
+                                s->program, (unsigned long long)v->base, (unsigned long long)i);
+            s->xyz[3 * i + (uint64_t)c] = x;
+        }
+    }
+    s->info.geometry.nv = v->count;
+    s->info.geometry.xyz = s->xyz;
+    if (gt >= 0) {
+        const session_array *t = &s->arrays[gt];
+        s->tri = malloc(3 * t->count * sizeof *s->tri);
+        if (!s->tri)
+            return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
+        for (uint64_t i = 0; i < t->count; i++) {
+            const unsigned char *p = session_field_at(t, i);
+            for (int c = 0; c < 3; c++) {
+                int64_t x = read_index(p + (size_t)c * session_scalar_bytes(t->type), t->type);
+                if (x < 0 || (uint64_t)x >= v->count)
+                    return emm_fail(err, EMM_ERR_MESH,
+                                    "%s: tagged triangle array at 0x%llx: triangle %llu has vertex "
+                                    "index %lld, outside the %llu tagged vertices (is vidx's "
+                                    "offset or type wrong?)",
+                                    s->program, (unsigned long long)t->base,
+                                    (unsigned long long)i, (long long)x,
+                                    (unsigned long long)v->count);
+                s->tri[3 * i + (uint64_t)c] = (int32_t)x;
+            }
+        }
+        s->info.geometry.nt = t->count;
+        s->info.geometry.tri = s->tri;
+    }
+    return EMM_OK;
+}
+
+/* Trace arrays for the live slots the geometry covers, in slot order; the
+ * window's records are renumbered and those of other slots dropped. */
+static emm_status freeze_arrays(emm_session *s, emm_error *err)
+{
+    s->tarrays = calloc((size_t)s->narrays + 1, sizeof *s->tarrays);
+    if (!s->tarrays)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", s->program);
+    for (int i = 0; i < s->narrays; i++) {
+        session_array *a = &s->arrays[i];
+        uint64_t limit = a->kind == EMM_ARRAY_VERTICES ? s->info.geometry.nv : s->info.geometry.nt;
+        a->trace_index = -1;
+        if (!session_usable(a) || a->count > limit)
+            continue;
+        a->trace_index = (int32_t)s->ntarrays;
+        s->tarrays[s->ntarrays++] = (emm_trace_array){
+            .kind = a->kind, .record_size = (uint32_t)a->stride, .count = a->count, .base = a->base};
+    }
+    s->info.version = 1;
+    s->info.narrays = s->ntarrays;
+    s->info.arrays = s->tarrays;
+    size_t m = 0;
+    uint64_t work = 0;
+    for (size_t k = 0; k < s->wn; k++) {
+        emm_trace_record r = s->window[k];
+        int32_t t = s->arrays[r.array].trace_index;
+        if (t < 0) {
+            work += r.work;
+            s->dropped++;
+            continue;
+        }
+        work += r.work;
+        r.work = work > UINT32_MAX ? UINT32_MAX : (uint32_t)work;
+        work = 0;
+        r.array = (uint32_t)t;
+        s->window[m++] = r;
+    }
+    s->wn = m;
+    return EMM_OK;
+}
+
+/* Eq. 5.1 over the window, its features and the table's nearest sample. */
+static emm_status profile_window(emm_session *s, emm_error *err)
+{
+    emm_profiler *p;
+    emm_status st = emm_profiler_new(&s->info, s->welements ? s->welements : 1, s->program, &p, err);
+    if (st != EMM_OK)
+        return st;
+    if ((st = emm_profiler_add(p, s->window, s->wn, err)) != EMM_OK) {
+        emm_profiler_free(p);
+        return st;
+    }
+    /* The profiler leaves the leading sweep out by the same rule as
+     * window_add; its count of the sweep's records is the one that holds
+     * for the frozen window. */
+    emm_profiler_swept(p, &s->wskip);
+    size_t n;
+    const double *xy = emm_profiler_positions(p, &n);
+    if (n > 0) {
+        s->D = malloc(n * sizeof *s->D);
+        if (!s->D) {
+            emm_profiler_free(p);
+            return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile", s->program);
+        }
+        st = emm_profile_compute(xy, n, s->D, NULL, &s->threads, err);
+        s->nD = st == EMM_OK ? n : 0;
+    }
+    emm_profiler_free(p);
+    if (st != EMM_OK || s->nD < EMM_PROFILE_MIN || !s->table)
+        return st;
+    double f[EMM_FEATURES];
+    if ((st = emm_profile_features(s->D, s->nD, s->program, f, err)) != EMM_OK)
+        return st;
+    /* The nearest sample, also when EMM_STRATEGY decides (the report names it). */
+    if ((st = emm_table_decide(s->table, f, 0, &s->decision, err)) != EMM_OK)
+        return st;
+    memcpy(s->features, f, sizeof f);
+    s->has_profile = true;
+    return EMM_OK;
+}
+
+/* The decision (runtime/table.c, docs/profile.md "The decision"): the
+ * nearest sample, its pattern simulated over this mesh and weighed with the
+ * window, or the sweep on the window when the profile is novel. */
+static emm_status choose(emm_session *s, emm_error *err)
+{
+    emm_window_decision wd;
+    emm_decide_options opt = {0, 0, &s->threads};
+    emm_status st = emm_decide_features(s->table, s->machine, &s->info, s->window + s->wskip,
+                                        s->wn - s->wskip, s->features, s->nD, s->program, &opt,
+                                        &wd, err);
+    if (st != EMM_OK)
+        return st;
+    s->chosen = wd.strategy;
+    s->has_chosen = true;
+    s->source = wd.how == EMM_DECIDED_WINDOW    ? FROM_SIMULATION
+                : wd.how == EMM_DECIDED_CHECKED ? FROM_CHECKED
+                                                : FROM_TABLE;
+    return EMM_OK;
+}
+
+static bool same_strategy(const emm_strategy *a, const emm_strategy *b)
+{
+    return a->kind == b->kind && a->layout == b->layout && a->fetch == b->fetch &&
+           a->cell == b->cell;
+}
+
+/* The models: the chosen strategy first, then the comparison. A comparison
+ * strategy that cannot run on this mesh is skipped; the chosen one failing
+ * is reported, and the baselines still run. */
+static emm_status build_models(emm_session *s, emm_error *err)
+{
+    size_t cap = 3 + (s->cfg.compare == EMM_COMPARE_ALL ? emm_strategy_sweep(NULL, 0) : 0);
+    emm_strategy *all = calloc(cap, sizeof *all), *list = calloc(cap, sizeof *list);
+    emm_error *errs = calloc(cap, sizeof *errs);
+    size_t n = 0, k = 0;
+    emm_status st = EMM_OK;
+    if (!all || !list || !errs) {
+        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", s->program);
+        goto out;
+    }
+    if (s->has_chosen)
+        all[n++] = s->chosen;
+    if (s->cfg.compare == EMM_COMPARE_ALL) {
+        n += emm_strategy_sweep(all + n, cap - n);
+    } else if (s->cfg.compare == EMM_COMPARE_BASELINES || !s->has_chosen) {
+        all[n++] = (emm_strategy){EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
+        all[n++] = (emm_strategy){EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
+    }
+    for (size_t i = 0; i < n; i++) {
+        bool dup = false;
+        for (size_t j = 0; j < k; j++)
+            dup = dup || same_strategy(&all[i], &list[j]);
+        if (!dup)
+            list[k++] = all[i];
+    }
+    if ((st = emm_runner_new(&s->threads, &s->runner, err)) != EMM_OK ||
+        (st = emm_runner_add(s->runner, s->machine, list, k, &s->info, errs, err)) != EMM_OK)
+        goto out;
+    s->nmodels = k;
+    size_t built = 0;
+    for (size_t i = 0; i < k; i++) {
+        if (emm_runner_model(s->runner, i)) {
+            built++;
+        } else if (i == 0 && s->has_chosen) {
+            snprintf(s->strategy_note, sizeof s->strategy_note, "%s", errs[i].message);
+            s->has_chosen = false;
+        } else {
+            s->skipped++;
+        }
+    }
+    if (built == 0)
+        st = emm_fail(err, EMM_ERR_UNSUPPORTED, "%s: no strategy can be simulated: %s",
+                      s->program, s->strategy_note[0] ? s->strategy_note : "none was asked for");
+out:
+    free(all);
+    free(list);
+    free(errs);
+    return st;
+}
+
+emm_status session_decide(emm_session *s, emm_error *err)
+{
+    emm_status st;
+    if ((st = read_geometry(s, err)) != EMM_OK || (st = freeze_arrays(s, err)) != EMM_OK)
+        return st;
+    if ((st = profile_window(s, err)) != EMM_OK)
+        return st;
+    if (s->cfg.has_strategy) {
+        s->chosen = s->cfg.strategy;
+        s->has_chosen = true;
+        s->source = FROM_CONFIG;
+    } else if (s->has_profile) {
+        if ((st = choose(s, err)) != EMM_OK)
+            return st;
+    }
+    if ((st = build_models(s, err)) != EMM_OK)
+        return st;
+    if (s->cfg.trace[0]) {
+        if ((st = emm_trace_writer_open(s->cfg.trace, s->tarrays, s->ntarrays, &s->info.geometry,
+                                        0, &s->trace, &s->trace_error)) != EMM_OK) {
+            s->trace_failed = true;
+            s->trace = NULL;
+        }
+    }
+    session_simulate(s, s->window, s->wn);
+    return EMM_OK;
+}
+

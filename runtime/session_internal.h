@@ -1,0 +1,143 @@
+/* Internal to the session (runtime/session*.c): its state, shared by the
+ * three files that split its jobs —
+ *   session.c         lifecycle, tagged arrays, the window, the stream of
+ *                     records through the models
+ *   session_decide.c  "freeze the data", the profile, the decision, the models
+ *   session_report.c  the summary, the JSON report, the CSV
+ * include/emm/session.h has the contract. */
+#ifndef EMM_RUNTIME_SESSION_INTERNAL_H
+#define EMM_RUNTIME_SESSION_INTERNAL_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "emm/profile.h"
+#include "emm/session.h"
+#include "emm/sim.h"
+#include "emm/table.h"
+#include "lead_sweep.h"
+#include "runner.h"
+
+/* Arrays the session keeps at once (live or still referenced by the window). */
+#define SESSION_MAX_ARRAYS 16
+
+enum session_phase { PHASE_PROFILING, PHASE_DECIDE, PHASE_SIMULATING, PHASE_FAILED, PHASE_DONE };
+
+enum decision_source { FROM_NONE, FROM_CONFIG, FROM_TABLE, FROM_CHECKED, FROM_SIMULATION };
+
+typedef struct session_array {
+    emm_array_kind kind;
+    uint64_t base, end;  /* [base, end) */
+    uint64_t count, stride, field;
+    emm_scalar type;
+    bool live;           /* tagged now */
+    unsigned char *snap; /* the fields, copied when the array went away before the
+                            decision while the window named it; else NULL */
+    uint64_t refs;       /* window records that name this slot */
+    int32_t trace_index; /* the trace array it feeds after the decision, or -1 */
+} session_array;
+
+struct emm_session {
+    emm_config cfg;      /* the settings, parsed (a copy) */
+    char *program;
+    emm_capture capture;
+    emm_threads threads;
+    emm_machine *machine;
+    emm_table *table;    /* NULL: no table (a configured strategy without one) */
+
+    enum session_phase phase;
+    emm_error failure;   /* why the session stepped aside (PHASE_FAILED) */
+
+    session_array arrays[SESSION_MAX_ARRAYS];
+    int narrays;
+    int last;            /* the slot the previous access hit */
+    uint64_t pending_work; /* work of dropped accesses, carried to the next record */
+
+    /* the window */
+    emm_trace_record *window;
+    size_t wn, wcap, wlimit;
+    uint64_t welements, iterations;
+    bool wany;
+    uint32_t wlast_array;
+    uint64_t wlast_element;
+    lead_sweep sweep;    /* the leading index-order sweep */
+    size_t wskip;        /* window records of that sweep (the profiler's count) */
+
+    /* frozen at the decision */
+    emm_trace_array *tarrays;
+    uint32_t ntarrays;
+    double *xyz;
+    int32_t *tri;
+    emm_trace_info info;
+    double *D;           /* the window's distance profile, nD values */
+    size_t nD;
+    bool has_profile;    /* features and a table decision exist */
+    double features[EMM_FEATURES];
+    emm_decision decision;
+    enum decision_source source;
+    char strategy_note[512]; /* why the chosen strategy has no model, or "" */
+    emm_strategy chosen;
+    bool has_chosen;
+    emm_runner *runner;  /* the chosen strategy first (when has_chosen), then the comparison */
+    size_t nmodels;      /* models added to the runner (built or skipped) */
+    size_t skipped;      /* of them, the comparison's that cannot run on this mesh */
+    emm_trace_writer *trace;
+    emm_error trace_error;
+    bool trace_failed;
+    emm_trace_record *chunk;
+    size_t nchunk;
+    uint64_t accesses;   /* records simulated */
+    uint64_t dropped;    /* records of arrays left out of the trace */
+};
+
+/* Live, or gone with its fields kept for the decision. */
+static inline bool session_usable(const session_array *a)
+{
+    return a->live || a->snap;
+}
+
+static inline size_t session_scalar_bytes(emm_scalar t)
+{
+    return t == EMM_F32 || t == EMM_I32 || t == EMM_U32 ? 4 : 8;
+}
+
+/* The address of record i's three scalars, in the program's memory or in
+ * the slot's snapshot. */
+static inline const unsigned char *session_field_at(const session_array *a, uint64_t i)
+{
+    if (a->snap)
+        return a->snap + i * 3 * session_scalar_bytes(a->type);
+    return (const unsigned char *)(uintptr_t)(a->base + i * a->stride + a->field);
+}
+
+/* The name a setting was given by (the variable or the option), for messages. */
+static inline const char *session_source(const emm_session *s, emm_config_key k)
+{
+    return s->cfg.source[k] ? s->cfg.source[k] : emm_config_row_get(k)->var;
+}
+
+/* A path setting, or NULL when unset. */
+static inline const char *session_path(const char *p)
+{
+    return p[0] ? p : NULL;
+}
+
+/* session_decide.c: the geometry, the profile, the choice and the models;
+ * the window's records then go through them. A failure leaves the session
+ * to step aside. */
+emm_status session_decide(emm_session *s, emm_error *err);
+
+/* session.c: runs records through the models and the trace writer. */
+void session_simulate(emm_session *s, const emm_trace_record *recs, size_t n);
+
+/* session_report.c: the summary on `out`, with the results of the models
+ * that ran (res[0..nres), the chosen strategy first when there is one;
+ * NULL when the session failed). */
+void session_print_summary(const emm_session *s, FILE *out, const emm_result *res, size_t nres);
+/* The JSON report at cfg.report. */
+emm_status session_write_report(const emm_session *s, const emm_result *res, size_t nres,
+                                emm_error *err);
+/* The CSV of the window's profile at cfg.profile_dump. */
+emm_status session_write_csv(const emm_session *s, emm_error *err);
+
+#endif

@@ -1,0 +1,130 @@
+/* The model runner (runner.h) on the thread pool of core/pool.h. */
+#include "runner.h"
+
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "error.h"
+#include "pool.h"
+
+struct emm_runner {
+    emm_pool *pool;
+    emm_model **models; /* NULL entries: strategies that could not be built */
+    emm_model **live;   /* the built ones, for the run */
+    size_t n, nlive, cap;
+};
+
+emm_status emm_runner_new(const emm_threads *t, emm_runner **out, emm_error *err)
+{
+    emm_runner *r = calloc(1, sizeof *r);
+    if (!r)
+        return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the model runner");
+    /* No pool is no failure: the work then runs on the calling thread. */
+    r->pool = emm_pool_new(t, 0);
+    *out = r;
+    return EMM_OK;
+}
+
+struct build_job {
+    const emm_machine *m;
+    const emm_strategy *s;
+    const emm_trace_info *info;
+    emm_model **models;
+    emm_error *errs;
+};
+
+static void build_one(void *ctx, size_t i)
+{
+    struct build_job *j = ctx;
+    emm_error_clear(&j->errs[i]);
+    if (emm_model_new(j->m, &j->s[i], j->info, &j->models[i], &j->errs[i]) != EMM_OK)
+        j->models[i] = NULL;
+}
+
+emm_status emm_runner_add(emm_runner *r, const emm_machine *m, const emm_strategy *s, size_t n,
+                          const emm_trace_info *info, emm_error *errs, emm_error *err)
+{
+    if (n == 0)
+        return EMM_OK;
+    if (r->n + n > r->cap) {
+        size_t cap = r->cap ? r->cap : 8;
+        while (cap < r->n + n)
+            cap *= 2;
+        emm_model **mm = realloc(r->models, cap * sizeof *mm);
+        if (mm)
+            r->models = mm;
+        emm_model **ll = mm ? realloc(r->live, cap * sizeof *ll) : NULL;
+        if (ll)
+            r->live = ll;
+        if (!mm || !ll)
+            return emm_fail(err, EMM_ERR_NOMEM, "out of memory for %zu models", r->n + n);
+        r->cap = cap;
+    }
+    emm_error *e = errs ? errs : calloc(n, sizeof *e);
+    if (!e)
+        return emm_fail(err, EMM_ERR_NOMEM, "out of memory for %zu models", n);
+    struct build_job job = {m, s, info, r->models + r->n, e};
+    emm_pool_for(r->pool, n, build_one, &job);
+    emm_status st = EMM_OK;
+    for (size_t i = 0; i < n && st == EMM_OK; i++)
+        if (!job.models[i] && (e[i].status == EMM_ERR_NOMEM || !errs)) {
+            st = e[i].status;
+            if (err)
+                *err = e[i];
+        }
+    if (st != EMM_OK) {
+        for (size_t i = 0; i < n; i++)
+            emm_model_free(job.models[i]);
+    } else {
+        for (size_t i = 0; i < n; i++)
+            if (job.models[i])
+                r->live[r->nlive++] = job.models[i];
+        r->n += n;
+    }
+    if (!errs)
+        free(e);
+    return st;
+}
+
+size_t emm_runner_count(const emm_runner *r)
+{
+    return r->n;
+}
+
+emm_model *emm_runner_model(const emm_runner *r, size_t i)
+{
+    return i < r->n ? r->models[i] : NULL;
+}
+
+struct run_job {
+    emm_model **models;
+    const emm_trace_record *recs;
+    size_t n;
+};
+
+static void run_one(void *ctx, size_t i)
+{
+    const struct run_job *j = ctx;
+    emm_model_run(j->models[i], j->recs, j->n);
+}
+
+void emm_runner_run(emm_runner *r, const emm_trace_record *recs, size_t n)
+{
+    if (n == 0 || r->nlive == 0)
+        return;
+    struct run_job job = {r->live, recs, n};
+    emm_pool_for(r->pool, r->nlive, run_one, &job);
+}
+
+void emm_runner_free(emm_runner *r)
+{
+    if (!r)
+        return;
+    emm_pool_free(r->pool);
+    for (size_t i = 0; i < r->n; i++)
+        emm_model_free(r->models[i]);
+    free(r->models);
+    free(r->live);
+    free(r);
+}

@@ -1,0 +1,40 @@
+/* Internal: the one model runner (docs/architecture.md). Every "run these
+ * strategies over these records" in emm — the session, the decision's
+ * sweeps, `emm table build`, `emm replay` — builds its models here and
+ * feeds them here. Models are built in parallel (a layout of a large mesh
+ * takes a while) and each batch of records goes through every model, the
+ * models spread over the pool's threads; a model sees the batches in
+ * order, on one thread at a time, so results never depend on the number of
+ * threads. With one job everything runs on the calling thread. */
+#ifndef EMM_SIM_RUNNER_H
+#define EMM_SIM_RUNNER_H
+
+#include "emm/sim.h"
+
+typedef struct emm_runner emm_runner;
+
+/* An empty runner whose work may use the threads `t` allows (NULL: the
+ * online CPUs, no start hook). EMM_ERR_NOMEM when memory runs out. */
+emm_status emm_runner_new(const emm_threads *t, emm_runner **out, emm_error *err);
+
+/* Adds one model per strategy s[0..n) on machine m (validated) for a trace
+ * described by `info`, built in parallel. A strategy whose model cannot be
+ * built gets the reason in errs[i] (status != EMM_OK) and no model; the
+ * others get errs[i].status == EMM_OK. errs may be NULL: then any such
+ * failure fails the call. Running out of memory always fails the call
+ * (with the runner unchanged). Models are numbered in the order added. */
+emm_status emm_runner_add(emm_runner *r, const emm_machine *m, const emm_strategy *s, size_t n,
+                          const emm_trace_info *info, emm_error *errs, emm_error *err);
+
+/* Models added (built or not), and model i (NULL when it could not be
+ * built). The runner owns them. */
+size_t emm_runner_count(const emm_runner *r);
+emm_model *emm_runner_model(const emm_runner *r, size_t i);
+
+/* Runs recs[0..n) through every model. */
+void emm_runner_run(emm_runner *r, const emm_trace_record *recs, size_t n);
+
+/* Frees the runner and its models; NULL is allowed. */
+void emm_runner_free(emm_runner *r);
+
+#endif
