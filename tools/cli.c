@@ -33,6 +33,12 @@ int cli_usage_error(const char *cmd, const char *fmt, ...)
     return EMM_EXIT_USAGE;
 }
 
+int cli_bad_value(const char *cmd, const emm_error *err)
+{
+    fprintf(stderr, "emm %s: %s\n", cmd, err->message);
+    return EMM_EXIT_USAGE;
+}
+
 bool cli_is_help(const char *arg)
 {
     return strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0;

@@ -30,6 +30,9 @@ void cli_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 int cli_fail(const emm_error *err);
 /* Prints "emm <cmd>: <message>\nTry 'emm <cmd> --help'." and returns EMM_EXIT_USAGE. */
 int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* A bad value whose message says all (it names the option and what it
+ * accepts): "emm CMD: MESSAGE", one line; returns EMM_EXIT_USAGE. */
+int cli_bad_value(const char *cmd, const emm_error *err);
 /* True when `arg` is -h or --help. */
 bool cli_is_help(const char *arg);
 

@@ -21,6 +21,23 @@ grep -q 'grid+sideways' "$work/err" || fail "bad strategy: message"
 "$emm" run --profile 5it --compare all --capture fault --bogus x -- true 2>"$work/err"
 [ $? -eq 2 ] && grep -q "unknown option '--bogus'" "$work/err" || fail "unknown option"
 
+# A bad option: exit status 2, one line naming the option as typed, and the
+# program never starts (configuration table: core/config.c).
+printf 'dma.issue = abc\n' > "$work/bad.ini"
+for args in "--tag garbage" "--report $work/nodir/x.json" "--machine $work/nosuch.ini" \
+            "--machine $work/bad.ini" "--compare bogus" "--capture magic" "--log 7"; do
+    opt=${args%% *}
+    rm -f "$work/started"
+    "$emm" run $args -- sh -c "touch '$work/started'" 2>"$work/err"; rc=$?
+    [ $rc -eq 2 ] || fail "$args: exit $rc, not 2"
+    [ "$(wc -l < "$work/err")" -eq 1 ] || fail "$args: not one line: $(cat "$work/err")"
+    grep -q -- "^emm run: $opt" "$work/err" || fail "$args: the line does not name $opt: $(cat "$work/err")"
+    [ ! -e "$work/started" ] || fail "$args: the program started"
+done
+# A bad variable the options leave alone is refused the same way, by name.
+EMM_PROFILE=zz "$emm" run -- true 2>"$work/err"; rc=$?
+[ $rc -eq 2 ] && grep -q "^emm run: EMM_PROFILE='zz'" "$work/err" || fail "EMM_PROFILE=zz: exit $rc"
+
 # A copy of emm with nothing beside it: the shim is not found.
 cp "$emm" "$work/bin/emm" || exit 1
 "$work/bin/emm" run -- true 2>"$work/err"; rc=$?

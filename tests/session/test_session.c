@@ -6,7 +6,10 @@
  * numbers and holds the same records, the CSV, a window that never fills,
  * novelty, iteration windows, bad geometry, bad configuration, and reports
  * that are whole or absent. */
+#include <errno.h>
 #include <math.h>
+#include <pthread.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -364,6 +367,52 @@ static void test_decide_checked(void)
     free(json);
 }
 
+/* The session's helper threads are the caller's own (the shim's): each one
+ * calls the start hook before it does any work, with every signal blocked,
+ * and the session's work — the decision's sweep and the whole comparison —
+ * runs on them while the calling thread holds its own lock, as the shim
+ * does. The shim's deadlock (a helper's allocation matching a tag rule
+ * while the main thread held the shim's lock) came from helpers that did
+ * not call the hook; tests/shim/helpers.sh runs that program under the
+ * shim, and this checks the contract in every build, sanitizers included. */
+static _Thread_local int marked;
+static int hooked, unblocked;
+static pthread_mutex_t caller_lock = PTHREAD_MUTEX_INITIALIZER;
+
+static void helper_hook(void *ctx)
+{
+    sigset_t now;
+    CHECK(ctx == &hooked);
+    marked = 1;
+    __atomic_add_fetch(&hooked, 1, __ATOMIC_RELAXED);
+    pthread_sigmask(SIG_SETMASK, NULL, &now);
+    if (!sigismember(&now, SIGTERM) || !sigismember(&now, SIGINT) || !sigismember(&now, SIGSEGV))
+        __atomic_add_fetch(&unblocked, 1, __ATOMIC_RELAXED);
+    /* The shim's hook never takes the lock its caller holds; a hook that
+     * did would hang here, so the test holds it throughout. */
+    CHECK(pthread_mutex_trylock(&caller_lock) == EBUSY);
+}
+
+static void test_helpers_marked(void)
+{
+    emm_error err;
+    emm_session *s;
+    write_table_synth("table.txt", "direct", "region", 0);
+    emm_session_config c = base_config();
+    tcfg.compare = EMM_COMPARE_ALL;
+    c.threads = (emm_threads){2, helper_hook, &hooked};
+    pthread_mutex_lock(&caller_lock);
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    CHECK(feed(s, 1000, 0) == 1);
+    CHECKF(emm_session_finish(s, NULL, &err) == EMM_OK, "%s", err.message);
+    emm_session_free(s);
+    pthread_mutex_unlock(&caller_lock);
+    CHECKF(hooked >= 1, "no helper thread called the hook (%d)", hooked);
+    CHECKF(unblocked == 0, "%d helpers ran with signals unblocked", unblocked);
+    CHECK(marked == 0); /* the calling thread is not a helper */
+}
+
 /* A short program: the window never fills, the decision comes at finish,
  * after the program has freed its arrays. */
 static void test_window_not_filled(void)
@@ -592,6 +641,7 @@ static void test_tags(void)
 int main(void)
 {
     setup();
+    test_helpers_marked();
     test_decide_from_table();
     test_decide_checked();
     test_window_not_filled();
