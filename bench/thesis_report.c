@@ -173,10 +173,21 @@ static const result *at_cell(const report *rep, emm_layout_kind l, emm_fetch_kin
 
 /* ---- figures ------------------------------------------------------------ */
 
-static const emm_layout_kind layouts[] = {EMM_LAYOUT_GRID, EMM_LAYOUT_TILES, EMM_LAYOUT_QUADTREE};
-static const emm_fetch_kind fetches[] = {EMM_FETCH_NAIVE, EMM_FETCH_CONVOLUTION,
-                                         EMM_FETCH_EXTRAPOLATED};
-static const uint32_t cells[] = {16, 32, 64, 128, 256};
+/* The sweep's layouts, fetch schemes and cell sizes (emm/strategy.h), so a
+ * figure lists whatever the standard sweep holds. */
+static emm_layout_kind layouts[EMM_LAYOUT_COUNT];
+static emm_fetch_kind fetches[EMM_FETCH_COUNT];
+static const uint32_t *cells;
+static size_t nlayouts, nfetches, ncells;
+
+static void sweep_parts(void)
+{
+    for (int l = EMM_LAYOUT_ORIGINAL + 1; l < EMM_LAYOUT_COUNT; l++)
+        layouts[nlayouts++] = (emm_layout_kind)l;
+    for (int f = EMM_FETCH_NONE + 1; f < EMM_FETCH_COUNT; f++)
+        fetches[nfetches++] = (emm_fetch_kind)f;
+    ncells = emm_strategy_sweep_cells(&cells);
+}
 
 static void row(const char *label, const result *x)
 {
@@ -205,8 +216,8 @@ static void fig_layouts(const report *rep, const char *fig, const char *what)
     snprintf(caption, sizeof caption, "%s: EMM layouts and fetch schemes, each at its best cell "
              "(cycles by bucket)", what);
     head(fig, caption);
-    for (size_t l = 0; l < 3; l++)
-        for (size_t f = 0; f < 3; f++) {
+    for (size_t l = 0; l < nlayouts; l++)
+        for (size_t f = 0; f < nfetches; f++) {
             const result *x = best_of(rep, layouts[l], fetches[f]);
             row(x ? x->name : "-", x);
         }
@@ -217,16 +228,16 @@ static void fig_cells(const report *rep, const char *fig, const char *what)
 {
     printf("\n%s  %s: total cycles per cell size (triangles per cell)\n  %-26s", fig, what,
            "layout+fetch");
-    for (size_t c = 0; c < sizeof cells / sizeof cells[0]; c++)
+    for (size_t c = 0; c < ncells; c++)
         printf(" %12u", cells[c]);
     printf("\n");
-    for (size_t l = 0; l < 3; l++)
-        for (size_t f = 0; f < 3; f++) {
+    for (size_t l = 0; l < nlayouts; l++)
+        for (size_t f = 0; f < nfetches; f++) {
             char label[64];
             snprintf(label, sizeof label, "%s+%s", emm_layout_name(layouts[l]),
                      emm_fetch_name(fetches[f]));
             printf("  %-26s", label);
-            for (size_t c = 0; c < sizeof cells / sizeof cells[0]; c++) {
+            for (size_t c = 0; c < ncells; c++) {
                 const result *x = at_cell(rep, layouts[l], fetches[f], cells[c]);
                 if (x)
                     printf(" %12.0f", x->total);
@@ -362,11 +373,15 @@ static void claims(report *reps, double tol)
     /* 5: quadtree, over the four workloads: DMA bytes against grid and tiles
      * with the same fetch and cell, instructions, and the overall result. */
     {
-        double br[4 * 3 * 5];
+        double *br = malloc(4 * nfetches * ncells * sizeof *br);
+        if (!br) {
+            fprintf(stderr, "thesis_report: out of memory\n");
+            exit(1);
+        }
         size_t nbr = 0, pairs = 0, more_instr = 0, loses = 0;
         for (int w = 0; w < 4; w++) {
-            for (size_t f = 0; f < 3; f++)
-                for (size_t k = 0; k < sizeof cells / sizeof cells[0]; k++) {
+            for (size_t f = 0; f < nfetches; f++)
+                for (size_t k = 0; k < ncells; k++) {
                     const result *q = at_cell(&reps[w], EMM_LAYOUT_QUADTREE, fetches[f], cells[k]);
                     const result *g = at_cell(&reps[w], EMM_LAYOUT_GRID, fetches[f], cells[k]);
                     const result *t = at_cell(&reps[w], EMM_LAYOUT_TILES, fetches[f], cells[k]);
@@ -396,6 +411,7 @@ static void claims(report *reps, double tol)
                "pairs", more_instr, pairs);
         sub(c, "quadtree's best strategy is slower than grid's and tiles' in %zu of 4 workloads",
             loses);
+        free(br);
     }
     printf("\n%d of 5 claims reproduced\n", reproduced);
 }
@@ -429,6 +445,7 @@ static void choices(const report *reps)
 int main(int argc, char **argv)
 {
     double tol = 0.25;
+    sweep_parts();
     const char *dir = NULL, *fit = NULL;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--tolerance") == 0 && i + 1 < argc)
@@ -481,7 +498,7 @@ int main(int argc, char **argv)
         fig_compare(rg, "Fig 6.8", "region growing", "tiles",
                     best_of(rg, EMM_LAYOUT_TILES, EMM_FETCH_CONVOLUTION), "tiles+convolution");
         fig_compare(ra, "Fig 6.9", "random access", NULL, NULL, NULL);
-        for (size_t l = 0; l < 3; l++) {
+        for (size_t l = 0; l < nlayouts; l++) {
             const result *x = best_emm_of_layout(ra, layouts[l]);
             char label[96];
             snprintf(label, sizeof label, "EMM %s", x ? x->name : emm_layout_name(layouts[l]));

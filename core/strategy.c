@@ -174,3 +174,17 @@ size_t emm_strategy_sweep(emm_strategy *out, size_t cap)
 #undef PUT
     return n;
 }
+
+size_t emm_strategy_sweep_describe(char *buf, size_t cap)
+{
+    char cells[128] = "";
+    size_t o = 0;
+    for (size_t c = 0; c < sizeof sweep_cells / sizeof *sweep_cells && o < sizeof cells; c++)
+        o += (size_t)snprintf(cells + o, sizeof cells - o, "%s%u", c ? ", " : "", sweep_cells[c]);
+    int n = snprintf(buf, cap,
+                     "%d layouts x %d fetch schemes x cells %s, then direct, cache and cache@ "
+                     "each layout: %zu strategies",
+                     EMM_LAYOUT_COUNT - 1, EMM_FETCH_COUNT - 1, cells,
+                     emm_strategy_sweep(NULL, 0));
+    return n < 0 ? 0 : (size_t)n;
+}

@@ -14,6 +14,7 @@
 #include <immintrin.h>
 
 #include "error.h"
+#include "geom.h"
 #include "lead_sweep.h"
 #include "pool.h"
 
@@ -425,13 +426,10 @@ emm_status emm_profiler_new(const emm_trace_info *info, uint64_t window, const c
             hi[a] = fmax(hi[a], g->xyz[3 * v + a]);
         }
     double ext[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
-    int drop = 2;
-    if (ext[0] < ext[drop])
-        drop = 0;
-    if (ext[1] < ext[drop])
-        drop = 1;
-    p->ax = drop == 0 ? 1 : 0;
-    p->ay = drop == 2 ? 1 : 2;
+    int axes[2];
+    emm_axes_largest(lo, hi, 2, axes);
+    p->ax = axes[0];
+    p->ay = axes[1];
     p->lo[0] = lo[p->ax];
     p->lo[1] = lo[p->ay];
     double diag = hypot(ext[p->ax], ext[p->ay]);

@@ -11,6 +11,7 @@
 
 #include "emm/trace.h"
 #include "error.h"
+#include "geom.h"
 #include "parse.h"
 #include "synth_internal.h"
 
@@ -91,18 +92,12 @@ struct synth {
 
 static void synth_init_axes(struct synth *s)
 {
-    double lo[3], hi[3], ext[3];
+    double lo[3], hi[3];
+    int axes[2];
     emm_mesh_bbox(s->m, lo, hi);
-    for (int i = 0; i < 3; i++)
-        ext[i] = hi[i] - lo[i];
-    /* The axis with the smallest extent is dropped. */
-    int drop = 2;
-    if (ext[0] < ext[drop])
-        drop = 0;
-    if (ext[1] < ext[drop])
-        drop = 1;
-    s->ax = drop == 0 ? 1 : 0;
-    s->ay = drop == 2 ? 1 : 2;
+    emm_axes_largest(lo, hi, 2, axes); /* the plane every layer sees (core/geom.h) */
+    s->ax = axes[0];
+    s->ay = axes[1];
     s->lo[0] = lo[s->ax];
     s->hi[0] = hi[s->ax];
     s->lo[1] = lo[s->ay];

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "parse.h"
 #include "emm/mesh.h"
 #include "generate.h"
 
@@ -144,20 +145,6 @@ static void json_string(FILE *out, const char *s)
     fputc('"', out);
 }
 
-/* 1366960 -> "1,366,960". */
-static const char *grouped(unsigned long long v, char buf[32])
-{
-    char digits[24];
-    int n = snprintf(digits, sizeof digits, "%llu", v), o = 0;
-    for (int i = 0; i < n; i++) {
-        if (i > 0 && (n - i) % 3 == 0)
-            buf[o++] = ',';
-        buf[o++] = digits[i];
-    }
-    buf[o] = '\0';
-    return buf;
-}
-
 static int cmd_info(int argc, char **argv)
 {
     const char *cmd = "mesh info";
@@ -211,7 +198,7 @@ static int cmd_info(int argc, char **argv)
         printf("mean edge length: %.6g\n", emm_mesh_mean_edge_length(m));
         printf("thesis bytes: %llu\n", bytes);
         printf("thesis structs (Vertex %u B, Triangle %u B): %s bytes (%.2f MB)\n",
-               EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES, grouped(bytes, buf),
+               EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES, emm_grouped(bytes, buf),
                (double)bytes / 1e6);
     }
     emm_mesh_free(m);

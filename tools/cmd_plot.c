@@ -654,15 +654,12 @@ static emm_status fig_breakdown(plot_ctx *c, const plot_report *rep, int *made_c
         return fig_bars(c, "breakdown", title, bars, n, err);
     }
     if (best) {
-        static const emm_layout_kind L[3] = {EMM_LAYOUT_GRID, EMM_LAYOUT_TILES, EMM_LAYOUT_QUADTREE};
-        static const emm_fetch_kind F[3] = {EMM_FETCH_NAIVE, EMM_FETCH_CONVOLUTION,
-                                            EMM_FETCH_EXTRAPOLATED};
-        for (int l = 0; l < 3; l++)
-            for (int k = 0; k < 3; k++)
+        for (int l = EMM_LAYOUT_ORIGINAL + 1; l < EMM_LAYOUT_COUNT; l++)
+            for (int k = EMM_FETCH_NONE + 1; k < EMM_FETCH_COUNT; k++)
                 for (size_t i = 0; i < rep->n; i++) {
                     const plot_result *r = &rep->r[i];
-                    if (r->ran && r->s.kind == EMM_STRATEGY_EMM && r->s.layout == L[l] &&
-                        r->s.fetch == F[k] && r->s.cell == best->s.cell)
+                    if (r->ran && r->s.kind == EMM_STRATEGY_EMM && (int)r->s.layout == l &&
+                        (int)r->s.fetch == k && r->s.cell == best->s.cell)
                         label_bar(&bars[n++], r, r == best ? " (best)" : NULL);
                 }
         snprintf(title, sizeof title, "%s: EMM layouts and fetch schemes, %u triangles per cell",
@@ -672,11 +669,17 @@ static emm_status fig_breakdown(plot_ctx *c, const plot_report *rep, int *made_c
     }
     n = 0;
     {
-        static const char *const base[] = {"direct", "cache", "cache@grid", "cache@tiles",
-                                           "cache@quadtree"};
+        /* direct, cache, then the cache on each layout */
         int chosen_shown = 0;
-        for (size_t i = 0; i < sizeof base / sizeof base[0]; i++) {
-            const plot_result *r = find(rep, base[i]);
+        for (int i = -1; i < EMM_LAYOUT_COUNT; i++) {
+            char base[64];
+            if (i < 0)
+                snprintf(base, sizeof base, "direct");
+            else if (i == EMM_LAYOUT_ORIGINAL)
+                snprintf(base, sizeof base, "cache");
+            else
+                snprintf(base, sizeof base, "cache@%s", emm_layout_name((emm_layout_kind)i));
+            const plot_result *r = find(rep, base);
             if (r)
                 label_bar(&bars[n++], r, r == chosen ? " (chosen)" : NULL);
             chosen_shown |= r && r == chosen;
@@ -700,26 +703,26 @@ static emm_status fig_breakdown(plot_ctx *c, const plot_report *rep, int *made_c
  * *made 0 when no layout + fetch has two cell sizes. */
 static emm_status fig_transfer(plot_ctx *c, const plot_report *rep, int *made, emm_error *err)
 {
-    static const emm_layout_kind L[3] = {EMM_LAYOUT_GRID, EMM_LAYOUT_TILES, EMM_LAYOUT_QUADTREE};
-    static const emm_fetch_kind F[3] = {EMM_FETCH_NAIVE, EMM_FETCH_CONVOLUTION,
-                                        EMM_FETCH_EXTRAPOLATED};
-    static const char *const lcolor[3] = {"#1f77b4", "#ff7f0e", "#2ca02c"};
-    static const int ptype[3] = {7, 5, 9}, dtype[3] = {1, 2, 4};
+    /* A colour per layout, a point and dash type per fetch scheme (cycled
+     * when the sweep has more of them than these). */
+    static const char *const lcolor[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd"};
+    static const int ptype[] = {7, 5, 9, 11, 13}, dtype[] = {1, 2, 4, 5, 3};
+    enum { NL = EMM_LAYOUT_COUNT - 1, NF = EMM_FETCH_COUNT - 1 };
     const plot_result *cache = find(rep, "cache");
     uint32_t cellmin = UINT32_MAX, cellmax = 0;
     int index = 0, first = 1;
-    char titles[9][64];
-    int lk[9][2];
+    char titles[NL * NF][64];
+    int lk[NL * NF][2];
     emm_status st;
     FILE *f;
 
     *made = 0;
-    for (int l = 0; l < 3; l++)
-        for (int k = 0; k < 3; k++) {
+    for (int l = 0; l < NL; l++)
+        for (int k = 0; k < NF; k++) {
             size_t cnt = 0;
             for (size_t i = 0; i < rep->n; i++)
                 cnt += rep->r[i].ran && rep->r[i].s.kind == EMM_STRATEGY_EMM &&
-                       rep->r[i].s.layout == L[l] && rep->r[i].s.fetch == F[k];
+                       (int)rep->r[i].s.layout == l + 1 && (int)rep->r[i].s.fetch == k + 1;
             *made |= cnt >= 2;
         }
     if (!*made)
@@ -727,22 +730,24 @@ static emm_status fig_transfer(plot_ctx *c, const plot_report *rep, int *made, e
     if (!(f = work_open(c, "transfer.dat", err)))
         return err->status;
     fprintf(f, "# triangles per cell, total cycles (millions); one block per layout+fetch\n");
-    for (int l = 0; l < 3; l++)
-        for (int k = 0; k < 3; k++) {
+    for (int l = 0; l < NL; l++)
+        for (int k = 0; k < NF; k++) {
+            emm_layout_kind L = (emm_layout_kind)(l + 1);
+            emm_fetch_kind F = (emm_fetch_kind)(k + 1);
             uint32_t last = 0;
             int any = 0;
             for (;;) { /* ascending cell sizes */
                 const plot_result *next = NULL;
                 for (size_t i = 0; i < rep->n; i++) {
                     const plot_result *r = &rep->r[i];
-                    if (r->ran && r->s.kind == EMM_STRATEGY_EMM && r->s.layout == L[l] &&
-                        r->s.fetch == F[k] && r->s.cell > last && (!next || r->s.cell < next->s.cell))
+                    if (r->ran && r->s.kind == EMM_STRATEGY_EMM && r->s.layout == L &&
+                        r->s.fetch == F && r->s.cell > last && (!next || r->s.cell < next->s.cell))
                         next = r;
                 }
                 if (!next)
                     break;
                 if (!any)
-                    fprintf(f, "# %s+%s\n", emm_layout_name(L[l]), emm_fetch_name(F[k]));
+                    fprintf(f, "# %s+%s\n", emm_layout_name(L), emm_fetch_name(F));
                 fprintf(f, "%u %.9g\n", next->s.cell, next->total / 1e6);
                 cellmin = next->s.cell < cellmin ? next->s.cell : cellmin;
                 cellmax = next->s.cell > cellmax ? next->s.cell : cellmax;
@@ -751,8 +756,8 @@ static emm_status fig_transfer(plot_ctx *c, const plot_report *rep, int *made, e
             }
             if (any) {
                 fprintf(f, "\n\n");
-                snprintf(titles[index], sizeof titles[index], "%s+%s", emm_layout_name(L[l]),
-                         emm_fetch_name(F[k]));
+                snprintf(titles[index], sizeof titles[index], "%s+%s", emm_layout_name(L),
+                         emm_fetch_name(F));
                 lk[index][0] = l;
                 lk[index][1] = k;
                 index++;
@@ -787,7 +792,8 @@ static emm_status fig_transfer(plot_ctx *c, const plot_report *rep, int *made, e
     for (int i = 0; i < index; i++) {
         fprintf(f, "%s'transfer.dat' index %d using 1:2 with linespoints lw 2 ps 1.3 lc rgb '%s' "
                    "pt %d dt %d title '%s'",
-                first ? "" : ", \\\n     ", i, lcolor[lk[i][0]], ptype[lk[i][1]], dtype[lk[i][1]],
+                first ? "" : ", \\\n     ", i, lcolor[lk[i][0] % 5], ptype[lk[i][1] % 5],
+                dtype[lk[i][1] % 5],
                 titles[i]);
         first = 0;
     }

@@ -12,11 +12,12 @@
 #include "emm/strategy.h"
 #include "machine_cli.h"
 
-#define MAX_STRATEGIES 64
 #define MAX_JOBS 256
 
 static void usage(FILE *out)
 {
+    char sweep[256];
+    emm_strategy_sweep_describe(sweep, sizeof sweep);
     fprintf(out,
             "usage: emm replay TRACE [--strategy S]... [--json FILE] [--machine FILE]\n"
             "                  [--set KEY=VALUE]... [--jobs N] [--quiet]\n"
@@ -28,10 +29,10 @@ static void usage(FILE *out)
             "cache's line counts (Dinero IV's demand fetches, demand misses, prefetch\n"
             "fetches) or the DMA counts.\n"
             "\n"
-            "With --all, simulates the standard sweep (3 layouts x 3 fetch schemes x cells\n"
-            "16, 32, 64, 128, 256, then direct, cache and cache@ each layout: 50\n"
-            "strategies) and prints one line per strategy, fastest first: total cycles,\n"
-            "seconds, speed-up over direct and over cache, and the largest buckets. A\n"
+            "With --all, simulates the standard sweep,\n"
+            "  %s,\n"
+            "and prints one line per strategy, fastest first: total cycles, seconds,\n"
+            "speed-up over direct and over cache, and the largest buckets. A\n"
             "strategy that cannot run on this trace (a cell larger than the local store, a\n"
             "trace without geometry) is listed as skipped with the reason, and the sweep\n"
             "goes on.\n"
@@ -49,7 +50,8 @@ static void usage(FILE *out)
             MACHINE_CLI_HELP
             "\n"
             "environment:\n"
-            "  EMM_MACHINE      machine file used when --machine is absent\n");
+            "  EMM_MACHINE      machine file used when --machine is absent\n",
+            sweep);
 }
 
 struct progress_ctx {
@@ -161,8 +163,12 @@ static void print_sweep(const char *trace, uint64_t accesses, const emm_machine 
 {
     double hz = (double)emm_machine_get(m, "clock.mhz") * 1e6;
     const emm_result *direct = NULL, *cache = NULL;
-    struct ranked order[MAX_STRATEGIES];
+    struct ranked *order = calloc(n ? n : 1, sizeof *order);
     size_t ran = 0;
+    if (!order) {
+        cli_error("replay: out of memory");
+        return;
+    }
     for (size_t i = 0; i < n; i++) {
         order[i].res = &res[i];
         order[i].skip = &skipped[i];
@@ -218,14 +224,15 @@ static void print_sweep(const char *trace, uint64_t accesses, const emm_machine 
                 printf("  %s: %s\n", name, order[k].skip->message);
         }
     }
+    free(order);
 }
 
-int emm_cmd_replay(int argc, char **argv)
+/* emm replay with its arrays: strategies, results and skipped hold `cap`
+ * entries (one per argument, or the sweep). */
+static int replay_main(int argc, char **argv, emm_strategy *strategies, emm_result *results,
+                       emm_error *skipped, size_t cap)
 {
     machine_cli mc = {0};
-    emm_strategy strategies[MAX_STRATEGIES];
-    emm_result results[MAX_STRATEGIES];
-    emm_error skipped[MAX_STRATEGIES];
     size_t nstrategies = 0;
     const char *trace = NULL, *json = NULL;
     int quiet = 0, all = 0, rc;
@@ -250,8 +257,6 @@ int emm_cmd_replay(int argc, char **argv)
         if (strcmp(argv[i], "--strategy") == 0 || strcmp(argv[i], "-s") == 0) {
             if (!(v = cli_value("replay", argc, argv, &i)))
                 return EMM_EXIT_USAGE;
-            if (nstrategies == MAX_STRATEGIES)
-                return cli_usage_error("replay", "at most %d strategies", MAX_STRATEGIES);
             if (emm_strategy_parse(v, &strategies[nstrategies], &err) != EMM_OK)
                 return cli_usage_error("replay", "%s", err.message);
             nstrategies++;
@@ -282,10 +287,7 @@ int emm_cmd_replay(int argc, char **argv)
     if (all && nstrategies > 0)
         return cli_usage_error("replay", "--all and --strategy do not go together");
     if (all) {
-        nstrategies = emm_strategy_sweep(strategies, MAX_STRATEGIES);
-        if (nstrategies > MAX_STRATEGIES)
-            return cli_usage_error("replay", "the sweep has more than %d strategies",
-                                   MAX_STRATEGIES);
+        nstrategies = emm_strategy_sweep(strategies, cap);
     } else if (nstrategies == 0) {
         emm_strategy_parse("direct", &strategies[nstrategies++], NULL);
         emm_strategy_parse("cache", &strategies[nstrategies++], NULL);
@@ -319,4 +321,24 @@ int emm_cmd_replay(int argc, char **argv)
         print_table(trace, accesses, m, results, nstrategies);
     emm_machine_free(m);
     return EMM_EXIT_OK;
+}
+
+int emm_cmd_replay(int argc, char **argv)
+{
+    /* At most one strategy per argument, or the sweep. */
+    size_t cap = (size_t)argc + emm_strategy_sweep(NULL, 0);
+    emm_strategy *strategies = calloc(cap, sizeof *strategies);
+    emm_result *results = calloc(cap, sizeof *results);
+    emm_error *skipped = calloc(cap, sizeof *skipped);
+    int rc;
+    if (strategies && results && skipped) {
+        rc = replay_main(argc, argv, strategies, results, skipped, cap);
+    } else {
+        cli_error("replay: out of memory");
+        rc = EMM_EXIT_FAIL;
+    }
+    free(strategies);
+    free(results);
+    free(skipped);
+    return rc;
 }

@@ -78,6 +78,10 @@ EMM_API const char *emm_fetch_name(emm_fetch_kind k);
  * layout. Fills up to cap entries (out may be NULL when cap is 0) and
  * returns the sweep's full length. */
 EMM_API size_t emm_strategy_sweep(emm_strategy *out, size_t cap);
+/* The sweep in words, for help texts: "3 layouts x 3 fetch schemes x cells
+ * 16, ..., then direct, cache and cache@ each layout: 50 strategies".
+ * Returns the length needed, as snprintf does. */
+EMM_API size_t emm_strategy_sweep_describe(char *buf, size_t cap);
 /* The sweep's cell sizes, ascending; returns their count. */
 EMM_API size_t emm_strategy_sweep_cells(const uint32_t **cells);
 
