@@ -142,19 +142,17 @@ int emm_cmd_run(int argc, char **argv)
      * samples), as the shim will start it. */
     if (emm_config_from_env(&cfg, get_env, (long)getpid(), given, &err) != EMM_OK)
         return cli_bad_value("run", &err);
+    emm_session_config sc = {&cfg, cfg.capture, argv[i], 0, {1, NULL, NULL}};
+    emm_session *probe;
+    if (emm_session_new(&sc, &probe, &err) != EMM_OK)
+        return cli_bad_value("run", &err);
+    emm_session_free(probe);
     char tried[4096];
     char *shim = find_shim(tried, sizeof tried);
     if (!shim) {
         cli_error("run: cannot find %s; tried %s", SHIM_NAME, tried);
         return EMM_EXIT_FAIL;
     }
-    emm_session_config sc = {&cfg, cfg.capture, argv[i], 0, {1, NULL, NULL}};
-    emm_session *probe;
-    if (emm_session_new(&sc, &probe, &err) != EMM_OK) {
-        free(shim);
-        return cli_bad_value("run", &err);
-    }
-    emm_session_free(probe);
 
     const char *old = getenv("LD_PRELOAD");
     size_t len = strlen(shim) + (old ? strlen(old) + 1 : 0) + 1;
