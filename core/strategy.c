@@ -15,13 +15,13 @@ static const char *const fetch_names[EMM_FETCH_COUNT] = {"none", EMM_FETCH_LIST(
 #undef NAME_
 /* "grid, tiles, quadtree" */
 #define LIST_(e, n) ", " #n
-#define LAYOUTS (EMM_LAYOUT_LIST(LIST_) + 2)
-#define FETCHES (EMM_FETCH_LIST(LIST_) + 2)
+#define LAYOUTS (&(EMM_LAYOUT_LIST(LIST_))[2])
+#define FETCHES (&(EMM_FETCH_LIST(LIST_))[2])
 
 #define ACCEPTED "direct, cache, cache@LAYOUT or LAYOUT+FETCH[@CELL]"
 
 /* The standard sweep's cell sizes (thesis §6.3: "small cells" win). */
-static const uint32_t sweep_cells[] = {16, 32, 64, 128, 256};
+static const uint32_t sweep_cells[] = {4, 8, 16, 32, 64, 128, 256};
 
 const char *emm_layout_name(emm_layout_kind k)
 {

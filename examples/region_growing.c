@@ -1,6 +1,31 @@
-/* region_growing — the region-growing workload of thesis §4.3.2 (Program
- * 4.2): the valence-driven connectivity encoding of Touma and Gotsman [16]
- * (the triangle conquest of §2.1.1, Fig. 2.3; Alliez and Desbrun refine it).
+/* region_growing — the region-growing workload of thesis §4.3.2.
+ *
+ * By default, the thesis' own Program 4.2, as written: a breadth-first
+ * conquest from triangle 0 ("the traversals all grow ring by ring", §2.1.1).
+ * Its three vertices start the active list. The list's *front* is the focus;
+ * it leaves the list, and each of its incident vertices, in rotation order,
+ * is either free — conquered, appended at the list's *back*, its code
+ * "A<valence>" output — or, when it is still in the active list with free
+ * triangles around it, a split: the pseudo-code puts it in a second list
+ * pushed on a stack for later treatment (each vertex at most once here, so
+ * the stack stays finite). A breadth-first front meets itself at nearly
+ * every step this way, so most of those lists enclose nothing by the time
+ * they are popped: a list whose vertex is full (no free triangle) is
+ * dropped unread, as Touma and Gotsman drop a list of two vertices, and
+ * only a list around territory still free (behind a hole, say) is grown.
+ * When the list is empty the next list is popped; when the stack is empty
+ * the next component starts at its lowest free triangle. A vertex's valence is its triangle count, which a first pass
+ * over the triangles counts; "full" is a count of free triangles down to 0.
+ * Output: "codes: N\nsplits: S\nchecksum: 0x...\n", checksum the FNV-1a of
+ * the code sequence (--print-codes). Invariants: every vertex with a
+ * triangle conquered exactly once, every triangle conquered, the valences
+ * adding up to 3 x triangles.
+ *
+ * With --conquest, the valence-driven connectivity encoding of Touma and
+ * Gotsman [16] that Program 4.2 abbreviates (the triangle conquest of
+ * §2.1.1, Fig. 2.3; Alliez and Desbrun refine it), described below: a
+ * pivot keeps conquering its one-ring until it is full, so the front
+ * advances in a spiral rather than ring by ring.
  *
  * The conquered region grows from a seed triangle. Its border is kept as
  * cyclic *active lists* of vertices; consecutive vertices u -> w in a list
@@ -63,14 +88,18 @@
 
 static void usage(FILE *out)
 {
-    fputs("usage: " PROG " [--print-codes] [--times] [MESH]\n"
+    fputs("usage: " PROG " [--conquest] [--print-codes] [--times] [MESH]\n"
           "\n"
-          "Encodes the connectivity of a triangle mesh by valence-driven region growing\n"
-          "(thesis section 4.3.2, after Touma and Gotsman), checks the conquest's\n"
-          "invariants, and prints the code count, splits, merges and a checksum of the\n"
-          "code sequence. MESH is an OFF, OBJ, PLY or STL file; without it the default\n"
-          "mesh (20,000 clustered faces, seed 1) is generated in memory.\n"
+          "Grows a region over a triangle mesh as the thesis' Program 4.2 does (section\n"
+          "4.3.2): a breadth-first conquest of the vertices from triangle 0, ring by\n"
+          "ring, outputting each conquered vertex's valence; checks its invariants and\n"
+          "prints the code count, the splits and a checksum of the code sequence.\n"
+          "MESH is an OFF, OBJ, PLY or STL file; without it the default mesh (20,000\n"
+          "clustered faces, seed 1) is generated in memory.\n"
           "\n"
+          "  --conquest       the valence-driven encoding of Touma and Gotsman instead\n"
+          "                   (pivots conquer their one-ring until full; also prints\n"
+          "                   merges)\n"
           "  --print-codes    also print the code sequence, one code per line, first\n"
           "  --times          print load and traversal seconds on stderr\n",
           out);
@@ -491,10 +520,182 @@ static void run_list(struct rg *g, int32_t L)
     g->lalive[L] = 0;
 }
 
+/* ---- Program 4.2: the breadth-first conquest -------------------------------- */
+
+struct fifo {
+    const struct Mesh *m;
+    int32_t *free_tris;   /* per conquered vertex: its triangles not yet conquered */
+    unsigned char *tconq, *vconq, *inlist, *stacked;
+    int32_t *queue;       /* the active list: [head, tail) */
+    size_t head, tail, cap;
+    int32_t *stack;       /* pushed lists: single vertices, and component seeds */
+    size_t depth;
+    int32_t *fan;
+    size_t fan_cap;
+    uint64_t codes, splits, valence_sum, checksum;
+    bool print;
+};
+
+static void fifo_push_back(struct fifo *f, int32_t v)
+{
+    if (f->tail == f->cap) {
+        f->cap = f->cap ? 2 * f->cap : 1024;
+        f->queue = xrealloc(f->queue, f->cap * sizeof *f->queue);
+    }
+    f->queue[f->tail++] = v;
+    f->inlist[v] = 1;
+}
+
+/* The fan of v into f->fan; returns its size. */
+static size_t fifo_fan(struct fifo *f, int32_t v, bool *open)
+{
+    size_t n = vertex_fan(f->m, v, f->fan, f->fan_cap, open);
+    if (n > f->fan_cap) {
+        f->fan_cap = n;
+        f->fan = xrealloc(f->fan, n * sizeof *f->fan);
+        n = vertex_fan(f->m, v, f->fan, f->fan_cap, open);
+    }
+    return n;
+}
+
+/* Conquers v: its valence (its triangles, counted around its fan, next to
+ * the focus) is the code, and its free triangles are counted for "full". */
+static void fifo_conquer(struct fifo *f, int32_t v)
+{
+    char code[32];
+    bool open;
+    size_t n = fifo_fan(f, v, &open);
+    int32_t free_tris = 0;
+    for (size_t i = 0; i < n; i++)
+        free_tris += !f->tconq[f->fan[i]];
+    f->vconq[v] = 1;
+    f->free_tris[v] = free_tris;
+    snprintf(code, sizeof code, "A%zu", n);
+    f->codes++;
+    f->valence_sum += n;
+    f->checksum = fnv1a64_line(f->checksum, code);
+    if (f->print)
+        printf("%s\n", code);
+    fifo_push_back(f, v);
+}
+
+/* The focus's incident vertices, in rotation order: around its fan, the
+ * vertex after it in each triangle, and for an open fan the last one's
+ * other vertex too. Each triangle of the fan is conquered. */
+static void fifo_focus(struct fifo *f, int32_t focus)
+{
+    const struct Mesh *m = f->m;
+    bool open;
+    size_t n = fifo_fan(f, focus, &open);
+    /* The fan is walked again by the conquests below: keep this one. */
+    int32_t *fan = xmalloc(n * sizeof *fan);
+    memcpy(fan, f->fan, n * sizeof *fan);
+    for (size_t i = 0; i < n + (open && n ? 1 : 0); i++) {
+        int32_t ti = fan[i < n ? i : n - 1];
+        const struct Triangle *t = &m->triangles[ti];
+        int k = tri_corner(t, focus);
+        int32_t v = t->vertexIndices[(k + (i < n ? 1 : 2)) % 3];
+        if (i < n && !f->tconq[ti]) {
+            f->tconq[ti] = 1;
+            for (int c = 0; c < 3; c++)
+                if (f->vconq[t->vertexIndices[c]])
+                    f->free_tris[t->vertexIndices[c]]--;
+        }
+        if (!f->vconq[v]) {
+            fifo_conquer(f, v);
+        } else if (f->inlist[v] && f->free_tris[v] > 0 && !f->stacked[v]) {
+            /* The conquest meets its own front: a second list, for later. */
+            f->stacked[v] = 1;
+            f->stack[f->depth++] = v;
+            f->splits++;
+        }
+    }
+    free(fan);
+}
+
+static int run_fifo(const struct Mesh *m, bool print, const struct workload_args *args,
+                    double t0, double t1)
+{
+    struct fifo f;
+    memset(&f, 0, sizeof f);
+    f.m = m;
+    f.print = print;
+    f.checksum = FNV1A64_INIT;
+    size_t nv = m->verNr, nt = m->triNr;
+    f.free_tris = xmalloc(nv * sizeof *f.free_tris);
+    f.vconq = xmalloc(nv);
+    f.inlist = xmalloc(nv);
+    f.stacked = xmalloc(nv);
+    f.tconq = xmalloc(nt);
+    f.stack = xmalloc((nv + nt) * sizeof *f.stack);
+    memset(f.vconq, 0, nv);
+    memset(f.inlist, 0, nv);
+    memset(f.stacked, 0, nv);
+    memset(f.tconq, 0, nt);
+    f.fan_cap = 64;
+    f.fan = xmalloc(f.fan_cap * sizeof *f.fan);
+
+    for (size_t s = 0; s < nt; s++) {
+        if (f.tconq[s])
+            continue;
+        /* A seed: its vertices start the active list. */
+        for (int c = 0; c < 3; c++) {
+            int32_t v = m->triangles[s].vertexIndices[c];
+            if (!f.vconq[v])
+                fifo_conquer(&f, v);
+        }
+        for (;;) {
+            while (f.head < f.tail) {
+                int32_t focus = f.queue[f.head++];
+                f.inlist[focus] = 0;
+                fifo_focus(&f, focus);
+            }
+            /* The next list from the stack; one whose vertex is full by
+             * now encloses nothing and is dropped, as Touma and Gotsman drop
+             * a list of two vertices. */
+            while (f.depth > 0 && f.free_tris[f.stack[f.depth - 1]] == 0)
+                f.depth--;
+            if (f.depth == 0)
+                break;
+            f.head = f.tail = 0;
+            fifo_push_back(&f, f.stack[--f.depth]);
+        }
+        f.head = f.tail = 0;
+    }
+
+    /* The invariants, from the program's own flags (a sweep over the mesh
+     * here would be part of the traversal emm simulates): every triangle
+     * conquered, so every vertex of one; each vertex conquered once (a flag)
+     * with its whole fan, so the valences add up to 3 x triangles. */
+    int64_t conquered = 0;
+    for (size_t v = 0; v < nv; v++)
+        conquered += f.vconq[v];
+    for (size_t t = 0; t < nt; t++)
+        if (!f.tconq[t])
+            violated("triangle %zu never reached", t);
+    if (f.valence_sum != 3 * (uint64_t)nt)
+        violated("valences add up to %" PRIu64 ", not 3 * %zu triangles", f.valence_sum, nt);
+    if ((uint64_t)conquered != f.codes)
+        violated("%" PRIu64 " codes for %" PRId64 " vertices", f.codes, conquered);
+    double t2 = workload_now();
+    printf("codes: %" PRIu64 "\nsplits: %" PRIu64 "\nchecksum: 0x%016" PRIx64 "\n", f.codes,
+           f.splits, f.checksum);
+    workload_report_times(args, t0, t1, t2);
+    free(f.free_tris);
+    free(f.vconq);
+    free(f.inlist);
+    free(f.stacked);
+    free(f.tconq);
+    free(f.queue);
+    free(f.stack);
+    free(f.fan);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     struct workload_args args = {NULL, false};
-    bool print = false;
+    bool print = false, conquest = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
@@ -502,6 +703,8 @@ int main(int argc, char **argv)
             return 0;
         } else if (strcmp(a, "--print-codes") == 0) {
             print = true;
+        } else if (strcmp(a, "--conquest") == 0) {
+            conquest = true;
         } else {
             int rc = workload_common_arg(&args, PROG, a);
             if (rc)
@@ -514,6 +717,11 @@ int main(int argc, char **argv)
     if (!read_mesh(PROG, args.mesh, &mesh))
         return 1;
     double t1 = workload_now();
+    if (!conquest) {
+        int rc = run_fifo(&mesh, print, &args, t0, t1);
+        free_mesh(&mesh);
+        return rc;
+    }
 
     struct rg g;
     memset(&g, 0, sizeof g);

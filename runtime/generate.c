@@ -31,9 +31,11 @@
  * each triangle is turned counter-clockwise; a zero-area triangle (which
  * 'Qt' may produce for nearly collinear sites) is dropped and counted.
  *
- * Order. By default (EMM_ORDER_INPUT) vertices keep the order of the point
- * stream and triangles qhull's facet order: the unorganised "original
- * layout" the thesis' cache baseline runs on (§6.3). With EMM_ORDER_HILBERT
+ * Order. By default (EMM_ORDER_MADE) vertices keep the order of the point
+ * stream and triangles qhull's facet order, which is spatially coherent.
+ * EMM_ORDER_RANDOM numbers both in a seeded random order: the unorganised
+ * "original layout" the thesis' cache baseline runs on (§6.3). With
+ * EMM_ORDER_HILBERT
  * vertices are numbered along a Hilbert curve and triangles by the Hilbert
  * index of their centroid, as a mesher that renumbers for locality would
  * write them. */
@@ -396,8 +398,18 @@ static int keyed_cmp(const void *pa, const void *pb)
 
 /* Keeps the used points only, numbers vertices and triangles in `order`,
  * and writes the result into `out`. */
+/* A random key for element i under `seed` (splitmix64): the `random`
+ * order, the same for the same seed. */
+static uint64_t random_key(uint64_t seed, uint64_t i)
+{
+    uint64_t z = seed * 0x9e3779b97f4a7c15ull + i + 0x632be59bd9b4e019ull;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
 static emm_status compact(const double *xy, size_t n, const int32_t *tri, size_t nt,
-                          emm_order order, emm_gen_arrays *out, emm_error *err)
+                          emm_order order, uint64_t seed, emm_gen_arrays *out, emm_error *err)
 {
     int32_t *map = malloc(n * sizeof *map);
     struct keyed *keys = malloc((n > nt ? n : nt) * sizeof *keys);
@@ -412,7 +424,9 @@ static emm_status compact(const double *xy, size_t n, const int32_t *tri, size_t
     size_t nv = 0;
     for (size_t i = 0; i < n; i++)
         if (map[i] == 0) {
-            keys[nv].key = order == EMM_ORDER_HILBERT ? hilbert_key(xy[2 * i], xy[2 * i + 1]) : i;
+            keys[nv].key = order == EMM_ORDER_HILBERT ? hilbert_key(xy[2 * i], xy[2 * i + 1])
+                           : order == EMM_ORDER_RANDOM ? random_key(seed, i)
+                                                       : i;
             keys[nv].index = (uint32_t)i;
             nv++;
         }
@@ -431,7 +445,9 @@ static emm_status compact(const double *xy, size_t n, const int32_t *tri, size_t
         const int32_t *v = tri + 3 * t;
         double cx = (xy[2 * v[0]] + xy[2 * v[1]] + xy[2 * v[2]]) / 3.0;
         double cy = (xy[2 * v[0] + 1] + xy[2 * v[1] + 1] + xy[2 * v[2] + 1]) / 3.0;
-        keys[t].key = order == EMM_ORDER_HILBERT ? hilbert_key(cx, cy) : t;
+        keys[t].key = order == EMM_ORDER_HILBERT  ? hilbert_key(cx, cy)
+                      : order == EMM_ORDER_RANDOM ? random_key(seed ^ 0x5bd1e995u, t)
+                                                  : t;
         keys[t].index = (uint32_t)t;
     }
     qsort(keys, nt, sizeof *keys, keyed_cmp);
@@ -568,7 +584,7 @@ emm_status emm_gen_arrays_build(const emm_gen_options *opt, emm_gen_arrays *out,
         st = emm_fail(err, EMM_ERR_RANGE,
                       "generator: could only reach %zu faces of the %zu asked for", best_nt, want);
     if (st == EMM_OK)
-        st = compact(xy, best_n, best, best_nt, opt->order, out, err);
+        st = compact(xy, best_n, best, best_nt, opt->order, opt->seed, out, err);
     if (st == EMM_OK) {
         out->hull = hull;
         out->attempts = attempt;

@@ -3,6 +3,7 @@
  * (simulator/runner.h), so memory stays the same for any trace length; and
  * the JSON report of docs/report.md. */
 #include <errno.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,15 +24,149 @@
 /* Records between progress reports. */
 #define REPLAY_PROGRESS_EVERY (1u << 20)
 
+/* The memory a strategy's model needs on a mesh of nt triangles, roughly:
+ * an EMM strategy's layout (about 70 bytes per triangle and 100 per cell,
+ * shared by the strategies of the same layout and cell size) and its
+ * per-cell state; the cache's lines. Only used to split a sweep into
+ * passes that fit the memory budget. */
+static uint64_t layout_bytes(uint64_t nt, uint32_t cell)
+{
+    return 70 * nt + 100 * (nt / (cell ? cell : 1) + 1);
+}
+
+static uint64_t model_bytes(const emm_strategy *s, uint64_t nt)
+{
+    if (s->kind == EMM_STRATEGY_EMM)
+        return 30 * (nt / s->cell + 1);
+    if (s->kind == EMM_STRATEGY_CACHE && s->layout != EMM_LAYOUT_ORIGINAL)
+        return 40 * nt + (1u << 20);
+    return 1u << 20;
+}
+
+/* The pass of each strategy: strategies of one layout and cell size share
+ * a pass (and the layout); a pass is closed when the next group would take
+ * it past `budget`. Returns the number of passes. */
+static unsigned plan_passes(const emm_strategy *s, size_t n, uint64_t nt, uint64_t budget,
+                            unsigned *pass)
+{
+    unsigned passes = 1;
+    uint64_t used = 0;
+    for (size_t i = 0; i < n; i++)
+        pass[i] = UINT32_MAX;
+    for (size_t i = 0; i < n; i++) {
+        if (pass[i] != UINT32_MAX)
+            continue;
+        /* The group of strategies that share s[i]'s layout. */
+        uint64_t need = model_bytes(&s[i], nt);
+        bool layout = s[i].kind == EMM_STRATEGY_EMM ||
+                      (s[i].kind == EMM_STRATEGY_CACHE && s[i].layout != EMM_LAYOUT_ORIGINAL);
+        if (layout)
+            need += layout_bytes(nt, s[i].cell ? s[i].cell : EMM_DEFAULT_CELL);
+        for (size_t j = i + 1; j < n; j++)
+            if (s[j].kind == EMM_STRATEGY_EMM && s[i].kind == EMM_STRATEGY_EMM &&
+                s[j].layout == s[i].layout && s[j].cell == s[i].cell)
+                need += model_bytes(&s[j], nt);
+        if (used > 0 && used + need > budget) {
+            passes++;
+            used = 0;
+        }
+        used += need;
+        pass[i] = passes - 1;
+        for (size_t j = i + 1; j < n; j++)
+            if (s[j].kind == EMM_STRATEGY_EMM && s[i].kind == EMM_STRATEGY_EMM &&
+                s[j].layout == s[i].layout && s[j].cell == s[i].cell)
+                pass[j] = passes - 1;
+    }
+    return passes;
+}
+
+/* One pass: the strategies s[k] with pass[k] == p, over every record. */
+static emm_status replay_pass(emm_trace_reader *r, const emm_machine *m, const emm_strategy *s,
+                              size_t n, const unsigned *pass, unsigned p, unsigned passes,
+                              const emm_replay_options *opt, emm_trace_record *buf,
+                              emm_result *results, emm_error *skipped, uint64_t *done,
+                              const char *path, emm_error *err)
+{
+    const emm_trace_info *info = emm_trace_reader_info(r);
+    emm_threads threads = {opt->jobs, NULL, NULL};
+    emm_runner *run = NULL;
+    size_t k = 0, *index = malloc((n ? n : 1) * sizeof *index);
+    emm_strategy *mine = malloc((n ? n : 1) * sizeof *mine);
+    emm_error *errs = skipped ? calloc(n ? n : 1, sizeof *errs) : NULL;
+    uint64_t next_report = 0, total = info->accesses * passes;
+    emm_status st = EMM_OK;
+    if (!index || !mine || (skipped && !errs)) {
+        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
+        goto out;
+    }
+    for (size_t i = 0; i < n; i++)
+        if (pass[i] == p) {
+            index[k] = i;
+            mine[k++] = s[i];
+        }
+    if ((st = emm_trace_rewind(r, err)) != EMM_OK ||
+        (st = emm_runner_new(&threads, &run, err)) != EMM_OK ||
+        (st = emm_runner_add(run, m, mine, k, info, errs, err)) != EMM_OK)
+        goto out;
+    for (;;) {
+        size_t got = 0;
+        /* A batch is filled whole (but at the end), so the models always see
+         * the same batches. */
+        while (got < REPLAY_BATCH) {
+            size_t c = 0;
+            if ((st = emm_trace_read(r, buf + got, REPLAY_BATCH - got, &c, err)) != EMM_OK)
+                goto out;
+            if (c == 0)
+                break;
+            got += c;
+        }
+        if (got == 0)
+            break;
+        emm_runner_run(run, buf, got);
+        *done += got;
+        if (opt->progress && *done >= next_report) {
+            opt->progress(opt->progress_ctx, *done, total);
+            next_report = *done + REPLAY_PROGRESS_EVERY;
+        }
+    }
+    for (size_t j = 0; j < k; j++) {
+        size_t i = index[j];
+        emm_model *model = emm_runner_model(run, j);
+        if (skipped)
+            skipped[i] = errs[j];
+        memset(&results[i], 0, sizeof results[i]);
+        results[i].strategy = s[i];
+        if (!model)
+            continue;
+        emm_model_result(model, &results[i]);
+        if (opt->cells && (st = emm_model_cells(model, &results[i], err)) != EMM_OK)
+            goto out;
+    }
+out:
+    emm_runner_free(run);
+    free(index);
+    free(mine);
+    free(errs);
+    return st;
+}
+
+uint64_t emm_replay_default_memory(void)
+{
+    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGESIZE);
+    uint64_t half = pages > 0 && size > 0 ? (uint64_t)pages * (uint64_t)size / 2 : UINT64_MAX;
+    uint64_t cap = (uint64_t)4 << 30;
+    return half < cap ? half : cap;
+}
+
 emm_status emm_replay_ex(const char *path, const emm_machine *m, const emm_strategy *s,
                          size_t n, const emm_replay_options *opt, emm_result *results,
                          emm_error *skipped, uint64_t *accesses, emm_error *err)
 {
-    static const emm_replay_options defaults = {0, NULL, NULL, 0};
+    static const emm_replay_options defaults = {0, NULL, NULL, 0, 0};
     emm_trace_reader *r = NULL;
-    emm_runner *run = NULL;
     emm_trace_record *buf = NULL;
-    uint64_t done = 0, next_report = 0;
+    unsigned *pass = NULL;
+    uint64_t done = 0;
     emm_status st;
 
     if (!opt)
@@ -41,57 +176,32 @@ emm_status emm_replay_ex(const char *path, const emm_machine *m, const emm_strat
     if ((st = emm_trace_reader_open(path, &r, err)) != EMM_OK)
         return st;
     const emm_trace_info *info = emm_trace_reader_info(r);
-    emm_threads threads = {opt->jobs, NULL, NULL};
     buf = malloc(REPLAY_BATCH * sizeof *buf);
-    if (!buf) {
+    pass = malloc((n ? n : 1) * sizeof *pass);
+    if (!buf || !pass) {
         st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
         goto out;
     }
-    if ((st = emm_runner_new(&threads, &run, err)) != EMM_OK ||
-        (st = emm_runner_add(run, m, s, n, info, skipped, err)) != EMM_OK)
+    memset(results, 0, n * sizeof *results);
+    /* The sweep in passes over the trace when its models would not fit the
+     * memory budget together; the results do not depend on the passes. */
+    unsigned passes = plan_passes(s, n, info->geometry.nt,
+                                  opt->memory ? opt->memory : emm_replay_default_memory(), pass);
+    for (unsigned p = 0; p < passes && st == EMM_OK; p++)
+        st = replay_pass(r, m, s, n, pass, p, passes, opt, buf, results, skipped, &done, path,
+                         err);
+    if (st != EMM_OK) {
+        for (size_t i = 0; i < n; i++)
+            emm_result_release(&results[i]);
         goto out;
-    for (;;) {
-        size_t got = 0;
-        /* A batch is filled whole (but at the end), so the models always see
-         * the same batches. */
-        while (got < REPLAY_BATCH) {
-            size_t k = 0;
-            if ((st = emm_trace_read(r, buf + got, REPLAY_BATCH - got, &k, err)) != EMM_OK)
-                goto out;
-            if (k == 0)
-                break;
-            got += k;
-        }
-        if (got == 0)
-            break;
-        emm_runner_run(run, buf, got);
-        done += got;
-        if (opt->progress && done >= next_report) {
-            opt->progress(opt->progress_ctx, done, info->accesses);
-            next_report = done + REPLAY_PROGRESS_EVERY;
-        }
     }
     if (opt->progress)
-        opt->progress(opt->progress_ctx, done, info->accesses);
-    for (size_t i = 0; i < n; i++) {
-        emm_model *model = emm_runner_model(run, i);
-        if (model) {
-            emm_model_result(model, &results[i]);
-            if (opt->cells && (st = emm_model_cells(model, &results[i], err)) != EMM_OK) {
-                for (size_t j = 0; j <= i; j++)
-                    emm_result_release(&results[j]);
-                goto out;
-            }
-        } else {
-            memset(&results[i], 0, sizeof results[i]);
-            results[i].strategy = s[i];
-        }
-    }
+        opt->progress(opt->progress_ctx, done, done);
     if (accesses)
-        *accesses = done;
+        *accesses = done / passes;
 out:
-    emm_runner_free(run);
     free(buf);
+    free(pass);
     emm_trace_reader_close(r);
     return st;
 }
@@ -100,7 +210,7 @@ emm_status emm_replay(const char *path, const emm_machine *m, const emm_strategy
                       size_t n, emm_result *results, uint64_t *accesses,
                       emm_progress_fn progress, void *progress_ctx, emm_error *err)
 {
-    emm_replay_options opt = {1, progress, progress_ctx, 0};
+    emm_replay_options opt = {1, progress, progress_ctx, 0, 0};
     return emm_replay_ex(path, m, s, n, &opt, results, NULL, accesses, err);
 }
 
@@ -223,6 +333,12 @@ static void write_result(json_writer *w, const emm_machine *m, const emm_result 
             {"other_accesses", res->emm.other_accesses},
             {"local_budget", res->emm.local_budget},
             {"lookup_bytes", res->emm.lookup_bytes},
+            {"lookups", res->emm.lookups},
+            {"pointer_accesses", res->emm.pointer_accesses},
+            {"same_record", res->emm.same_record},
+            {"lookup_paged", (uint64_t)res->emm.lookup_paged},
+            {"lookup_pages", res->emm.lookup_pages},
+            {"lookup_page_bytes", res->emm.lookup_page_bytes},
         };
         json_key(w, "emm");
         json_begin_object(w);

@@ -159,6 +159,21 @@ static void report_extra(json_writer *w, void *ctx)
         json_string(w, s->strategy_note);
     }
     json_end_object(w);
+    /* The traced mesh: its elements and the bytes of its records, against
+     * which the DMA bytes say how often cells were fetched again. */
+    uint64_t mesh_bytes = 0;
+    for (uint32_t a = 0; a < s->ntarrays; a++)
+        if (s->tarrays[a].kind != EMM_ARRAY_RAW)
+            mesh_bytes += s->tarrays[a].count * s->tarrays[a].record_size;
+    json_key(w, "mesh");
+    json_begin_object(w);
+    json_key(w, "vertices");
+    json_u64(w, s->info.geometry.nv);
+    json_key(w, "triangles");
+    json_u64(w, s->info.geometry.nt);
+    json_key(w, "bytes");
+    json_u64(w, mesh_bytes);
+    json_end_object(w);
     json_key(w, "window");
     json_begin_object(w);
     json_key(w, "unit");

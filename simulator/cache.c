@@ -37,8 +37,8 @@ emm_status emm_cache_init(emm_cache *c, const emm_machine_params *p, emm_error *
     c->fetch = (emm_cache_fetch)p->cache_fetch;
     c->hit_cycles = p->cache_hit;
     c->local_cycles = p->local_cycles;
-    c->fill1 = p->dma_issue + emm_dma_transfer_cycles(p, p->cache_line);
-    c->fill2 = p->dma_issue + emm_dma_transfer_cycles(p, 2 * p->cache_line);
+    c->fill1 = emm_dma_sync_cycles(p, p->cache_line);
+    c->fill2 = emm_dma_sync_cycles(p, 2 * p->cache_line);
     c->compute_per_access = p->compute_per_access;
     c->compute_per_work = p->compute_per_work;
     c->tags = malloc(lines * sizeof *c->tags);

@@ -14,7 +14,7 @@
  *
  * No cells move, so the local-store size check of the EMM strategies does
  * not apply. Everything the loop needs is precomputed into flat arrays and
- * the layout itself is freed after construction. */
+ * the (shared) layout is released after construction. */
 #include "cache_layout.h"
 
 #include <stdlib.h>
@@ -127,12 +127,12 @@ static uint64_t image_base(const emm_trace_info *trace, uint32_t varray, uint32_
 }
 
 emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_strategy *s,
-                                      const emm_trace_info *trace, emm_model **out,
-                                      emm_error *err)
+                                      const emm_trace_info *trace, emm_model_share *share,
+                                      emm_model **out, emm_error *err)
 {
     const emm_trace_geometry *g = &trace->geometry;
     emm_layout_options opt;
-    emm_layout *l = NULL;
+    const emm_layout *l = NULL;
     cache_layout_model *m;
     char name[64];
     emm_status st;
@@ -182,13 +182,16 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
     memset(&opt, 0, sizeof opt);
     opt.kind = s->layout;
     opt.cell = s->cell ? s->cell : EMM_DEFAULT_CELL;
-    opt.vertex_bytes = m->varray != NO_ARRAY ? trace->arrays[m->varray].record_size : 0;
-    opt.triangle_bytes = m->tarray != NO_ARRAY ? trace->arrays[m->tarray].record_size : 0;
+    opt.vertex_bytes = m->varray != NO_ARRAY ? trace->arrays[m->varray].record_size
+                                             : EMM_THESIS_VERTEX_BYTES;
+    opt.triangle_bytes = m->tarray != NO_ARRAY ? trace->arrays[m->tarray].record_size
+                                               : EMM_THESIS_TRIANGLE_BYTES;
     opt.local_store = 0; /* no cell is moved as a whole */
-    opt.fetch = EMM_FETCH_NONE;
-    if ((st = emm_layout_build(g->xyz, (size_t)g->nv, g->tri, (size_t)g->nt, &opt, name, &l,
-                               err)) != EMM_OK)
+    opt.fetch = EMM_FETCH_NONE; /* the same layout as the EMM strategies' (shared) */
+    if ((st = emm_model_share_layout(share, trace, &opt, name, &l, err)) != EMM_OK) {
+        l = NULL;
         goto fail;
+    }
 
     size_t nv = (size_t)g->nv, nt = (size_t)g->nt, ncopies = 0;
     for (size_t v = 0; v < nv; v++) {
@@ -224,7 +227,7 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
         m->vhome_addr[v] = base + emm_layout_vertex_address(l, (uint32_t)v, EMM_LAYOUT_NONE, 0);
     }
     m->vcopy_start[nv] = k;
-    emm_layout_free(l);
+    emm_model_share_release(share, l);
     l = NULL;
 
     if ((st = emm_addr_map_init(&m->map, trace, err)) != EMM_OK)
@@ -235,7 +238,8 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
     *out = &m->base;
     return EMM_OK;
 fail:
-    emm_layout_free(l);
+    if (l)
+        emm_model_share_release(share, l);
     cl_destroy(&m->base);
     return st;
 }

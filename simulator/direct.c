@@ -1,7 +1,16 @@
 /* Direct remote access (thesis §3.2, DESIGN.md "The machine model"): every
  * access moves the words it spans one at a time; a read costs
  * direct.cycles_per_word per word, a write direct.write_cycles per word
- * (writes to main memory are buffered, thesis §3.2). */
+ * (writes to main memory are buffered, thesis §3.2).
+ *
+ * direct.granularity says what one read of a mesh element moves: `field`,
+ * the words the program loads; `record`, the whole record on the element's
+ * first load (an STL-style `Vertex getVertex(id)` returns a copy, thesis
+ * §6), after which further loads of the same record are local accesses
+ * (local.cycles), until the program loads another element. Writes move
+ * their own words either way, and plain-memory (raw) arrays always move
+ * what is loaded. */
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -12,14 +21,53 @@ typedef struct direct_model {
     struct emm_model base;
     emm_addr_map map;
     uint32_t word_shift;
-    uint64_t read_cycles, write_cycles;
+    uint64_t read_cycles, write_cycles, local_cycles;
     uint64_t compute_per_access, compute_per_work;
-    uint64_t accesses, words_read, words_written, work;
+    bool record;              /* direct.granularity = record */
+    uint64_t *record_words;   /* per array: words of a whole record; 0: move fields */
+    bool any;                 /* the previous read's element (record mode) */
+    uint32_t last_array;
+    uint64_t last_element;
+    uint64_t accesses, words_read, words_written, work, local;
 } direct_model;
+
+/* Record mode: the element's first read copies its record; later reads of
+ * it are local. */
+static void direct_run_records(direct_model *m, const emm_trace_record *recs, size_t n)
+{
+    const uint32_t ws = m->word_shift;
+    for (size_t i = 0; i < n; i++) {
+        const emm_trace_record *r = &recs[i];
+        uint64_t rec = m->record_words[r->array];
+        m->work += r->work;
+        if (r->write || rec == 0) {
+            uint64_t a = emm_addr_of(&m->map, r);
+            uint64_t words = ((a + r->bytes - 1) >> ws) - (a >> ws) + 1;
+            if (r->write)
+                m->words_written += words;
+            else
+                m->words_read += words;
+            continue;
+        }
+        if (m->any && r->array == m->last_array && r->element == m->last_element) {
+            m->local++;
+            continue;
+        }
+        m->any = true;
+        m->last_array = r->array;
+        m->last_element = r->element;
+        m->words_read += rec;
+    }
+    m->accesses += n;
+}
 
 static void direct_run(emm_model *model, const emm_trace_record *recs, size_t n)
 {
     direct_model *m = (direct_model *)model;
+    if (m->record) {
+        direct_run_records(m, recs, n);
+        return;
+    }
     const emm_addr_map *map = &m->map;
     const uint32_t ws = m->word_shift;
     uint64_t rd = 0, wr = 0, work = 0;
@@ -42,7 +90,8 @@ static void direct_run(emm_model *model, const emm_trace_record *recs, size_t n)
 static void direct_reset(emm_model *model)
 {
     direct_model *m = (direct_model *)model;
-    m->accesses = m->words_read = m->words_written = m->work = 0;
+    m->accesses = m->words_read = m->words_written = m->work = m->local = 0;
+    m->any = false;
 }
 
 static void direct_result(const emm_model *model, emm_result *out)
@@ -52,6 +101,7 @@ static void direct_result(const emm_model *model, emm_result *out)
     out->accesses = m->accesses;
     out->cycles[EMM_BUCKET_COMPUTE] = m->accesses * m->compute_per_access + m->work * m->compute_per_work;
     out->cycles[EMM_BUCKET_REMOTE_ACCESS] = m->words_read * m->read_cycles + m->words_written * m->write_cycles;
+    out->cycles[EMM_BUCKET_LOCAL_ACCESS] = m->local * m->local_cycles;
     out->total = 0;
     for (int i = 0; i < EMM_BUCKET_COUNT; i++)
         out->total += out->cycles[i];
@@ -64,6 +114,7 @@ static void direct_destroy(emm_model *model)
 {
     direct_model *m = (direct_model *)model;
     emm_addr_map_free(&m->map);
+    free(m->record_words);
     free(m);
 }
 
@@ -85,6 +136,17 @@ emm_status emm_direct_model_new(const emm_machine_params *p, const emm_trace_inf
         m->word_shift++;
     m->read_cycles = p->direct_cycles_per_word;
     m->write_cycles = p->direct_write_cycles;
+    m->local_cycles = p->local_cycles;
+    m->record = p->direct_granularity == EMM_DIRECT_RECORD;
+    uint32_t na = trace ? trace->narrays : 0;
+    m->record_words = calloc(na ? na : 1, sizeof *m->record_words);
+    if (!m->record_words) {
+        direct_destroy(&m->base);
+        return emm_fail(err, EMM_ERR_NOMEM, "direct model: out of memory");
+    }
+    for (uint32_t a = 0; a < na; a++)
+        if (trace->arrays[a].kind != EMM_ARRAY_RAW)
+            m->record_words[a] = (trace->arrays[a].record_size + p->word_bytes - 1) / p->word_bytes;
     m->compute_per_access = p->compute_per_access;
     m->compute_per_work = p->compute_per_work;
     *out = &m->base;

@@ -1,6 +1,7 @@
 /* Internal: the DMA engine (thesis §3.2): a few channels that move data
- * while the core goes on. The core pays the issue cost; a transfer starts on
- * the earliest-free channel once the core has issued it and occupies that
+ * while the core goes on. The core pays the programming (dma.program); a
+ * transfer starts on the earliest-free channel once the core has issued it,
+ * spends the controller's latency (dma.latency) there, and occupies that
  * channel until it completes; the core waits only when it needs the data,
  * and only for what is left. Times are in core cycles since the model
  * started. */
@@ -11,6 +12,7 @@
 
 typedef struct emm_dma {
     uint64_t issue;                          /* cycles the core pays per transfer */
+    uint64_t latency;                        /* the controller's, on the channel */
     uint32_t channels;
     uint64_t free_at[EMM_DMA_MAX_CHANNELS];  /* when each channel is next idle */
     emm_machine_params params;

@@ -1,18 +1,22 @@
 /* EMM strategies in the machine model: a layout's cells moved whole into
- * the local store by DMA and served from there (thesis §4.1), fetched
- * naively, by convolution or by extrapolation (thesis §4.2), evicted
- * least-recently-used, with the EMM runtime's own work charged per
- * operation (thesis §6.2: "instruction cycles"). The costs and every choice
- * are in docs/fetch.md.
+ * the local store by DMA and served from there (thesis §4.1), fetched by a
+ * scheme (fetch_*.c, thesis §4.2), evicted least-recently-used, with the EMM
+ * runtime's own work charged per operation (thesis §6.2: "instruction
+ * cycles") — and the operations are the thesis' (§4.1.1): a look-up per
+ * element *request*, not per word; a vertex that the triangle just
+ * requested names is reached through the triangle's pointer to its copy in
+ * the same cell; the look-up tables in the local store while they fit their
+ * budget, paged in by DMA beyond it. The costs and every choice are in
+ * docs/fetch.md.
  *
  * The model keeps a clock: the core's time advances by every charge, DMA
  * transfers run on the engine's channels meanwhile (simulator/dma.c), and
  * an access to a cell still in flight stalls for what is left. Every
  * charge lands in exactly one bucket, so the buckets add up to the clock.
  *
- * Everything a record needs is a flat array indexed by triangle, vertex
- * copy or cell, built once from the layout; the LRU order is an intrusive
- * doubly-linked list over cell numbers (STYLE.md §5, §12). */
+ * The layout is shared by every model of the same layout and cell size
+ * (simulator/share.h) and read directly; a model keeps only per-cell state:
+ * residency, the LRU list, DMA bytes (STYLE.md §5, §12). */
 #include "emm_fetch.h"
 
 #include <assert.h>
@@ -24,10 +28,16 @@
 #include "dma.h"
 #include "error.h"
 #include "fetch_scheme.h"
+#include "layout_internal.h"
 #include "model.h"
 #include "parse.h"
 
 #define NONE EMM_LAYOUT_NONE
+
+/* The schemes, from EMM_FETCH_LIST. */
+#define OPS_(e, n) [EMM_FETCH_##e] = &emm_fetch_##n##_ops,
+static const struct emm_fetch_ops *const schemes[EMM_FETCH_COUNT] = {EMM_FETCH_LIST(OPS_)};
+#undef OPS_
 
 enum { ARR_VERTICES = 0, ARR_TRIANGLES = 1, ARR_OTHER = 2 };
 
@@ -36,51 +46,69 @@ enum { ARR_VERTICES = 0, ARR_TRIANGLES = 1, ARR_OTHER = 2 };
  * (docs/fetch.md, "Prefetch filter"). */
 enum { CELL_PRESENT = 1u, CELL_PREFETCHED = 2u, CELL_USELESS = 4u };
 
-/* The schemes, from EMM_FETCH_LIST. */
-#define OPS_(e, n) [EMM_FETCH_##e] = &emm_fetch_##n##_ops,
-static const struct emm_fetch_ops *const schemes[EMM_FETCH_COUNT] = {EMM_FETCH_LIST(OPS_)};
-#undef OPS_
+/* The look-up tables in remote memory, when they are paged: the triangle
+ * and vertex id tables (4 bytes an entry), then the cell table (8 bytes a
+ * cell), then the rest (quadtree nodes). A frame holds one page; the frames
+ * are kept least-recently-used. */
+typedef struct pager {
+    uint64_t page;                  /* bytes per page */
+    uint32_t frames, used;
+    uint64_t tri_off, vert_off, cell_off;
+    uint32_t npages;
+    uint32_t *page_frame;           /* npages: the frame holding the page, or NONE */
+    uint32_t *frame_page;           /* frames */
+    uint32_t *prev, *next;          /* LRU list of frames, most recent at head */
+    uint32_t head, tail;
+    uint64_t fetches, bytes;
+} pager;
 
 struct fetch_model {
     struct emm_model base;
     const struct emm_fetch_ops *scheme;
     void *scheme_state;    /* scheme->state_bytes */
     emm_machine_params params;
-    emm_layout *layout;
+    emm_model_share *share;
+    const emm_layout *layout; /* shared; read-only */
+    const int32_t *tri;       /* the triangles' vertex ids, shared */
     emm_addr_map map;
+    uint8_t *array_kind;      /* per trace array: ARR_* */
 
-    /* The layout, flattened. */
-    uint8_t *array_kind;   /* per trace array: ARR_* */
-    uint64_t nv, nt;       /* vertices and triangles with a layout index */
+    /* The layout, as the record loop reads it. */
+    uint64_t nv, nt;          /* vertices and triangles with a layout index */
     uint32_t ncells;
-    uint32_t *tri_cell;    /* triangle -> cell */
-    uint32_t *vcopy_start; /* vertex v's copies are vcopy_cell[vcopy_start[v] .. [v+1]) */
-    uint32_t *vcopy_cell;
-    uint64_t *cell_bytes;
-    uint32_t *cell_ntri;
-    uint64_t *lookup_cost; /* emm.lookup (+ emm.quadtree_level x depth) */
+    const uint32_t *tri_cell;
+    const uint32_t *vcopy_start;
+    const emm_layout_index *vcopy;
+    const emm_layout_cell *cells;
 
     /* Costs, from the machine. */
-    uint64_t residency, predict, issue_instr, local_cycles;
+    uint64_t lookup, level, residency, issue_instr, local_cycles;
     uint64_t compute_per_access, compute_per_work;
     uint64_t direct_read, direct_write;
     uint32_t word_shift;
-    bool filter; /* emm.prefetch_filter */
+    bool filter;              /* emm.prefetch_filter */
     uint64_t budget, lookup_bytes;
+    bool paged;
+    pager pg;
 
     /* The run. */
     emm_dma dma;
     uint64_t now;
     uint64_t cycles[EMM_BUCKET_COUNT];
-    uint64_t *ready;       /* present cells: when their transfer completes */
-    uint32_t *prev, *next; /* LRU list of present cells, most recent at head */
+    uint64_t *ready;          /* present cells: when their transfer completes */
+    uint32_t *prev, *next;    /* LRU list of present cells, most recent at head */
     uint8_t *flags;
-    uint64_t *cell_dma;    /* bytes DMA moved per cell (emm_model_cells) */
+    uint64_t *cell_dma;       /* bytes DMA moved per cell (emm_model_cells) */
     uint32_t head, tail;
-    uint64_t used;         /* bytes of present cells (resident or in flight) */
-    uint32_t cur;          /* the cell of the previous access */
-    uint32_t last_tri;     /* the cell of the latest triangle access */
-    uint64_t accesses;
+    uint64_t used;            /* bytes of present cells (resident or in flight) */
+    uint32_t cur;             /* the cell of the previous access */
+    uint32_t last_tri;        /* the cell of the latest triangle request */
+    int64_t last_tri_id;      /* that triangle, or -1 */
+    bool any;                 /* a record was seen */
+    uint32_t last_array;      /* the previous record's element */
+    uint64_t last_element;
+    uint32_t last_cell;       /* the cell that served it, or NONE */
+    uint64_t accesses, lookups, pointers, same_record;
     uint64_t cell_changes, demand_fetches, demand_bytes, prefetches, prefetch_bytes;
     uint64_t useful_prefetches, dropped_prefetches, filtered_prefetches, evictions;
     uint64_t other_accesses;
@@ -123,7 +151,7 @@ static void evict(fetch_model *m, uint32_t c)
         m->hook(m->hook_ctx, c, m->now, m->ready[c]);
     lru_unlink(m, c);
     m->flags[c] = m->flags[c] & CELL_PREFETCHED ? CELL_USELESS : 0;
-    m->used -= m->cell_bytes[c];
+    m->used -= m->cells[c].bytes;
     m->evictions++;
 }
 
@@ -138,7 +166,7 @@ static int make_room(fetch_model *m, uint64_t bytes, uint32_t keep)
     need = m->used + bytes - m->budget;
     for (uint32_t c = m->tail; c != NONE && freeable < need; c = m->prev[c])
         if (c != keep && m->ready[c] <= m->now)
-            freeable += m->cell_bytes[c];
+            freeable += m->cells[c].bytes;
     if (freeable < need)
         return 0;
     for (uint32_t c = m->tail; m->used + bytes > m->budget;) {
@@ -164,17 +192,97 @@ static void stall_until(fetch_model *m, uint64_t t)
         charge(m, EMM_BUCKET_DMA_STALL, t - m->now);
 }
 
-/* The runtime's bookkeeping, then the core programs the engine; the cell is
- * present (in flight) from now on and most recently used. */
-static void issue(fetch_model *m, uint32_t c)
+/* The runtime's bookkeeping, then the core programs the engine; returns
+ * when the data will have arrived. */
+static uint64_t start_dma(fetch_model *m, uint64_t bytes)
 {
     uint64_t core_free, done;
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->issue_instr);
-    done = emm_dma_start(&m->dma, m->now, m->cell_bytes[c], &core_free);
+    done = emm_dma_start(&m->dma, m->now, bytes, &core_free);
     charge(m, EMM_BUCKET_DMA_ISSUE, core_free - m->now);
-    m->ready[c] = done;
-    m->cell_dma[c] += m->cell_bytes[c];
-    m->used += m->cell_bytes[c];
+    return done;
+}
+
+/* ---- the look-up tables ------------------------------------------------------ */
+
+static void frame_unlink(pager *g, uint32_t f)
+{
+    uint32_t p = g->prev[f], n = g->next[f];
+    if (p != NONE)
+        g->next[p] = n;
+    else
+        g->head = n;
+    if (n != NONE)
+        g->prev[n] = p;
+    else
+        g->tail = p;
+}
+
+static void frame_push_front(pager *g, uint32_t f)
+{
+    g->prev[f] = NONE;
+    g->next[f] = g->head;
+    if (g->head != NONE)
+        g->prev[g->head] = f;
+    else
+        g->tail = f;
+    g->head = f;
+}
+
+/* The table entry at byte `off` of the tables: a resident page is a local
+ * access to it; a missing one is brought in by a DMA the core waits for,
+ * into the least recently used frame. */
+static void touch_table(fetch_model *m, uint64_t off)
+{
+    pager *g = &m->pg;
+    uint32_t p = (uint32_t)(off / g->page), f = g->page_frame[p];
+    if (f != NONE) {
+        if (g->head != f) {
+            frame_unlink(g, f);
+            frame_push_front(g, f);
+        }
+        return;
+    }
+    if (g->used < g->frames) {
+        f = g->used++;
+    } else {
+        f = g->tail;
+        frame_unlink(g, f);
+        g->page_frame[g->frame_page[f]] = NONE;
+    }
+    g->frame_page[f] = p;
+    g->page_frame[p] = f;
+    frame_push_front(g, f);
+    stall_until(m, start_dma(m, g->page));
+    g->fetches++;
+    g->bytes += g->page;
+}
+
+/* A look-up of element `e` of an array of `kind` in cell c (the id table
+ * gives its layout index; the cell table its cell's place and residency):
+ * emm.lookup, plus emm.quadtree_level per level descended, plus
+ * emm.residency; with paged tables, the pages those entries live in. */
+static void lookup(fetch_model *m, int kind, uint64_t e, uint32_t c)
+{
+    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS,
+           m->lookup + m->level * m->cells[c].depth + m->residency);
+    m->lookups++;
+    if (m->paged) {
+        touch_table(m, (kind == ARR_TRIANGLES ? m->pg.tri_off : m->pg.vert_off) + 4 * e);
+        touch_table(m, m->pg.cell_off + 8 * (uint64_t)c);
+    }
+}
+
+/* ---- fetching ---------------------------------------------------------------- */
+
+/* The core programs the engine for cell c, which is present (in flight)
+ * from now on and most recently used. */
+static void issue(fetch_model *m, uint32_t c)
+{
+    uint64_t bytes = m->cells[c].bytes;
+    m->ready[c] = start_dma(m, bytes);
+    m->cell_dma[c] += bytes;
+    m->used += bytes;
     lru_push_front(m, c);
 }
 
@@ -184,7 +292,7 @@ static void issue(fetch_model *m, uint32_t c)
  * construction), so this ends. */
 static void demand_fetch(fetch_model *m, uint32_t c)
 {
-    while (!make_room(m, m->cell_bytes[c], NONE)) {
+    while (!make_room(m, m->cells[c].bytes, NONE)) {
         uint64_t first = UINT64_MAX;
         for (uint32_t x = m->head; x != NONE; x = m->next[x])
             if (m->ready[x] > m->now && m->ready[x] < first)
@@ -195,22 +303,24 @@ static void demand_fetch(fetch_model *m, uint32_t c)
     issue(m, c);
     m->flags[c] = CELL_PRESENT;
     m->demand_fetches++;
-    m->demand_bytes += m->cell_bytes[c];
+    m->demand_bytes += m->cells[c].bytes;
 }
 
 /* A cell the scheme expects the program to need soon (`entered` is the cell
- * being worked on, which stays). Finding the cell is a look-up; an empty
- * cell holds nothing to fetch; a present one needs nothing. Nor does a cell
- * whose last prefetch was evicted unused, until the program enters it: the
- * prefetch pollution filter of Zhuang & Lee (ICPP 2003), one bit per cell
- * beside the residency bit, so a guess that already failed once cannot
- * keep pushing the cells in use out. A prefetch that finds no room without
- * evicting a cell in flight is dropped: waiting would stall the core for a
- * guess. */
+ * being worked on, which stays). Finding the cell is a look-up in the cell
+ * table; an empty cell holds nothing to fetch; a present one needs nothing.
+ * Nor does a cell whose last prefetch was evicted unused, until the program
+ * enters it: the prefetch pollution filter of Zhuang & Lee (ICPP 2003), one
+ * bit per cell beside the residency bit, so a guess that already failed
+ * once cannot keep pushing the cells in use out. A prefetch that finds no
+ * room without evicting a cell in flight is dropped: waiting would stall
+ * the core for a guess. */
 void emm_fetcher_prefetch(fetch_model *m, uint32_t c, uint32_t entered)
 {
-    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->lookup_cost[c]);
-    if (m->cell_ntri[c] == 0)
+    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->lookup + m->level * m->cells[c].depth);
+    if (m->paged)
+        touch_table(m, m->pg.cell_off + 8 * (uint64_t)c);
+    if (m->cells[c].ntri == 0)
         return;
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->residency);
     if (m->flags[c] & CELL_PRESENT)
@@ -219,14 +329,14 @@ void emm_fetcher_prefetch(fetch_model *m, uint32_t c, uint32_t entered)
         m->filtered_prefetches++;
         return;
     }
-    if (!make_room(m, m->cell_bytes[c], entered)) {
+    if (!make_room(m, m->cells[c].bytes, entered)) {
         m->dropped_prefetches++;
         return;
     }
     issue(m, c);
     m->flags[c] = CELL_PRESENT | CELL_PREFETCHED;
     m->prefetches++;
-    m->prefetch_bytes += m->cell_bytes[c];
+    m->prefetch_bytes += m->cells[c].bytes;
 }
 
 const emm_layout *emm_fetcher_layout(const emm_fetcher *f)
@@ -246,21 +356,29 @@ void emm_fetcher_instructions(emm_fetcher *f, uint64_t cycles)
 
 /* ---- the record loop --------------------------------------------------------- */
 
-static inline uint32_t vertex_cell(const fetch_model *m, uint64_t v)
+/* The cell serving vertex v: its copy in the cell of the latest triangle
+ * request when it has one there, else its home copy (NONE: a vertex no
+ * triangle uses). *pointer: v is a vertex of that triangle, whose layout
+ * record points at the copy (thesis §4.1.1, Fig. 4.4): no look-up. */
+static inline uint32_t vertex_cell(const fetch_model *m, uint64_t v, bool *pointer)
 {
-    uint32_t lo, hi;
+    *pointer = false;
     if (v >= m->nv)
         return NONE;
-    lo = m->vcopy_start[v];
-    hi = m->vcopy_start[v + 1];
+    uint32_t lo = m->vcopy_start[v], hi = m->vcopy_start[v + 1];
     if (lo == hi)
         return NONE;
-    /* The copy in the cell of the triangle just read: the thesis' triangles
-     * point at their local vertex copies (§4.1.1, Fig. 4.4). */
-    for (uint32_t i = lo; i < hi; i++)
-        if (m->vcopy_cell[i] == m->last_tri)
+    if (m->last_tri_id >= 0) {
+        const int32_t *t = m->tri + 3 * m->last_tri_id;
+        if ((uint64_t)t[0] == v || (uint64_t)t[1] == v || (uint64_t)t[2] == v) {
+            *pointer = true;
             return m->last_tri;
-    return m->vcopy_cell[lo];
+        }
+    }
+    for (uint32_t i = lo; i < hi; i++)
+        if (m->vcopy[i].cell == m->last_tri)
+            return m->last_tri;
+    return m->vcopy[lo].cell;
 }
 
 static void direct_access(fetch_model *m, const emm_trace_record *r)
@@ -273,26 +391,37 @@ static void direct_access(fetch_model *m, const emm_trace_record *r)
 
 static void access_one(fetch_model *m, const emm_trace_record *r)
 {
-    uint32_t c;
     charge(m, EMM_BUCKET_COMPUTE, m->compute_per_access + (uint64_t)r->work * m->compute_per_work);
-    switch (m->array_kind[r->array]) {
-    case ARR_TRIANGLES:
-        c = r->element < m->nt ? m->tri_cell[r->element] : NONE;
-        if (c != NONE)
-            m->last_tri = c;
-        break;
-    case ARR_VERTICES:
-        c = vertex_cell(m, r->element);
-        break;
-    default:
-        c = NONE;
-        break;
+    bool same = m->any && r->array == m->last_array && r->element == m->last_element;
+    m->any = true;
+    m->last_array = r->array;
+    m->last_element = r->element;
+    /* A further load of the record just requested: the runtime has handed
+     * the program its local copy, so this is a local access and no more. */
+    if (same && m->last_cell != NONE) {
+        m->same_record++;
+        charge(m, EMM_BUCKET_LOCAL_ACCESS, m->local_cycles);
+        return;
     }
+    int kind = m->array_kind[r->array];
+    bool pointer = false;
+    uint32_t c = NONE;
+    if (kind == ARR_TRIANGLES && r->element < m->nt) {
+        c = m->tri_cell[r->element];
+        m->last_tri = c;
+        m->last_tri_id = (int64_t)r->element;
+    } else if (kind == ARR_VERTICES) {
+        c = vertex_cell(m, r->element, &pointer);
+    }
+    m->last_cell = c;
     if (c == NONE) {
         direct_access(m, r);
         return;
     }
-    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->lookup_cost[c] + m->residency);
+    if (pointer)
+        m->pointers++;
+    else
+        lookup(m, kind, r->element, c);
     if (c != m->cur) {
         uint32_t from = m->cur;
         m->cell_changes++;
@@ -337,12 +466,22 @@ static void fetch_reset(emm_model *model)
     memset(m->cell_dma, 0, m->ncells * sizeof *m->cell_dma);
     m->head = m->tail = NONE;
     m->used = 0;
-    m->cur = m->last_tri = NONE;
+    m->cur = m->last_tri = m->last_cell = NONE;
+    m->last_tri_id = -1;
+    m->any = false;
     if (m->scheme->state_bytes)
         memset(m->scheme_state, 0, m->scheme->state_bytes);
     if (m->scheme->reset)
         m->scheme->reset(m->scheme_state, &m->params);
-    m->accesses = 0;
+    if (m->paged) {
+        pager *g = &m->pg;
+        for (uint32_t p = 0; p < g->npages; p++)
+            g->page_frame[p] = NONE;
+        g->used = 0;
+        g->head = g->tail = NONE;
+        g->fetches = g->bytes = 0;
+    }
+    m->accesses = m->lookups = m->pointers = m->same_record = 0;
     m->cell_changes = m->demand_fetches = m->demand_bytes = 0;
     m->prefetches = m->prefetch_bytes = 0;
     m->useful_prefetches = m->dropped_prefetches = m->filtered_prefetches = 0;
@@ -375,26 +514,32 @@ static void fetch_result(const emm_model *model, emm_result *out)
     out->emm.other_accesses = m->other_accesses;
     out->emm.local_budget = m->budget;
     out->emm.lookup_bytes = m->lookup_bytes;
+    out->emm.lookups = m->lookups;
+    out->emm.pointer_accesses = m->pointers;
+    out->emm.same_record = m->same_record;
+    out->emm.lookup_paged = m->paged;
+    out->emm.lookup_pages = m->paged ? m->pg.fetches : 0;
+    out->emm.lookup_page_bytes = m->paged ? m->pg.bytes : 0;
 }
 
 static void fetch_destroy(emm_model *model)
 {
     fetch_model *m = (fetch_model *)model;
-    emm_layout_free(m->layout);
+    if (m->layout)
+        emm_model_share_release(m->share, m->layout);
+    emm_model_share_unref(m->share);
     emm_addr_map_free(&m->map);
     free(m->array_kind);
-    free(m->tri_cell);
-    free(m->vcopy_start);
-    free(m->vcopy_cell);
-    free(m->cell_bytes);
-    free(m->cell_ntri);
-    free(m->lookup_cost);
     free(m->ready);
     free(m->prev);
     free(m->next);
     free(m->flags);
     free(m->cell_dma);
     free(m->scheme_state);
+    free(m->pg.page_frame);
+    free(m->pg.frame_page);
+    free(m->pg.prev);
+    free(m->pg.next);
     free(m);
 }
 
@@ -402,120 +547,93 @@ static const struct emm_model_ops fetch_ops = {fetch_run, fetch_reset, fetch_res
 
 /* ---- construction ------------------------------------------------------------ */
 
-/* Builds the layout and the local store its cells may use: local.bytes
- * minus the layout's own look-up tables (docs/fetch.md, "The local store").
- * Those tables depend on the layout, so the layout is built unchecked
- * first; a cell that does not fit what the tables leave is reported by a
- * second build checked against exactly that, whose message names a CELL
- * that fits. */
-static emm_status build_layout(fetch_model *m, const emm_machine_params *p, const emm_strategy *s,
-                               const emm_trace_info *t, uint32_t vbytes, uint32_t tbytes,
-                               emm_error *err)
+/* The local store the cells may use (docs/fetch.md, "The local store"):
+ * local.bytes less the look-up tables, when they fit emm.lookup_budget (and
+ * half the local store); less the budget's page frames when they do not and
+ * are paged. Those
+ * tables depend on the layout, so it is built (shared, unchecked) first; a
+ * cell that does not fit what the tables leave is reported by a private
+ * build checked against exactly that, whose message names a CELL that
+ * fits. */
+static emm_status plan_local_store(fetch_model *m, const emm_machine_params *p,
+                                   const emm_strategy *s, const emm_trace_info *t,
+                                   const emm_layout_options *o, emm_error *err)
 {
-    const emm_trace_geometry *g = &t->geometry;
-    char name[64], where[160], b1[32], b2[32];
-    uint64_t largest = 0;
-    emm_layout_options o;
-    emm_status st;
-
+    char name[64], where[200], b1[32], b2[32];
     emm_strategy_format(s, name, sizeof name);
-    memset(&o, 0, sizeof o);
-    o.kind = s->layout;
-    o.cell = s->cell;
-    o.vertex_bytes = vbytes;
-    o.triangle_bytes = tbytes;
-    o.local_store = 0;
-    o.fetch = s->fetch;
-    st = emm_layout_build(g->xyz, (size_t)g->nv, g->tri, (size_t)g->nt, &o, name, &m->layout, err);
-    if (st != EMM_OK)
-        return st;
     m->lookup_bytes = emm_layout_lookup_bytes(m->layout);
-    if (m->lookup_bytes >= p->local_bytes)
-        return emm_fail(err, EMM_ERR_RANGE,
-                        "%s: the layout's look-up tables take %s bytes, more than the %s-byte "
-                        "local store (local.bytes)",
-                        name, emm_grouped(m->lookup_bytes, b1),
-                        emm_grouped(p->local_bytes, b2));
-    m->budget = p->local_bytes - m->lookup_bytes;
-    for (uint32_t c = 0; c < emm_layout_cell_count(m->layout); c++)
-        if (emm_layout_cell_get(m->layout, c)->bytes > largest)
-            largest = emm_layout_cell_get(m->layout, c)->bytes;
-    if (largest > m->budget) {
-        emm_layout *again = NULL;
-        o.local_store = m->budget;
-        snprintf(where, sizeof where, "%s (local store less %s bytes of look-up tables)", name,
-                 emm_grouped(m->lookup_bytes, b1));
-        st = emm_layout_build(g->xyz, (size_t)g->nv, g->tri, (size_t)g->nt, &o, where, &again,
-                              err);
-        if (st == EMM_OK) { /* cannot happen: the same build, now checked */
-            emm_layout_free(again);
-            return emm_fail(err, EMM_ERR_RANGE,
-                            "%s: a cell of %s bytes does not fit the %s bytes of local store "
-                            "left by the look-up tables: use a smaller CELL than %u",
-                            name, emm_grouped(largest, b1),
-                            emm_grouped(m->budget, b2), s->cell);
-        }
-        return st;
+    uint64_t tables = m->lookup_bytes;
+    /* The tables' budget, and never more than half the local store: the
+     * cells need the rest. */
+    uint64_t budget = p->emm_lookup_budget < p->local_bytes / 2 ? p->emm_lookup_budget
+                                                                 : p->local_bytes / 2;
+    if (tables > budget) {
+        m->paged = true;
+        m->pg.page = p->emm_lookup_page;
+        uint64_t frames = budget / p->emm_lookup_page;
+        m->pg.frames = (uint32_t)(frames < 2 ? 2 : frames > UINT32_MAX ? UINT32_MAX : frames);
+        tables = (uint64_t)m->pg.frames * m->pg.page;
     }
-    return EMM_OK;
+    if (tables >= p->local_bytes)
+        return emm_fail(err, EMM_ERR_RANGE,
+                        "%s: the layout's look-up tables take %s bytes of the %s-byte local "
+                        "store (local.bytes); lower emm.lookup_budget to page them",
+                        name, emm_grouped(tables, b1), emm_grouped(p->local_bytes, b2));
+    m->budget = p->local_bytes - tables;
+    uint64_t largest = 0;
+    for (uint32_t c = 0; c < m->ncells; c++)
+        if (m->cells[c].bytes > largest)
+            largest = m->cells[c].bytes;
+    if (largest <= m->budget)
+        return EMM_OK;
+    emm_layout *again = NULL;
+    emm_layout_options checked = *o;
+    checked.local_store = m->budget;
+    snprintf(where, sizeof where, "%s (local store less %s bytes of look-up tables)", name,
+             emm_grouped(tables, b1));
+    const emm_trace_geometry *g = &t->geometry;
+    emm_status st = emm_layout_build(g->xyz, (size_t)g->nv, g->tri, (size_t)g->nt, &checked,
+                                     where, &again, err);
+    if (st == EMM_OK) { /* cannot happen: the same build, now checked */
+        emm_layout_free(again);
+        return emm_fail(err, EMM_ERR_RANGE,
+                        "%s: a cell of %s bytes does not fit the %s bytes of local store left "
+                        "by the look-up tables: use a smaller CELL than %u",
+                        name, emm_grouped(largest, b1), emm_grouped(m->budget, b2), s->cell);
+    }
+    return st;
 }
 
-/* The flat arrays the record loop reads. */
-static emm_status flatten(fetch_model *m, const emm_machine_params *p, emm_error *err)
+static emm_status alloc_pager(fetch_model *m, const char *name, emm_error *err)
 {
+    pager *g = &m->pg;
     const emm_layout *l = m->layout;
-    uint32_t nc = emm_layout_cell_count(l);
-    uint64_t copies = 0;
-    m->ncells = nc;
-    m->nt = emm_layout_triangle_count(l);
-    m->nv = emm_layout_vertex_count(l);
-    m->tri_cell = malloc((m->nt ? m->nt : 1) * sizeof *m->tri_cell);
-    m->vcopy_start = malloc((m->nv + 1) * sizeof *m->vcopy_start);
-    m->cell_bytes = malloc(nc * sizeof *m->cell_bytes);
-    m->cell_ntri = malloc(nc * sizeof *m->cell_ntri);
-    m->lookup_cost = malloc(nc * sizeof *m->lookup_cost);
-    m->ready = calloc(nc, sizeof *m->ready);
-    m->prev = malloc(nc * sizeof *m->prev);
-    m->next = malloc(nc * sizeof *m->next);
-    m->flags = calloc(nc, 1);
-    m->cell_dma = calloc(nc, sizeof *m->cell_dma);
-    if (!m->tri_cell || !m->vcopy_start || !m->cell_bytes || !m->cell_ntri || !m->lookup_cost ||
-        !m->ready || !m->prev || !m->next || !m->flags || !m->cell_dma)
-        return emm_fail(err, EMM_ERR_NOMEM, "EMM model: out of memory for %u cells", nc);
-    for (uint64_t t = 0; t < m->nt; t++)
-        m->tri_cell[t] = emm_layout_triangle_index(l, (uint32_t)t).cell;
-    for (uint64_t v = 0; v < m->nv; v++) {
-        const emm_layout_index *cp;
-        m->vcopy_start[v] = (uint32_t)copies;
-        copies += emm_layout_vertex_copies(l, (uint32_t)v, &cp);
-    }
-    m->vcopy_start[m->nv] = (uint32_t)copies;
-    m->vcopy_cell = malloc((copies ? copies : 1) * sizeof *m->vcopy_cell);
-    if (!m->vcopy_cell)
-        return emm_fail(err, EMM_ERR_NOMEM, "EMM model: out of memory for %llu vertex copies",
-                        (unsigned long long)copies);
-    for (uint64_t v = 0; v < m->nv; v++) {
-        const emm_layout_index *cp;
-        uint32_t k = emm_layout_vertex_copies(l, (uint32_t)v, &cp);
-        for (uint32_t i = 0; i < k; i++)
-            m->vcopy_cell[m->vcopy_start[v] + i] = cp[i].cell;
-    }
-    for (uint32_t c = 0; c < nc; c++) {
-        const emm_layout_cell *cell = emm_layout_cell_get(l, c);
-        m->cell_bytes[c] = cell->bytes;
-        m->cell_ntri[c] = cell->ntri;
-        m->lookup_cost[c] = p->emm_lookup + p->emm_quadtree_level * cell->depth;
-    }
+    g->tri_off = 0;
+    g->vert_off = 4 * (uint64_t)l->nt;
+    g->cell_off = g->vert_off + 4 * (uint64_t)l->nv;
+    uint64_t npages = (m->lookup_bytes + g->page - 1) / g->page;
+    if (npages > UINT32_MAX - 1)
+        return emm_fail(err, EMM_ERR_RANGE, "%s: %llu pages of look-up tables are too many",
+                        name, (unsigned long long)npages);
+    g->npages = (uint32_t)npages;
+    if (g->frames > g->npages)
+        g->frames = g->npages;
+    g->page_frame = malloc((npages ? npages : 1) * sizeof *g->page_frame);
+    g->frame_page = malloc((size_t)g->frames * sizeof *g->frame_page);
+    g->prev = malloc((size_t)g->frames * sizeof *g->prev);
+    g->next = malloc((size_t)g->frames * sizeof *g->next);
+    if (!g->page_frame || !g->frame_page || !g->prev || !g->next)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the paged tables", name);
     return EMM_OK;
 }
 
 emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
-                             const emm_trace_info *trace, emm_model **out, emm_error *err)
+                             const emm_trace_info *trace, emm_model_share *share,
+                             emm_model **out, emm_error *err)
 {
     fetch_model *m;
     emm_status st;
-    uint32_t vbytes = 0, tbytes = 0;
-    int have_v = 0, have_t = 0;
+    emm_layout_options o;
     char name[64];
 
     assert(s->kind == EMM_STRATEGY_EMM && s->cell >= 1);
@@ -531,42 +649,73 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
     m->base.ops = &fetch_ops;
     m->scheme = schemes[s->fetch];
     m->params = *p;
+    m->share = share;
+    emm_model_share_ref(share);
     m->scheme_state = calloc(1, m->scheme->state_bytes ? m->scheme->state_bytes : 1);
-    if (!m->scheme_state) {
-        free(m);
-        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
-    }
-    if ((st = emm_addr_map_init(&m->map, trace, err)) != EMM_OK) {
-        free(m->scheme_state);
-        free(m);
-        return st;
-    }
     m->array_kind = malloc(trace->narrays ? trace->narrays : 1);
-    if (!m->array_kind) {
+    if (!m->scheme_state || !m->array_kind) {
         st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
         goto fail;
     }
+    if ((st = emm_addr_map_init(&m->map, trace, err)) != EMM_OK)
+        goto fail;
     /* The first vertex array and the first triangle array are the mesh the
      * geometry describes; any other array is plain memory, read directly. */
+    memset(&o, 0, sizeof o);
+    o.kind = s->layout;
+    o.cell = s->cell;
+    o.fetch = s->fetch;
+    bool have_v = false, have_t = false;
     for (uint32_t a = 0; a < trace->narrays; a++) {
         const emm_trace_array *arr = &trace->arrays[a];
         m->array_kind[a] = ARR_OTHER;
         if (arr->kind == EMM_ARRAY_VERTICES && !have_v) {
-            have_v = 1;
-            vbytes = arr->record_size;
+            have_v = true;
+            o.vertex_bytes = arr->record_size;
             m->array_kind[a] = ARR_VERTICES;
         } else if (arr->kind == EMM_ARRAY_TRIANGLES && !have_t) {
-            have_t = 1;
-            tbytes = arr->record_size;
+            have_t = true;
+            o.triangle_bytes = arr->record_size;
             m->array_kind[a] = ARR_TRIANGLES;
         }
     }
-    if ((st = build_layout(m, p, s, trace, vbytes, tbytes, err)) != EMM_OK)
+    if (o.vertex_bytes == 0)
+        o.vertex_bytes = EMM_THESIS_VERTEX_BYTES;
+    if (o.triangle_bytes == 0)
+        o.triangle_bytes = EMM_THESIS_TRIANGLE_BYTES;
+    if ((st = emm_model_share_layout(share, trace, &o, name, &m->layout, err)) != EMM_OK) {
+        m->layout = NULL;
         goto fail;
-    if ((st = flatten(m, p, err)) != EMM_OK)
+    }
+    if (!(m->tri = emm_model_share_triangles(share, trace, err))) {
+        st = EMM_ERR_NOMEM;
         goto fail;
+    }
+    const emm_layout *l = m->layout;
+    m->ncells = l->ncells;
+    m->nt = l->nt;
+    m->nv = l->nv;
+    m->tri_cell = l->tri_cell;
+    m->vcopy_start = l->vcopy_start;
+    m->vcopy = l->vcopy;
+    m->cells = l->cells;
+    if ((st = plan_local_store(m, p, s, trace, &o, err)) != EMM_OK)
+        goto fail;
+    if (m->paged && (st = alloc_pager(m, name, err)) != EMM_OK)
+        goto fail;
+    uint32_t nc = m->ncells;
+    m->ready = calloc(nc, sizeof *m->ready);
+    m->prev = malloc(nc * sizeof *m->prev);
+    m->next = malloc(nc * sizeof *m->next);
+    m->flags = calloc(nc, 1);
+    m->cell_dma = calloc(nc, sizeof *m->cell_dma);
+    if (!m->ready || !m->prev || !m->next || !m->flags || !m->cell_dma) {
+        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for %u cells", name, nc);
+        goto fail;
+    }
+    m->lookup = p->emm_lookup;
+    m->level = p->emm_quadtree_level;
     m->residency = p->emm_residency;
-    m->predict = p->emm_predict;
     m->issue_instr = p->emm_dma_issue_instr;
     m->local_cycles = p->local_cycles;
     m->compute_per_access = p->compute_per_access;
@@ -606,8 +755,8 @@ const emm_layout *emm_fetch_layout(const emm_model *model)
 }
 
 /* Per-cell traffic, for the report's "cells" key and `emm plot`'s map of
- * the mesh: only the cells' rectangles and counters, so a caller that
- * never asks pays one add per transfer. */
+ * the mesh: only the cells' boxes and counters, so a caller that never
+ * asks pays one add per transfer. */
 emm_status emm_model_cells(const emm_model *model, emm_result *out, emm_error *err)
 {
     const fetch_model *m = (const fetch_model *)model;
@@ -620,10 +769,9 @@ emm_status emm_model_cells(const emm_model *model, emm_result *out, emm_error *e
     out->cells.count = m->ncells;
     out->cells.dims = emm_layout_axes(m->layout, NULL, out->cells.lo, out->cells.hi);
     for (uint32_t c = 0; c < m->ncells; c++) {
-        const emm_layout_cell *cell = emm_layout_cell_get(m->layout, c);
         emm_cell_dma *o = &out->cells.cell[c];
-        memcpy(o->lo, cell->lo, sizeof o->lo);
-        memcpy(o->hi, cell->hi, sizeof o->hi);
+        memcpy(o->lo, m->cells[c].lo, sizeof o->lo);
+        memcpy(o->hi, m->cells[c].hi, sizeof o->hi);
         o->bytes = m->cell_dma[c];
     }
     return EMM_OK;

@@ -13,7 +13,7 @@
 #include "error.h"
 #include "parse.h"
 
-enum key_type { KEY_COUNT, KEY_SIZE, KEY_FETCH };
+enum key_type { KEY_COUNT, KEY_SIZE, KEY_FETCH, KEY_GRANULARITY };
 
 struct key_desc {
     emm_machine_key pub;
@@ -45,8 +45,12 @@ static const struct key_desc keys[] = {
      KEY_COUNT, P(direct_cycles_per_word), 32, 0, 1000000},
     {{"direct.write_cycles", "cycles", "one word written to remote memory (buffered, thesis 3.2)", "1"},
      KEY_COUNT, P(direct_write_cycles), 1, 0, 1000000},
-    {{"dma.issue", "cycles", "programming one DMA transfer, paid by the core (thesis 3.2)", "266"},
-     KEY_COUNT, P(dma_issue), 266, 0, 1000000},
+    {{"direct.granularity", "unit", "field: a direct read moves the words the program loads; record: an element's first load copies its whole record, later loads of it are local (an STL-style getVertex(id), thesis 6)", "field"},
+     KEY_GRANULARITY, P(direct_granularity), EMM_DIRECT_FIELD, 0, 1},
+    {{"dma.program", "cycles", "the core's part of starting a DMA: the runtime's call and the controller's registers (thesis 3.2: dma.program + dma.latency = the 266 of initial programming; the split is fitted, docs/calibration.md)", "125"},
+     KEY_COUNT, P(dma_program), 125, 0, 1000000},
+    {{"dma.latency", "cycles", "the controller's part: cycles on the channel before the data moves, while the core goes on", "141"},
+     KEY_COUNT, P(dma_latency), 141, 0, 1000000},
     {{"dma.cycles_per_8b", "cycles", "transfer time per 8 bytes (thesis 3.2)", "2"},
      KEY_COUNT, P(dma_cycles_per_8b), 2, 0, 1000000},
     {{"dma.chunk_bytes", "bytes", "the engine is reprogrammed after each chunk (thesis 3.2)", "1K"},
@@ -69,8 +73,8 @@ static const struct key_desc keys[] = {
      KEY_COUNT, P(compute_per_access), 1, 0, 1000000},
     {{"compute.per_work", "cycles", "compute per unit of a record's work field", "1"},
      KEY_COUNT, P(compute_per_work), 1, 0, 1000000},
-    {{"emm.lookup", "cycles", "EMM runtime: map an element to its cell and slot", "4"},
-     KEY_COUNT, P(emm_lookup), 4, 0, 1000000},
+    {{"emm.lookup", "cycles", "EMM runtime: find a requested element through the id table (fitted, docs/calibration.md)", "12"},
+     KEY_COUNT, P(emm_lookup), 12, 0, 1000000},
     {{"emm.residency", "cycles", "EMM runtime: check whether a cell is resident", "2"},
      KEY_COUNT, P(emm_residency), 2, 0, 1000000},
     {{"emm.quadtree_level", "cycles", "EMM runtime: descend one quadtree level", "6"},
@@ -83,11 +87,33 @@ static const struct key_desc keys[] = {
      KEY_COUNT, P(emm_fifo), 4, 1, 64},
     {{"emm.prefetch_filter", "0|1", "1: do not prefetch a cell whose last prefetch was evicted unused until the program enters it (docs/fetch.md); 0: the thesis' plain schemes", "1"},
      KEY_COUNT, P(emm_prefetch_filter), 1, 0, 1},
+    {{"emm.lookup_budget", "bytes", "local store the look-up tables may hold; larger tables live in remote memory and come in by pages (thesis 4.1.1)", "128K"},
+     KEY_SIZE, P(emm_lookup_budget), K(128), 0, G(64)},
+    {{"emm.lookup_page", "bytes", "one page of paged look-up tables, moved by one DMA", "1K"},
+     KEY_SIZE, P(emm_lookup_page), K(1), 64, M(1)},
 };
 
 #define NKEYS (sizeof keys / sizeof keys[0])
 
 static const char *const fetch_names[] = {"demand", "miss", "always"};
+static const char *const granularity_names[] = {"field", "record"};
+
+/* The words of a text key. */
+static const char *const *words_of(const struct key_desc *k, size_t *n)
+{
+    if (k->type == KEY_FETCH) {
+        *n = sizeof fetch_names / sizeof *fetch_names;
+        return fetch_names;
+    }
+    *n = sizeof granularity_names / sizeof *granularity_names;
+    return granularity_names;
+}
+
+/* dma.issue, the one number of the model before the core's part and the
+ * controller's were told apart: setting it sets dma.program to the value
+ * and dma.latency to 0 (the core pays all, as then); reading it gives their
+ * sum. */
+#define ISSUE_ALIAS "dma.issue"
 
 static uint64_t *field(emm_machine *m, const struct key_desc *k)
 {
@@ -152,11 +178,13 @@ const emm_machine_key *emm_machine_key_at(size_t i)
 int emm_machine_key_is_text(const char *key)
 {
     const struct key_desc *k = find_key(key);
-    return k && k->type == KEY_FETCH;
+    return k && (k->type == KEY_FETCH || k->type == KEY_GRANULARITY);
 }
 
 uint64_t emm_machine_get(const emm_machine *m, const char *key)
 {
+    if (strcmp(key, ISSUE_ALIAS) == 0)
+        return m->p.dma_program + m->p.dma_latency;
     const struct key_desc *k = find_key(key);
     assert(k);
     return field_get(m, k);
@@ -167,8 +195,9 @@ uint64_t emm_machine_get(const emm_machine *m, const char *key)
 static size_t format_value(const struct key_desc *k, uint64_t v, char *buf, size_t cap)
 {
     int n;
-    if (k->type == KEY_FETCH)
-        n = snprintf(buf, cap, "%s", fetch_names[v]);
+    size_t nw;
+    if (k->type == KEY_FETCH || k->type == KEY_GRANULARITY)
+        n = snprintf(buf, cap, "%s", words_of(k, &nw)[v]);
     else if (k->type == KEY_SIZE && v != 0 && v % G(1) == 0)
         n = snprintf(buf, cap, "%lluG", (unsigned long long)(v >> 30));
     else if (k->type == KEY_SIZE && v != 0 && v % M(1) == 0)
@@ -196,17 +225,27 @@ emm_status emm_machine_set_key(emm_machine *m, const char *key, const char *valu
 {
     const struct key_desc *k = find_key(key);
     uint64_t v = 0;
+    if (strcmp(key, ISSUE_ALIAS) == 0) {
+        emm_status st = emm_machine_set_key(m, "dma.program", value, where, err);
+        if (st == EMM_OK)
+            m->p.dma_latency = 0;
+        else if (err) /* name the key as written */
+            emm_fail(err, st, "%s: %s = '%s': expected a non-negative integer up to 1000000",
+                     where, key, value);
+        return st;
+    }
     if (!k)
         return emm_fail(err, EMM_ERR_INVALID, "%s: unknown key '%s' (see 'emm machine show')",
                         where, key);
-    if (k->type == KEY_FETCH) {
-        size_t i;
-        for (i = 0; i < sizeof fetch_names / sizeof fetch_names[0]; i++)
-            if (strcmp(value, fetch_names[i]) == 0)
+    if (k->type == KEY_FETCH || k->type == KEY_GRANULARITY) {
+        size_t i, nw;
+        const char *const *w = words_of(k, &nw);
+        for (i = 0; i < nw; i++)
+            if (strcmp(value, w[i]) == 0)
                 break;
-        if (i == sizeof fetch_names / sizeof fetch_names[0])
-            return emm_fail(err, EMM_ERR_INVALID,
-                            "%s: %s = '%s': expected demand, miss or always", where, key, value);
+        if (i == nw)
+            return emm_fail(err, EMM_ERR_INVALID, "%s: %s = '%s': expected %s", where, key, value,
+                            k->type == KEY_FETCH ? "demand, miss or always" : "field or record");
         v = i;
     } else {
         bool ok = k->type == KEY_SIZE ? emm_parse_size(value, &v) : emm_parse_u64(value, &v);
@@ -318,7 +357,10 @@ emm_status emm_machine_load_text(emm_machine *m, const char *name, const char *t
             snprintf(full, sizeof full, "%s.%s", section, key);
         else
             snprintf(full, sizeof full, "%s", key);
-        k = find_key(full);
+        if (strcmp(full, ISSUE_ALIAS) == 0)
+            k = find_key("dma.program"); /* duplicates count against dma.program */
+        else
+            k = find_key(full);
         if (!k)
             return emm_fail(err, EMM_ERR_INVALID, "%s: unknown key '%s'", where, full);
         if (first_line[k - keys])
@@ -404,5 +446,5 @@ uint64_t emm_machine_dma_cycles(const emm_machine *m, uint64_t bytes)
 {
     if (bytes == 0)
         return 0;
-    return m->p.dma_issue + emm_dma_transfer_cycles(&m->p, bytes);
+    return emm_dma_sync_cycles(&m->p, bytes);
 }

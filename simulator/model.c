@@ -36,6 +36,18 @@ void emm_addr_map_free(emm_addr_map *map)
 emm_status emm_model_new(const emm_machine *m, const emm_strategy *s,
                          const emm_trace_info *trace, emm_model **out, emm_error *err)
 {
+    emm_model_share *sh = emm_model_share_new();
+    if (!sh)
+        return emm_fail(err, EMM_ERR_NOMEM, "model: out of memory");
+    emm_status st = emm_model_create(m, s, trace, sh, out, err);
+    emm_model_share_unref(sh);
+    return st;
+}
+
+emm_status emm_model_create(const emm_machine *m, const emm_strategy *s,
+                            const emm_trace_info *trace, emm_model_share *share,
+                            emm_model **out, emm_error *err)
+{
     emm_status st;
     char name[64];
     if ((st = emm_machine_validate(m, err)) != EMM_OK)
@@ -46,9 +58,9 @@ emm_status emm_model_new(const emm_machine *m, const emm_strategy *s,
     else if (s->kind == EMM_STRATEGY_CACHE && s->layout == EMM_LAYOUT_ORIGINAL)
         st = emm_cache_model_new(&m->p, trace, out, err);
     else if (s->kind == EMM_STRATEGY_CACHE)
-        st = emm_cache_layout_model_new(&m->p, s, trace, out, err);
+        st = emm_cache_layout_model_new(&m->p, s, trace, share, out, err);
     else if (s->kind == EMM_STRATEGY_EMM)
-        st = emm_emm_model_new(&m->p, s, trace, out, err);
+        st = emm_emm_model_new(&m->p, s, trace, share, out, err);
     else
         return emm_fail(err, EMM_ERR_UNSUPPORTED,
                         "strategy '%s': not implemented in this build (only 'direct' and 'cache')",

@@ -9,6 +9,7 @@
 #define EMM_SIM_MODEL_H
 
 #include "machine.h"
+#include "share.h"
 
 struct emm_model_ops {
     void (*run)(emm_model *m, const emm_trace_record *recs, size_t n);
@@ -37,6 +38,12 @@ static inline uint64_t emm_addr_of(const emm_addr_map *map, const emm_trace_reco
 {
     return map->base[r->array] + r->element * map->size[r->array] + r->offset;
 }
+
+/* emm_model_new with the layouts and geometry the models of one run share
+ * (the model runner passes its own share; emm_model_new a fresh one). */
+emm_status emm_model_create(const emm_machine *m, const emm_strategy *s,
+                            const emm_trace_info *trace, emm_model_share *share,
+                            emm_model **out, emm_error *err);
 
 /* The constructors of the models this build has. */
 emm_status emm_direct_model_new(const emm_machine_params *p, const emm_trace_info *trace,

@@ -6,10 +6,13 @@
 #include <string.h>
 
 #include "error.h"
+#include "model.h"
 #include "pool.h"
+#include "share.h"
 
 struct emm_runner {
     emm_pool *pool;
+    emm_model_share *share; /* layouts built once for all the models */
     emm_model **models; /* NULL entries: strategies that could not be built */
     emm_model **live;   /* the built ones, for the run */
     size_t n, nlive, cap;
@@ -20,6 +23,11 @@ emm_status emm_runner_new(const emm_threads *t, emm_runner **out, emm_error *err
     emm_runner *r = calloc(1, sizeof *r);
     if (!r)
         return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the model runner");
+    r->share = emm_model_share_new();
+    if (!r->share) {
+        free(r);
+        return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the model runner");
+    }
     /* No pool is no failure: the work then runs on the calling thread. */
     r->pool = emm_pool_new(t, 0);
     *out = r;
@@ -27,6 +35,7 @@ emm_status emm_runner_new(const emm_threads *t, emm_runner **out, emm_error *err
 }
 
 struct build_job {
+    emm_model_share *share;
     const emm_machine *m;
     const emm_strategy *s;
     const emm_trace_info *info;
@@ -38,7 +47,7 @@ static void build_one(void *ctx, size_t i)
 {
     struct build_job *j = ctx;
     emm_error_clear(&j->errs[i]);
-    if (emm_model_new(j->m, &j->s[i], j->info, &j->models[i], &j->errs[i]) != EMM_OK)
+    if (emm_model_create(j->m, &j->s[i], j->info, j->share, &j->models[i], &j->errs[i]) != EMM_OK)
         j->models[i] = NULL;
 }
 
@@ -64,7 +73,7 @@ emm_status emm_runner_add(emm_runner *r, const emm_machine *m, const emm_strateg
     emm_error *e = errs ? errs : calloc(n, sizeof *e);
     if (!e)
         return emm_fail(err, EMM_ERR_NOMEM, "out of memory for %zu models", n);
-    struct build_job job = {m, s, info, r->models + r->n, e};
+    struct build_job job = {r->share, m, s, info, r->models + r->n, e};
     emm_pool_for(r->pool, n, build_one, &job);
     emm_status st = EMM_OK;
     for (size_t i = 0; i < n && st == EMM_OK; i++)
@@ -124,6 +133,7 @@ void emm_runner_free(emm_runner *r)
     emm_pool_free(r->pool);
     for (size_t i = 0; i < r->n; i++)
         emm_model_free(r->models[i]);
+    emm_model_share_unref(r->share);
     free(r->models);
     free(r->live);
     free(r);

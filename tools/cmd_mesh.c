@@ -12,7 +12,7 @@ static void usage_mesh(FILE *out)
 {
     fprintf(out,
             "usage: emm mesh gen [--faces N] [--seed S] [--density clustered|uniform]\n"
-            "                   [--order input|hilbert] -o FILE\n"
+            "                   [--order made|random|hilbert] -o FILE\n"
             "       emm mesh info [--json] FILE\n"
             "\n"
             "  gen   make a planar (z = 0) Delaunay triangulation of points in the unit\n"
@@ -29,7 +29,7 @@ static void usage_gen(FILE *out)
 {
     fprintf(out,
             "usage: emm mesh gen [--faces N] [--seed S] [--density clustered|uniform]\n"
-            "                   [--order input|hilbert] -o FILE\n"
+            "                   [--order made|random|hilbert] -o FILE\n"
             "\n"
             "Writes a planar (z = 0) Delaunay triangulation (libqhull) of points drawn in\n"
             "the unit square, as an ASCII OFF file. The face count is N exactly (within 1%%\n"
@@ -42,9 +42,11 @@ static void usage_gen(FILE *out)
             "  --density D      clustered: a few Gaussian clusters over a uniform background,\n"
             "                   their number, places and widths drawn from the seed (default)\n"
             "                   uniform: points spread evenly\n"
-            "  --order O        input: vertices in the order the points were drawn, faces in\n"
-            "                   qhull's order, an unorganised layout like the thesis' (default)\n"
-            "                   hilbert: both numbered along a Hilbert curve, for locality\n"
+            "  --order O        made: vertices in the order the points were drawn, faces in\n"
+            "                   qhull's order, which is spatially coherent (default; 'input'\n"
+            "                   is the same); random: both in a random order from the seed,\n"
+            "                   unorganised like the thesis' original mesh; hilbert: both\n"
+            "                   numbered along a Hilbert curve, for locality\n"
             "  -o, --output F   the OFF file to write (required); written whole or not at all\n",
             EMM_DEFAULT_FACES, EMM_DEFAULT_SEED);
 }
@@ -96,12 +98,14 @@ static int cmd_gen(int argc, char **argv)
         } else if (strcmp(a, "--order") == 0) {
             if (!(v = cli_value(cmd, argc, argv, &i)))
                 return EMM_EXIT_USAGE;
-            if (strcmp(v, "input") == 0)
-                opt.order = EMM_ORDER_INPUT;
+            if (strcmp(v, "made") == 0 || strcmp(v, "input") == 0)
+                opt.order = EMM_ORDER_MADE;
+            else if (strcmp(v, "random") == 0)
+                opt.order = EMM_ORDER_RANDOM;
             else if (strcmp(v, "hilbert") == 0)
                 opt.order = EMM_ORDER_HILBERT;
             else
-                return cli_usage_error(cmd, "--order expects input or hilbert, not '%s'", v);
+                return cli_usage_error(cmd, "--order expects made, random or hilbert, not '%s'", v);
         } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) {
             if (!(v = cli_value(cmd, argc, argv, &i)))
                 return EMM_EXIT_USAGE;

@@ -20,7 +20,7 @@ static void usage(FILE *out)
     emm_strategy_sweep_describe(sweep, sizeof sweep);
     fprintf(out,
             "usage: emm replay TRACE [--strategy S]... [--json FILE] [--machine FILE]\n"
-            "                  [--set KEY=VALUE]... [--jobs N] [--quiet]\n"
+            "                  [--set KEY=VALUE]... [--jobs N] [--memory BYTES] [--quiet]\n"
             "       emm replay TRACE --all [--json FILE] [--jobs N] ...\n"
             "\n"
             "Simulates the accesses recorded in TRACE on the machine model, once per\n"
@@ -46,6 +46,9 @@ static void usage(FILE *out)
             "  --jobs N         threads simulating strategies (default: the online CPUs,\n"
             "                   at most one per strategy); results do not depend on N\n"
             "  --json FILE      also write the JSON report (docs/report.md), whole or not at all\n"
+            "  --memory BYTES   memory the models may take together (K/M/G; default half the\n"
+            "                   physical memory, at most 4G): a sweep that needs more runs\n"
+            "                   in passes over the trace, with the same results\n"
             "  --quiet          no table, no progress\n"
             MACHINE_CLI_HELP
             "\n"
@@ -236,7 +239,7 @@ static int replay_main(int argc, char **argv, emm_strategy *strategies, emm_resu
     size_t nstrategies = 0;
     const char *trace = NULL, *json = NULL;
     int quiet = 0, all = 0, rc;
-    uint64_t jobs = 0;
+    uint64_t jobs = 0, memory = 0;
     emm_machine *m = NULL;
     emm_error err;
     uint64_t accesses = 0;
@@ -269,6 +272,12 @@ static int replay_main(int argc, char **argv, emm_strategy *strategies, emm_resu
             if (jobs < 1 || jobs > MAX_JOBS)
                 return cli_usage_error("replay", "%s '%s': a number of threads from 1 to %d", opt,
                                        v, MAX_JOBS);
+        } else if (strcmp(argv[i], "--memory") == 0) {
+            const char *opt = argv[i];
+            if (!(v = cli_value("replay", argc, argv, &i)) || !cli_size("replay", opt, v, &memory))
+                return EMM_EXIT_USAGE;
+            if (memory == 0)
+                return cli_usage_error("replay", "--memory '%s': at least 1 byte", v);
         } else if (strcmp(argv[i], "--json") == 0) {
             if (!(json = cli_value("replay", argc, argv, &i)))
                 return EMM_EXIT_USAGE;
@@ -296,7 +305,7 @@ static int replay_main(int argc, char **argv, emm_strategy *strategies, emm_resu
         return rc;
 
     pctx.on = !quiet && isatty(STDERR_FILENO);
-    emm_replay_options ropt = {(unsigned)jobs, progress, &pctx, json != NULL};
+    emm_replay_options ropt = {(unsigned)jobs, progress, &pctx, json != NULL, memory};
     if (emm_replay_ex(trace, m, strategies, nstrategies, &ropt, results, all ? skipped : NULL,
                       &accesses, &err) != EMM_OK) {
         if (pctx.on)

@@ -97,12 +97,20 @@ EMM_API void *emm_triangle_data(const emm_mesh *m, uint32_t t);
  * the same mesh, bit for bit. */
 typedef enum emm_density { EMM_DENSITY_CLUSTERED = 0, EMM_DENSITY_UNIFORM } emm_density;
 
-/* How the generated mesh's vertices and triangles are numbered: `input`
- * keeps the order the points were drawn in and qhull's facet order, an
- * unorganised layout like that of the thesis' original mesh (§3.1: "the
- * ordering ... is typically arbitrary"); `hilbert` renumbers both along a
- * Hilbert curve, as a mesher that orders for locality would. */
-typedef enum emm_order { EMM_ORDER_INPUT = 0, EMM_ORDER_HILBERT } emm_order;
+/* How the generated mesh's vertices and triangles are numbered: `made`
+ * keeps the order the points were drawn in and qhull's facet order (qhull
+ * builds facets as it sweeps, so the faces come out spatially coherent);
+ * `random` numbers both in a random order drawn from the seed — the
+ * "unorganized (or unknown)" original of the thesis (§3.1, §6.3); `hilbert`
+ * renumbers both along a Hilbert curve, as a mesher that orders for
+ * locality would. */
+typedef enum emm_order {
+    EMM_ORDER_MADE = 0,
+    EMM_ORDER_RANDOM,
+    EMM_ORDER_HILBERT
+} emm_order;
+/* The name used before `random` existed. */
+#define EMM_ORDER_INPUT EMM_ORDER_MADE
 
 typedef struct emm_gen_options {
     size_t faces;        /* wanted triangle count, >= 8 */

@@ -39,11 +39,20 @@ typedef struct emm_replay_options {
      * (emm_model_cells); the caller then releases every result with
      * emm_result_release. */
     int cells;
+    /* Bytes the models may take together (0: emm_replay_default_memory).
+     * Strategies that do not fit together run in further passes over the
+     * trace, those of one layout and cell size in the same pass; the results
+     * do not depend on it. */
+    uint64_t memory;
 } emm_replay_options;
 
+/* Half the physical memory, at most 4 GiB. */
+EMM_API uint64_t emm_replay_default_memory(void);
+
 /* emm_replay with options (opt may be NULL: defaults). The trace is read
- * once; its records go to every model in windows, the models split over
- * opt->jobs threads. With `skipped` NULL a strategy whose model cannot be
+ * once per pass (one, unless the models would exceed opt->memory); its
+ * records go to every model in windows, the models split over opt->jobs
+ * threads. With `skipped` NULL a strategy whose model cannot be
  * built fails the replay, as in emm_replay. With `skipped` (n entries), such
  * a strategy gets its error in skipped[i] (status != EMM_OK) and a result
  * with only the strategy set, and the others go on; skipped[i].status is

@@ -32,6 +32,15 @@ typedef enum emm_cache_fetch {
     EMM_CACHE_FETCH_ALWAYS      /* prefetch the next line on every read */
 } emm_cache_fetch;
 
+/* What one direct read of an element moves (direct.granularity): the
+ * words of the field the program loads, or the element's whole record on
+ * its first load (as an STL-style `Vertex getVertex(id)` copies it; later
+ * loads of the same record are then local). */
+typedef enum emm_direct_granularity {
+    EMM_DIRECT_FIELD = 0,
+    EMM_DIRECT_RECORD
+} emm_direct_granularity;
+
 /* One configuration key, as documented in docs/machine.md. */
 typedef struct emm_machine_key {
     const char *name;     /* "dma.issue" */
@@ -70,15 +79,17 @@ EMM_API const emm_machine_key *emm_machine_key_at(size_t i);
 /* The value of `key` in m as text (as a machine file would spell it);
  * returns the length needed, as snprintf does; 0 for an unknown key. */
 EMM_API size_t emm_machine_format(const emm_machine *m, const char *key, char *buf, size_t cap);
-/* The value of `key` as a number (an emm_cache_fetch for cache.fetch).
+/* The value of `key` as a number (an emm_cache_fetch for cache.fetch, an
+ * emm_direct_granularity for direct.granularity).
  * `key` must be one of the keys (assert). */
 EMM_API uint64_t emm_machine_get(const emm_machine *m, const char *key);
-/* True when `key` holds a word (cache.fetch) rather than a number. */
+/* True when `key` holds a word (cache.fetch, direct.granularity) rather
+ * than a number. */
 EMM_API int emm_machine_key_is_text(const char *key);
 
 /* Cycles of one synchronous DMA of `bytes` bytes on an idle engine:
- * issue + cycles_per_8b*ceil(bytes/8) + chunk_cycles*(ceil(bytes/chunk)-1);
- * 0 bytes cost nothing. */
+ * program + latency + cycles_per_8b*ceil(bytes/8) +
+ * chunk_cycles*(ceil(bytes/chunk)-1); 0 bytes cost nothing. */
 EMM_API uint64_t emm_machine_dma_cycles(const emm_machine *m, uint64_t bytes);
 
 /* ---- cycles and results ---------------------------------------------------- */
@@ -143,11 +154,17 @@ typedef struct emm_result {
         uint64_t lookup_bytes;           /* the layout's look-up tables in the local store */
         uint64_t filtered_prefetches;    /* prefetches skipped: the cell's last prefetch was
                                             evicted unused (docs/fetch.md, "Prefetch filter") */
+        uint64_t lookups;                /* element requests found through the look-up tables */
+        uint64_t pointer_accesses;       /* vertex requests through the triangle's pointer */
+        uint64_t same_record;            /* further loads of the record just requested */
+        int lookup_paged;                /* the tables exceed emm.lookup_budget: paged */
+        uint64_t lookup_pages;           /* pages of the tables brought in by DMA */
+        uint64_t lookup_page_bytes;      /* their bytes (part of dma.bytes) */
     } emm;
     /* Per-cell DMA traffic of an EMM strategy, filled only on request
      * (emm_model_cells, emm_replay_options.cells); cell == NULL otherwise.
      * The result owns `cell`: emm_result_release frees it. The sum of the
-     * cells' bytes equals dma.bytes. */
+     * cells' bytes plus emm.lookup_page_bytes equals dma.bytes. */
     struct {
         uint32_t count;      /* the layout's cells: cell[0..count), in cell order */
         uint32_t dims;       /* coordinates per box (emm_layout_axes) */

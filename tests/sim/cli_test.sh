@@ -65,7 +65,8 @@ done
 grep -q '"emm_report": 1' "$W/r.miss.json" || no "report version"
 grep -q '"strategy": "cache"' "$W/r.miss.json" || no "report strategy"
 grep -q '"total":' "$W/r.miss.json" || no "report total"
-grep -q '"dma.issue": 266' "$W/r.miss.json" || no "report machine"
+grep -q '"dma.program": 125' "$W/r.miss.json" || no "report machine"
+grep -q '"dma.latency": 141' "$W/r.miss.json" || no "report machine latency"
 expect 0 "$EMM" replay "$W/t.emmt" --strategy direct --strategy cache --json "$W/both.json"
 has 'remote_access'
 [ "$(grep -c '"strategy"' "$W/both.json")" = 2 ] || no "two results"

@@ -52,10 +52,14 @@ int main(void)
     refused("grid+naive@16x", "'16x'");
     refused("grid+naive@", "''");
 
-    /* The standard sweep: 45 EMM strategies, direct, cache, cache@ each layout. */
-    emm_strategy sweep[64];
-    size_t n = emm_strategy_sweep(sweep, 64);
-    CHECK(n == 50);
+    /* The standard sweep: 3 layouts x 3 fetch schemes x 7 cells (4 to 256)
+     * EMM strategies, direct, cache, cache@ each layout. */
+    emm_strategy sweep[80];
+    const uint32_t *cells;
+    CHECK(emm_strategy_sweep_cells(&cells) == 7 && cells[0] == 4 && cells[1] == 8 &&
+          cells[6] == 256);
+    size_t n = emm_strategy_sweep(sweep, 80);
+    CHECK(n == 68);
     size_t emm = 0, cache = 0, direct = 0;
     for (size_t i = 0; i < n; i++) {
         emm += sweep[i].kind == EMM_STRATEGY_EMM;
@@ -64,7 +68,11 @@ int main(void)
         for (size_t j = 0; j < i; j++)
             CHECK(memcmp(&sweep[i], &sweep[j], sizeof sweep[i]) != 0);
     }
-    CHECK(emm == 45 && cache == 4 && direct == 1);
-    CHECK(emm_strategy_sweep(NULL, 0) == 50);
+    CHECK(emm == 63 && cache == 4 && direct == 1);
+    CHECK(emm_strategy_sweep(NULL, 0) == 68);
+    char text[256];
+    emm_strategy_sweep_describe(text, sizeof text);
+    CHECKF(strstr(text, "3 layouts x 3 fetch schemes x cells 4, 8, 16, 32, 64, 128, 256") &&
+           strstr(text, "68 strategies"), "%s", text);
     return check_done();
 }

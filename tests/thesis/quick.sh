@@ -29,7 +29,7 @@ sum=$(grep -E '^[0-5] of 5 claims reproduced$' "$out" | awk '{ s += $1 } END { p
 for w in "short curves" "long curves" "region growing" "random access"; do
   grep -Eq "^  $w +[a-z-]+ +[a-z]" "$out" || no "no profiler choice for $w"
 done
-grep -q '^  1024 ' "$out" || no "calibration grid incomplete"
+grep -Eq '^  16 +125 ' "$out" || no "calibration grid incomplete"
 grep -Eq '^  (fitted|NOT FITTED): ' "$out" || no "no calibration outcome"
 for f in curves-short curves-long region random; do
   [ -s "$work/$f.json" ] && [ -s "$work/$f.emmt" ] || no "$f: no report or trace"

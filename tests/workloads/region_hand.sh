@@ -24,15 +24,36 @@ check() { # MESH "CODES" (space-separated)
   listing=$(printf '%s\n' $2)
   n=$(printf '%s\n' $2 | wc -l | tr -d ' ')
   sum=$(printf '%s\n' $2 | "$fnv")
-  out=$("$bin/region_growing" --print-codes "$data/$1") || fail "$1: exited $?"
+  out=$("$bin/region_growing" --conquest --print-codes "$data/$1") || fail "$1: exited $?"
   expect_eq "$1 codes" "$listing" "$(printf '%s\n' "$out" | head -n "$n")"
   expect_eq "$1 summary" "codes: $n
 splits: 0
 merges: 0
 checksum: $sum" "$(printf '%s\n' "$out" | tail -n 4)"
-  out2=$("$bin/region_growing" "$data/$1")
+  out2=$("$bin/region_growing" --conquest "$data/$1")
   expect_eq "$1 without --print-codes" "$(printf '%s\n' "$out" | tail -n 4)" "$out2"
 }
 check triangle.off "A3 A3 A3 D3"
 check square.off "A4 A3 A4 D4 A3"
+
+# The default, Program 4.2 (breadth-first, FIFO), whose codes are each
+# vertex's triangle count. triangle.off: the seed's three vertices, one
+# triangle each; focus 0 meets 1 and 2 full: A1 A1 A1, no split.
+# square.off: seed (0,1,2): A2 A1 A2, list 0 1 2. Focus 0's fan, in
+# rotation from its first triangle (0,1,2) the other way round, is
+# (0,2,3) then (0,1,2): conquering (0,2,3) meets 2 in the list with (0,1,2)
+# still free around it — a split, pushed for later — and frees 3: A1. The
+# split's list is full by the time it is popped and is dropped.
+fifo() { # MESH "CODES" SPLITS
+  listing=$(printf '%s\n' $2)
+  n=$(printf '%s\n' $2 | wc -l | tr -d ' ')
+  sum=$(printf '%s\n' $2 | "$fnv")
+  out=$("$bin/region_growing" --print-codes "$data/$1") || fail "$1: exited $?"
+  expect_eq "$1 codes (Program 4.2)" "$listing" "$(printf '%s\n' "$out" | head -n "$n")"
+  expect_eq "$1 summary (Program 4.2)" "codes: $n
+splits: $3
+checksum: $sum" "$(printf '%s\n' "$out" | tail -n 3)"
+}
+fifo triangle.off "A1 A1 A1" 0
+fifo square.off "A2 A1 A2 A1" 1
 echo ok

@@ -1,0 +1,167 @@
+/* What the models of one trace share (share.h): layouts built once and kept
+ * while used, the triangles' vertex ids copied once. */
+#include "share.h"
+
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "error.h"
+
+enum { BUILDING, READY, FAILED };
+
+struct entry {
+    emm_layout_options opt; /* the key: kind, cell, record sizes */
+    emm_layout *layout;
+    int state;
+    unsigned refs;
+    emm_error failure;
+};
+
+struct emm_model_share {
+    int refs; /* atomic */
+    pthread_mutex_t mu;
+    pthread_cond_t built;
+    struct entry *e;
+    size_t n, cap;
+    int32_t *tri;
+    bool tri_done;
+};
+
+emm_model_share *emm_model_share_new(void)
+{
+    emm_model_share *sh = calloc(1, sizeof *sh);
+    if (!sh)
+        return NULL;
+    sh->refs = 1;
+    pthread_mutex_init(&sh->mu, NULL);
+    pthread_cond_init(&sh->built, NULL);
+    return sh;
+}
+
+void emm_model_share_ref(emm_model_share *sh)
+{
+    __atomic_add_fetch(&sh->refs, 1, __ATOMIC_RELAXED);
+}
+
+void emm_model_share_unref(emm_model_share *sh)
+{
+    if (!sh || __atomic_sub_fetch(&sh->refs, 1, __ATOMIC_ACQ_REL) != 0)
+        return;
+    for (size_t i = 0; i < sh->n; i++)
+        emm_layout_free(sh->e[i].layout);
+    free(sh->e);
+    free(sh->tri);
+    pthread_cond_destroy(&sh->built);
+    pthread_mutex_destroy(&sh->mu);
+    free(sh);
+}
+
+static bool same_key(const emm_layout_options *a, const emm_layout_options *b)
+{
+    return a->kind == b->kind && a->cell == b->cell && a->vertex_bytes == b->vertex_bytes &&
+           a->triangle_bytes == b->triangle_bytes && a->local_store == b->local_store;
+}
+
+emm_status emm_model_share_layout(emm_model_share *sh, const emm_trace_info *t,
+                                  const emm_layout_options *opt, const char *name,
+                                  const emm_layout **out, emm_error *err)
+{
+    const emm_trace_geometry *g = &t->geometry;
+    pthread_mutex_lock(&sh->mu);
+    size_t i = 0;
+    while (i < sh->n && !same_key(&sh->e[i].opt, opt))
+        i++;
+    if (i < sh->n) {
+        struct entry *e = &sh->e[i];
+        while (e = &sh->e[i], e->state == BUILDING)
+            pthread_cond_wait(&sh->built, &sh->mu);
+        if (e->state == FAILED) {
+            if (err)
+                *err = e->failure;
+            emm_status st = e->failure.status;
+            pthread_mutex_unlock(&sh->mu);
+            return st;
+        }
+        if (e->layout) {
+            e->refs++;
+            *out = e->layout;
+            pthread_mutex_unlock(&sh->mu);
+            return EMM_OK;
+        }
+        /* Built once and freed since: build again in this entry. */
+        e->state = BUILDING;
+    } else {
+        if (sh->n == sh->cap) {
+            size_t cap = sh->cap ? 2 * sh->cap : 16;
+            struct entry *ne = realloc(sh->e, cap * sizeof *ne);
+            if (!ne) {
+                pthread_mutex_unlock(&sh->mu);
+                return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+            }
+            sh->e = ne;
+            sh->cap = cap;
+        }
+        memset(&sh->e[sh->n], 0, sizeof sh->e[sh->n]);
+        sh->e[sh->n].opt = *opt;
+        sh->e[sh->n].state = BUILDING;
+        i = sh->n++;
+    }
+    pthread_mutex_unlock(&sh->mu);
+
+    /* Built outside the lock: other layouts build meanwhile. */
+    emm_layout *l = NULL;
+    emm_error e;
+    emm_status st = emm_layout_build(g->xyz, (size_t)g->nv, g->tri, (size_t)g->nt, opt, name, &l,
+                                     &e);
+
+    pthread_mutex_lock(&sh->mu);
+    struct entry *en = &sh->e[i]; /* the array may have moved */
+    if (st == EMM_OK) {
+        en->layout = l;
+        en->refs = 1;
+        en->state = READY;
+        *out = l;
+    } else {
+        en->failure = e;
+        en->state = FAILED;
+        if (err)
+            *err = e;
+    }
+    pthread_cond_broadcast(&sh->built);
+    pthread_mutex_unlock(&sh->mu);
+    return st;
+}
+
+void emm_model_share_release(emm_model_share *sh, const emm_layout *l)
+{
+    emm_layout *gone = NULL;
+    pthread_mutex_lock(&sh->mu);
+    for (size_t i = 0; i < sh->n; i++)
+        if (sh->e[i].layout == l && --sh->e[i].refs == 0) {
+            gone = sh->e[i].layout;
+            sh->e[i].layout = NULL;
+            sh->e[i].state = READY;
+        }
+    pthread_mutex_unlock(&sh->mu);
+    emm_layout_free(gone);
+}
+
+const int32_t *emm_model_share_triangles(emm_model_share *sh, const emm_trace_info *t,
+                                         emm_error *err)
+{
+    const emm_trace_geometry *g = &t->geometry;
+    pthread_mutex_lock(&sh->mu);
+    if (!sh->tri_done) {
+        sh->tri = malloc((g->nt ? 3 * (size_t)g->nt : 1) * sizeof *sh->tri);
+        if (sh->tri && g->nt)
+            memcpy(sh->tri, g->tri, 3 * (size_t)g->nt * sizeof *sh->tri);
+        sh->tri_done = sh->tri != NULL;
+    }
+    const int32_t *tri = sh->tri;
+    pthread_mutex_unlock(&sh->mu);
+    if (!tri)
+        emm_fail(err, EMM_ERR_NOMEM, "out of memory for the triangles' vertex ids");
+    return tri;
+}
