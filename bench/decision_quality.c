@@ -2,10 +2,11 @@
  * synthetic traces that are NOT in the strategy table (other meshes, seeds
  * and window lengths; spiral and corner-seeded region growth; Hilbert
  * order), how the strategy chosen from the profile window fares over the
- * whole trace against the best strategy of the standard sweep and against
- * the cache baseline. Prints each case's regret (chosen / best − 1) and the
- * summary the issue asks for: mean regret within 5 %, and never more than
- * 5 % worse than `cache`. A benchmark, not a test.
+ * whole trace against the best candidate of the standard sweep (direct or
+ * an EMM strategy: the default machine has no cache), and against the
+ * reference cache. Prints each case's regret (chosen / best − 1) and the
+ * summary: mean regret within 3 %, none above 15 %. A benchmark, not a
+ * test.
  *
  * usage: decision_quality [--table FILE] [--quick] [--window-only]
  * (--window-only: decide by the sweep on the window alone, for comparison;
@@ -188,10 +189,12 @@ int main(int argc, char **argv)
     double mean = cases ? sum_regret / (double)cases : 0;
     printf("\n%zu cases (%zu skipped: window covers the trace, or strategy not simulated)\n", cases,
            skipped);
-    printf("mean regret %.2f%% (goal <= 5%%), largest %.2f%%\n", 100 * mean, 100 * max_regret);
-    printf("worst against cache %+.2f%% (goal <= +5%%); %zu cases more than 5%% worse\n",
+    printf("mean regret %.2f%% (goal <= 3%%), largest %.2f%% (goal <= 15%%), against the best "
+           "candidate (direct or EMM: the machine has no cache)\n",
+           100 * mean, 100 * max_regret);
+    printf("against the reference cache: worst %+.2f%%; %zu cases more than 5%% slower than it\n",
            100 * max_vs_cache, worse_than_cache);
-    printf("goals met: %s\n", cases && mean <= 0.05 && worse_than_cache == 0 ? "yes" : "no");
+    printf("goals met: %s\n", cases && mean <= 0.03 && max_regret <= 0.15 ? "yes" : "no");
     emm_table_free(t);
     emm_machine_free(m);
     return 0;

@@ -9,12 +9,17 @@
 #include "error.h"
 #include "parse.h"
 
-#define NAME_(e, n) #n,
+#define NAME_(e, n, w) #n,
 static const char *const layout_names[EMM_LAYOUT_COUNT] = {"original", EMM_LAYOUT_LIST(NAME_)};
 static const char *const fetch_names[EMM_FETCH_COUNT] = {"none", EMM_FETCH_LIST(NAME_)};
 #undef NAME_
+#define WORDS_(e, n, w) w,
+static const char *const layout_words[EMM_LAYOUT_COUNT] = {"the program's own layout",
+                                                          EMM_LAYOUT_LIST(WORDS_)};
+static const char *const fetch_words[EMM_FETCH_COUNT] = {"", EMM_FETCH_LIST(WORDS_)};
+#undef WORDS_
 /* "grid, tiles, quadtree" */
-#define LIST_(e, n) ", " #n
+#define LIST_(e, n, w) ", " #n
 #define LAYOUTS (&(EMM_LAYOUT_LIST(LIST_))[2])
 #define FETCHES (&(EMM_FETCH_LIST(LIST_))[2])
 
@@ -186,5 +191,22 @@ size_t emm_strategy_sweep_describe(char *buf, size_t cap)
                      "each layout: %zu strategies",
                      EMM_LAYOUT_COUNT - 1, EMM_FETCH_COUNT - 1, cells,
                      emm_strategy_sweep(NULL, 0));
+    return n < 0 ? 0 : (size_t)n;
+}
+
+size_t emm_strategy_words(const emm_strategy *s, char *buf, size_t cap)
+{
+    int n;
+    if (s->kind == EMM_STRATEGY_DIRECT)
+        n = snprintf(buf, cap, "direct reads of remote memory, word by word");
+    else if (s->kind == EMM_STRATEGY_CACHE && s->layout == EMM_LAYOUT_ORIGINAL)
+        n = snprintf(buf, cap, "the hardware cache on the program's own layout");
+    else if (s->kind == EMM_STRATEGY_CACHE)
+        n = snprintf(buf, cap, "the hardware cache on the %s layout of %u triangles per cell",
+                     emm_layout_name(s->layout), s->cell);
+    else
+        n = snprintf(buf, cap, "layout %s (%s), fetch %s (%s), %u triangles per cell",
+                     emm_layout_name(s->layout), layout_words[s->layout],
+                     emm_fetch_name(s->fetch), fetch_words[s->fetch], s->cell);
     return n < 0 ? 0 : (size_t)n;
 }

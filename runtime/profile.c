@@ -473,7 +473,9 @@ emm_status emm_profiler_add(emm_profiler *p, const emm_trace_record *recs, size_
             return emm_fail(err, EMM_ERR_FORMAT, "%s: a record names array %u of %u", p->name,
                             rec->array, p->info->narrays);
         emm_array_kind kind = p->info->arrays[rec->array].kind;
-        if (kind == EMM_ARRAY_RAW)
+        /* The profile is of reads: the mesh is frozen once loaded (thesis
+         * §5), and a loader's writes are not the traversal. */
+        if (kind == EMM_ARRAY_RAW || rec->write)
             continue;
         if (p->any && rec->array == p->last_array && rec->element == p->last_element)
             continue;

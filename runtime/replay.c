@@ -362,11 +362,16 @@ static void write_result(json_writer *w, const emm_machine *m, const emm_result 
     json_end_object(w);
 }
 
+static emm_status report_write(const char *path, const char *trace_name, const emm_machine *m,
+                               uint64_t accesses, const emm_result *results,
+                               const emm_error *skipped, size_t n, emm_report_extra_fn extra,
+                               void *extra_ctx, emm_error *err);
+
 emm_status emm_report_write(const char *path, const char *trace_name, const emm_machine *m,
                             uint64_t accesses, const emm_result *results, size_t n,
                             emm_error *err)
 {
-    return emm_report_write_extra(path, trace_name, m, accesses, results, n, NULL, NULL, err);
+    return report_write(path, trace_name, m, accesses, results, NULL, n, NULL, NULL, err);
 }
 
 /* A strategy that did not run (emm_replay_ex's skipped[]). */
@@ -423,10 +428,11 @@ static emm_status report_write(const char *path, const char *trace_name, const e
 }
 
 emm_status emm_report_write_extra(const char *path, const char *trace_name, const emm_machine *m,
-                                  uint64_t accesses, const emm_result *results, size_t n,
-                                  emm_report_extra_fn extra, void *extra_ctx, emm_error *err)
+                                  uint64_t accesses, const emm_result *results,
+                                  const emm_error *skipped, size_t n, emm_report_extra_fn extra,
+                                  void *extra_ctx, emm_error *err)
 {
-    return report_write(path, trace_name, m, accesses, results, NULL, n, extra, extra_ctx, err);
+    return report_write(path, trace_name, m, accesses, results, skipped, n, extra, extra_ctx, err);
 }
 
 emm_status emm_report_write_ex(const char *path, const char *trace_name, const emm_machine *m,

@@ -11,10 +11,11 @@
  * top-level object, after "results". */
 typedef void (*emm_report_extra_fn)(json_writer *w, void *ctx);
 
-/* emm_report_write, plus `extra` (may be NULL) called before the object
- * closes. Whole or not at all, as emm_report_write. */
+/* emm_report_write_ex (skipped may be NULL), plus `extra` (may be NULL)
+ * called before the object closes. Whole or not at all, as emm_report_write. */
 emm_status emm_report_write_extra(const char *path, const char *trace_name, const emm_machine *m,
-                                  uint64_t accesses, const emm_result *results, size_t n,
-                                  emm_report_extra_fn extra, void *extra_ctx, emm_error *err);
+                                  uint64_t accesses, const emm_result *results,
+                                  const emm_error *skipped, size_t n, emm_report_extra_fn extra,
+                                  void *extra_ctx, emm_error *err);
 
 #endif

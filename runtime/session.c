@@ -314,6 +314,16 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
         emm_trace_record r;
         if (!convert(s, &a[k], &r))
             continue;
+        /* Until the first read of the mesh, the program is loading it: the
+         * thesis measures from the moment the mesh is frozen in memory (§5),
+         * so the loader's writes are counted, not buffered nor simulated. */
+        if (!s->wopen) {
+            if (r.write) {
+                s->loader_writes++;
+                continue;
+            }
+            s->wopen = true;
+        }
         if (s->wn == s->wcap) {
             /* Past the limit only while the caller has yet to decide. */
             size_t cap = s->wcap ? 2 * s->wcap : 4096;
@@ -332,9 +342,15 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
         }
         s->window[s->wn++] = r;
         s->arrays[r.array].refs++;
-        /* An element access as the profiler counts it: consecutive accesses
-         * to one element count once. */
-        if (s->phase == PHASE_PROFILING &&
+        if (r.write)
+            s->wwrites++;
+        else
+            s->wreads++;
+        /* An element access as the profiler counts it: reads only (the
+         * loader's writes are not the traversal: the window opens when the
+         * mesh is frozen, thesis §5), consecutive reads of one element
+         * count once. */
+        if (s->phase == PHASE_PROFILING && !r.write &&
             (!s->wany || r.array != s->wlast_array || r.element != s->wlast_element)) {
             s->wany = true;
             s->wlast_array = r.array;
@@ -461,24 +477,28 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
         return s->failure.status;
     }
     flush_chunk(s);
-    emm_result *res = calloc(s->nmodels ? s->nmodels : 1, sizeof *res);
+    /* Every model in order, those that could not be built with only their
+     * strategy (the report says why); the summary gets those that ran. */
+    emm_result *all = calloc(s->nmodels ? 2 * s->nmodels : 1, sizeof *all);
     size_t nres = 0;
-    if (!res)
+    if (!all)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the results", s->program);
+    emm_result *res = all + s->nmodels;
     for (size_t i = 0; i < s->nmodels; i++) {
         emm_model *m = emm_runner_model(s->runner, i);
+        all[i].strategy = s->mstrat[i];
         if (!m)
             continue;
-        emm_model_result(m, &res[nres]);
+        emm_model_result(m, &all[i]);
         if (s->cfg.report[0]) /* the report's per-cell DMA bytes; no cells is no error */
-            emm_model_cells(m, &res[nres], NULL);
-        nres++;
+            emm_model_cells(m, &all[i], NULL);
+        res[nres++] = all[i];
     }
     if (summary && s->cfg.log >= 1) {
         session_print_summary(s, summary, res, nres);
         fflush(summary);
     }
-    if (s->cfg.report[0] && session_write_report(s, res, nres, &e) != EMM_OK) {
+    if (s->cfg.report[0] && session_write_report(s, all, s->merr, s->nmodels, &e) != EMM_OK) {
         output_failed(s, summary, &e);
         if (first == EMM_OK && err)
             *err = e;
@@ -504,9 +524,9 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
             *err = e;
         first = first == EMM_OK ? e.status : first;
     }
-    for (size_t i = 0; i < nres; i++)
-        emm_result_release(&res[i]);
-    free(res);
+    for (size_t i = 0; i < s->nmodels; i++)
+        emm_result_release(&all[i]);
+    free(all);
     s->phase = PHASE_DONE;
     return first;
 }
@@ -525,6 +545,8 @@ void emm_session_free(emm_session *s)
     free(s->window);
     free(s->chunk);
     free(s->tarrays);
+    free(s->mstrat);
+    free(s->merr);
     free(s->xyz);
     free(s->tri);
     free(s->D);

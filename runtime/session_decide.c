@@ -203,6 +203,8 @@ static emm_status choose(emm_session *s, emm_error *err)
         return st;
     s->chosen = wd.strategy;
     s->has_chosen = true;
+    s->wd = wd;
+    s->has_wd = true;
     s->source = wd.how == EMM_DECIDED_WINDOW    ? FROM_SIMULATION
                 : wd.how == EMM_DECIDED_CHECKED ? FROM_CHECKED
                                                 : FROM_TABLE;
@@ -220,7 +222,7 @@ static bool same_strategy(const emm_strategy *a, const emm_strategy *b)
  * is reported, and the baselines still run. */
 static emm_status build_models(emm_session *s, emm_error *err)
 {
-    size_t cap = 3 + (s->cfg.compare == EMM_COMPARE_ALL ? emm_strategy_sweep(NULL, 0) : 0);
+    size_t cap = 4 + (s->cfg.compare == EMM_COMPARE_ALL ? emm_strategy_sweep(NULL, 0) : 0);
     emm_strategy *all = calloc(cap, sizeof *all), *list = calloc(cap, sizeof *list);
     emm_error *errs = calloc(cap, sizeof *errs);
     size_t n = 0, k = 0;
@@ -231,12 +233,16 @@ static emm_status build_models(emm_session *s, emm_error *err)
     }
     if (s->has_chosen)
         all[n++] = s->chosen;
-    if (s->cfg.compare == EMM_COMPARE_ALL) {
-        n += emm_strategy_sweep(all + n, cap - n);
-    } else if (s->cfg.compare == EMM_COMPARE_BASELINES || !s->has_chosen) {
+    /* The runner-up, direct reads and the reference cache come first after
+     * the choice in every comparison: the summary's answer is made of them. */
+    if (s->cfg.compare != EMM_COMPARE_NONE || !s->has_chosen) {
+        if (s->has_wd && s->wd.has_runner_up)
+            all[n++] = s->wd.runner_up;
         all[n++] = (emm_strategy){EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
         all[n++] = (emm_strategy){EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
     }
+    if (s->cfg.compare == EMM_COMPARE_ALL)
+        n += emm_strategy_sweep(all + n, cap - n);
     for (size_t i = 0; i < n; i++) {
         bool dup = false;
         for (size_t j = 0; j < k; j++)
@@ -248,12 +254,16 @@ static emm_status build_models(emm_session *s, emm_error *err)
         (st = emm_runner_add(s->runner, s->machine, list, k, &s->info, errs, err)) != EMM_OK)
         goto out;
     s->nmodels = k;
+    s->mstrat = list;
+    s->merr = errs;
+    list = NULL;
+    errs = NULL;
     size_t built = 0;
     for (size_t i = 0; i < k; i++) {
         if (emm_runner_model(s->runner, i)) {
             built++;
         } else if (i == 0 && s->has_chosen) {
-            snprintf(s->strategy_note, sizeof s->strategy_note, "%s", errs[i].message);
+            snprintf(s->strategy_note, sizeof s->strategy_note, "%s", s->merr[i].message);
             s->has_chosen = false;
         } else {
             s->skipped++;

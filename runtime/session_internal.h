@@ -57,6 +57,9 @@ struct emm_session {
     emm_trace_record *window;
     size_t wn, wcap, wlimit;
     uint64_t welements, iterations;
+    uint64_t wreads, wwrites; /* the window's records by direction */
+    bool wopen;          /* the first read of the mesh came: the window is open */
+    uint64_t loader_writes; /* writes before it: the loader's, not simulated */
     bool wany;
     uint32_t wlast_array;
     uint64_t wlast_element;
@@ -74,12 +77,16 @@ struct emm_session {
     bool has_profile;    /* features and a table decision exist */
     double features[EMM_FEATURES];
     emm_decision decision;
+    emm_window_decision wd; /* the decision's simulation: runner-up, tie (has_wd) */
+    bool has_wd;
     enum decision_source source;
     char strategy_note[512]; /* why the chosen strategy has no model, or "" */
     emm_strategy chosen;
     bool has_chosen;
     emm_runner *runner;  /* the chosen strategy first (when has_chosen), then the comparison */
     size_t nmodels;      /* models added to the runner (built or skipped) */
+    emm_strategy *mstrat; /* their strategies, nmodels */
+    emm_error *merr;     /* why each could not be built (status != EMM_OK), nmodels */
     size_t skipped;      /* of them, the comparison's that cannot run on this mesh */
     emm_trace_writer *trace;
     emm_error trace_error;
@@ -127,6 +134,13 @@ static inline const char *session_path(const char *p)
  * to step aside. */
 emm_status session_decide(emm_session *s, emm_error *err);
 
+/* Only the window was captured and simulated: the fault backend stops at
+ * the decision. */
+static inline bool session_window_only(const emm_session *s)
+{
+    return s->capture == EMM_CAPTURE_FAULT;
+}
+
 /* session.c: runs records through the models and the trace writer. */
 void session_simulate(emm_session *s, const emm_trace_record *recs, size_t n);
 
@@ -134,9 +148,10 @@ void session_simulate(emm_session *s, const emm_trace_record *recs, size_t n);
  * that ran (res[0..nres), the chosen strategy first when there is one;
  * NULL when the session failed). */
 void session_print_summary(const emm_session *s, FILE *out, const emm_result *res, size_t nres);
-/* The JSON report at cfg.report. */
-emm_status session_write_report(const emm_session *s, const emm_result *res, size_t nres,
-                                emm_error *err);
+/* The JSON report at cfg.report: res[0..nres) are the models in order, and
+ * skipped[i].status != EMM_OK marks one that could not be built. */
+emm_status session_write_report(const emm_session *s, const emm_result *res,
+                                const emm_error *skipped, size_t nres, emm_error *err);
 /* The CSV of the window's profile at cfg.profile_dump. */
 emm_status session_write_csv(const emm_session *s, emm_error *err);
 

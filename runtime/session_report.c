@@ -5,6 +5,7 @@
  * (core/outfile.h). */
 #include "session_internal.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "error.h"
@@ -31,6 +32,9 @@ static const char *source_name(enum decision_source src)
 
 typedef struct report_ctx {
     const emm_session *s;
+    const emm_result *res;    /* every model, in order */
+    const emm_error *skipped; /* status != EMM_OK: could not be built */
+    size_t n;
 } report_ctx;
 
 /* The most profile points the report carries: enough for a plot of the
@@ -111,9 +115,27 @@ static void write_profile(json_writer *w, const emm_session *s)
     json_end_object(w);
 }
 
+static const emm_result *find_result(const emm_result *res, size_t n, const emm_strategy *want);
+
+/* The summary's tie: the choice and the runner-up within the margin over
+ * the run (the window's scores when the runner-up was not simulated). */
+static bool answer_tie(const emm_session *s, const emm_result *res, const emm_error *skipped,
+                       size_t n)
+{
+    if (!s->has_chosen || !s->has_wd || !s->wd.has_runner_up || n == 0 ||
+        (skipped && skipped[0].status != EMM_OK))
+        return false;
+    const emm_result *r = find_result(res, n, &s->wd.runner_up);
+    size_t k = r ? (size_t)(r - res) : 0;
+    if (!r || r == res || (skipped && skipped[k].status != EMM_OK))
+        return s->wd.tie != 0;
+    return emm_decide_is_tie(res[0].total, r->total) != 0;
+}
+
 static void report_extra(json_writer *w, void *ctx)
 {
-    const emm_session *s = ((const report_ctx *)ctx)->s;
+    const report_ctx *c = ctx;
+    const emm_session *s = c->s;
     char name[64];
     json_key(w, "program");
     json_string(w, s->program);
@@ -158,6 +180,40 @@ static void report_extra(json_writer *w, void *ctx)
         json_key(w, "note");
         json_string(w, s->strategy_note);
     }
+    json_key(w, "candidates");
+    json_string(w, emm_machine_get(s->machine, "cache.present")
+                       ? "direct, the EMM strategies and the cache"
+                       : "direct and the EMM strategies (the cache is a reference)");
+    json_key(w, "runner_up");
+    if (s->has_wd && s->wd.has_runner_up) {
+        emm_strategy_format(&s->wd.runner_up, name, sizeof name);
+        json_string(w, name);
+        json_key(w, "runner_up_margin");
+        json_double(w, s->wd.runner_margin);
+    } else {
+        json_null(w);
+    }
+    json_key(w, "tie");
+    json_bool(w, answer_tie(s, c->res, c->skipped, c->n));
+    json_key(w, "tie_margin");
+    json_double(w, EMM_DECIDE_TIE_MARGIN);
+    json_key(w, "weak");
+    json_bool(w, s->has_profile && s->decision.distance > EMM_WEAK_MATCH);
+    json_end_object(w);
+    /* What was simulated (docs/report.md "coverage"). */
+    json_key(w, "coverage");
+    json_begin_object(w);
+    json_key(w, "simulated");
+    json_string(w, session_window_only(s) ? "window" : "run");
+    json_key(w, "accesses");
+    json_u64(w, s->accesses);
+    json_key(w, "share");
+    if (session_window_only(s))
+        json_null(w);
+    else
+        json_double(w, 1.0);
+    json_key(w, "loader_writes");
+    json_u64(w, s->loader_writes);
     json_end_object(w);
     /* The traced mesh: its elements and the bytes of its records, against
      * which the DMA bytes say how often cells were fetched again. */
@@ -182,6 +238,10 @@ static void report_extra(json_writer *w, void *ctx)
     json_u64(w, s->cfg.window_accesses ? s->cfg.window_accesses : s->cfg.window_iterations);
     json_key(w, "element_accesses");
     json_u64(w, s->nD);
+    json_key(w, "reads");
+    json_u64(w, s->wreads);
+    json_key(w, "writes");
+    json_u64(w, s->wwrites);
     json_key(w, "iterations");
     json_u64(w, s->iterations);
     json_key(w, "leading_sweep");
@@ -190,85 +250,174 @@ static void report_extra(json_writer *w, void *ctx)
     write_profile(w, s);
 }
 
-static void print_line(FILE *out, const emm_result *r, const emm_result *ref)
+/* The result of strategy `want` among res[0..n), or NULL. */
+static const emm_result *find_result(const emm_result *res, size_t n, const emm_strategy *want)
 {
-    char name[64], num[32];
-    emm_strategy_format(&r->strategy, name, sizeof name);
-    fprintf(out, "emm:   %-22s %15s cycles", name, emm_grouped(r->total, num));
-    if (ref && r != ref && r->total && ref->total) {
-        if (r->total >= ref->total)
-            fprintf(out, "  (%.2fx slower)", (double)r->total / (double)ref->total);
-        else
-            fprintf(out, "  (%.2fx faster)", (double)ref->total / (double)r->total);
-    }
-    fputc('\n', out);
+    for (size_t i = 0; i < n; i++)
+        if (res[i].strategy.kind == want->kind && res[i].strategy.layout == want->layout &&
+            res[i].strategy.fetch == want->fetch && res[i].strategy.cell == want->cell)
+            return &res[i];
+    return NULL;
 }
 
+static const emm_strategy direct_strategy = {EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL,
+                                             EMM_FETCH_NONE, 0};
+static const emm_strategy cache_strategy = {EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL,
+                                            EMM_FETCH_NONE, 0};
+
+/* "1.33x faster than" / "1.20x slower than" b, for a against b. */
+static const char *versus(uint64_t a, uint64_t b, char *buf, size_t cap)
+{
+    if (!a || !b)
+        snprintf(buf, cap, "n/a against");
+    else if (a <= b)
+        snprintf(buf, cap, "%.2fx faster than", (double)b / (double)a);
+    else
+        snprintf(buf, cap, "%.2fx slower than", (double)a / (double)b);
+    return buf;
+}
+
+static const char *how_decided(const emm_session *s)
+{
+    switch (s->source) {
+    case FROM_CONFIG:
+        return session_source(s, EMM_CONFIG_STRATEGY);
+    case FROM_SIMULATION:
+        return "the best candidate of the sweep on the window";
+    case FROM_CHECKED:
+        return "the table's pattern simulated over this mesh, with the window";
+    default:
+        return "the nearest sample's strategy";
+    }
+}
+
+/* The summary is the answer (docs/report.md "The summary"): the pattern, the
+ * chosen strategy in words with its cycles against direct reads, the
+ * runner-up, the reference cache, what was simulated, what was skipped,
+ * and the next command. */
 void session_print_summary(const emm_session *s, FILE *out, const emm_result *res, size_t nres)
 {
-    char name[64];
+    char name[64], words[320], num[32], num2[32], vs[48];
     if (s->phase == PHASE_FAILED) {
         fprintf(out, "emm: %s: no simulation: %s\n", s->program, s->failure.message);
         return;
     }
     if (s->has_profile && s->decision.novel)
-        fprintf(out, "emm: %s: pattern novel (nearest %s, a %s sample, at distance %.2f)\n",
-                s->program, s->decision.nearest, s->decision.pattern, s->decision.distance);
+        fprintf(out, "emm: %s: pattern novel (nearest %s, a %s sample, at distance %.2f, beyond "
+                     "%.2f): the candidates were simulated on the window\n",
+                s->program, s->decision.nearest, s->decision.pattern, s->decision.distance,
+                EMM_NOVELTY_THRESHOLD);
+    else if (s->has_profile && s->decision.distance > EMM_WEAK_MATCH)
+        fprintf(out, "emm: %s: pattern %s, a weak match (nearest %s at distance %.2f, beyond "
+                     "%.2f): trust the simulated cycles below more than the pattern\n",
+                s->program, s->decision.pattern, s->decision.nearest, s->decision.distance,
+                EMM_WEAK_MATCH);
     else if (s->has_profile)
         fprintf(out, "emm: %s: pattern %s (nearest %s, distance %.2f)\n", s->program,
                 s->decision.pattern, s->decision.nearest, s->decision.distance);
     else
-        fprintf(out, "emm: %s: pattern unknown (%zu element accesses profiled; %s)\n", s->program,
+        fprintf(out, "emm: %s: pattern unknown (%zu element reads profiled; %s)\n", s->program,
                 s->nD, s->table ? "a profile needs at least 256" : "no strategy table");
-    if (s->has_chosen) {
-        emm_strategy_format(&s->chosen, name, sizeof name);
-        const char *why = s->source == FROM_CONFIG       ? session_source(s, EMM_CONFIG_STRATEGY)
-                          : s->source == FROM_SIMULATION ? "best of the sweep on the window"
-                          : s->source == FROM_CHECKED
-                              ? "the table's pattern simulated over this mesh, with the window"
-                              : "from the table";
-        fprintf(out, "emm: strategy %s (%s)\n", name, why);
-    } else if (s->strategy_note[0]) {
-        fprintf(out, "emm: strategy not simulated: %s\n", s->strategy_note);
-    } else {
-        fprintf(out, "emm: no strategy chosen; baselines only\n");
-    }
-    const emm_result *ref = s->has_chosen ? &res[0] : NULL;
-    size_t shown = 0;
-    if (s->cfg.compare != EMM_COMPARE_ALL) {
-        for (size_t i = 0; i < nres; i++)
-            print_line(out, &res[i], ref);
-        shown = nres;
-    } else {
-        /* The whole sweep is in the report; here the chosen strategy, the
-         * baselines and the best of the rest. */
-        size_t best = 0;
-        for (size_t i = 0; i < nres; i++)
-            if (res[i].total < res[best].total)
-                best = i;
-        for (size_t i = 0; i < nres; i++) {
-            bool baseline = res[i].strategy.kind == EMM_STRATEGY_DIRECT ||
-                            (res[i].strategy.kind == EMM_STRATEGY_CACHE &&
-                             res[i].strategy.layout == EMM_LAYOUT_ORIGINAL);
-            if ((i == 0 && s->has_chosen) || baseline || i == best) {
-                print_line(out, &res[i], ref);
-                shown++;
-            }
+    if (s->wwrites > s->wreads)
+        fprintf(out, "emm:   the window saw mostly writes (%llu of %llu records): the program "
+                     "may still have been building its mesh; a later window (--profile) "
+                     "would see the traversal\n",
+                (unsigned long long)s->wwrites, (unsigned long long)(s->wwrites + s->wreads));
+
+    const emm_result *chosen = s->has_chosen && nres ? &res[0] : NULL;
+    const emm_result *direct = find_result(res, nres, &direct_strategy);
+    const emm_result *cache = find_result(res, nres, &cache_strategy);
+    const emm_result *runner =
+        s->has_wd && s->wd.has_runner_up ? find_result(res, nres, &s->wd.runner_up) : NULL;
+    if (chosen) {
+        emm_strategy_format(&chosen->strategy, name, sizeof name);
+        emm_strategy_words(&chosen->strategy, words, sizeof words);
+        if (runner && runner != chosen ? emm_decide_is_tie(chosen->total, runner->total)
+                                       : s->has_wd && s->wd.tie) {
+            char other[64];
+            emm_strategy_format(&runner->strategy, other, sizeof other);
+            fprintf(out, "emm: answer: a tie between %s and %s (within %.0f%%: either will "
+                         "do); %s named first (%s)\n",
+                    name, other, EMM_DECIDE_TIE_MARGIN * 100, name, how_decided(s));
+        } else {
+            fprintf(out, "emm: answer: %s (%s)\n", name, how_decided(s));
         }
-        if (shown < nres)
-            fprintf(out, "emm:   (%zu more in the report; the fastest is listed)\n",
-                    nres - shown);
+        fprintf(out, "emm:   %s\n", words);
+        if (direct && direct != chosen)
+            fprintf(out, "emm:   %s cycles, %s direct reads (%s cycles)\n",
+                    emm_grouped(chosen->total, num), versus(chosen->total, direct->total, vs,
+                                                            sizeof vs),
+                    emm_grouped(direct->total, num2));
+        else
+            fprintf(out, "emm:   %s cycles\n", emm_grouped(chosen->total, num));
+        if (runner && runner != chosen) {
+            emm_strategy_format(&runner->strategy, name, sizeof name);
+            double d = chosen->total ? (double)runner->total / (double)chosen->total - 1 : 0;
+            fprintf(out, "emm:   runner-up %s: %s cycles (%.1f%% %s over the run)\n", name,
+                    emm_grouped(runner->total, num), fabs(d) * 100, d >= 0 ? "slower" : "faster");
+        }
+    } else if (s->strategy_note[0]) {
+        fprintf(out, "emm: no answer: the chosen strategy cannot be simulated: %s\n",
+                s->strategy_note);
+    } else {
+        fprintf(out, "emm: no answer: no strategy chosen; direct reads and the reference only\n");
+        if (direct)
+            fprintf(out, "emm:   direct reads: %s cycles\n", emm_grouped(direct->total, num));
     }
+    if (cache && cache != chosen) {
+        uint64_t kib = emm_machine_get(s->machine, "cache.bytes") >> 10;
+        unsigned ways = (unsigned)emm_machine_get(s->machine, "cache.assoc");
+        bool has = emm_machine_get(s->machine, "cache.present") != 0;
+        fprintf(out, "emm:   %s: a %llu KiB %u-way cache%s would take %s cycles",
+                has ? "the machine's cache" : "reference", (unsigned long long)kib, ways,
+                has ? "" : " (not on this machine)", emm_grouped(cache->total, num));
+        if (chosen && chosen->total)
+            fprintf(out, " (%.2fx the answer)", (double)cache->total / (double)chosen->total);
+        fputc('\n', out);
+    }
+    if (session_window_only(s))
+        fprintf(out, "emm:   simulated: the profiling window only, %s accesses (the %s capture "
+                     "stops at the decision; its share of the run is unknown); an "
+                     "instrumented build (sancov) simulates the whole run\n",
+                emm_grouped(s->accesses, num), emm_capture_name(s->capture));
+    else
+        fprintf(out, "emm:   simulated: the whole run from the frozen mesh on, %s accesses\n",
+                emm_grouped(s->accesses, num));
+    if (s->loader_writes)
+        fprintf(out, "emm:   before it, %s writes while the mesh was being built (the loader): "
+                     "not simulated\n",
+                emm_grouped(s->loader_writes, num));
+    if (s->skipped) {
+        const char *why = "";
+        for (size_t i = 0; i < s->nmodels && !why[0]; i++)
+            if (s->merr[i].status != EMM_OK && !(i == 0 && s->strategy_note[0]))
+                why = s->merr[i].message;
+        char clip[EMM_CLIP + 1];
+        fprintf(out, "emm:   %zu strategies skipped, e.g. %s (each with its reason in the "
+                     "report)\n",
+                s->skipped, emm_clip(why, strlen(why), clip));
+    }
+    if (s->cfg.compare == EMM_COMPARE_ALL && s->cfg.report[0])
+        fprintf(out, "emm:   next: emm plot %s   (every candidate's cycles, by bucket)\n",
+                s->cfg.report);
+    else if (s->cfg.trace[0])
+        fprintf(out, "emm:   next: emm replay %s --all --json all.json && emm plot all.json\n",
+                s->cfg.trace);
+    else
+        fprintf(out, "emm:   next: rerun with --trace run.emmt, then emm replay run.emmt --all "
+                     "--json all.json && emm plot all.json   (every candidate)\n");
     if (s->cfg.log < 2)
         return;
+    for (size_t i = 0; i < nres; i++) {
+        emm_strategy_format(&res[i].strategy, name, sizeof name);
+        fprintf(out, "emm:   %-22s %15s cycles\n", name, emm_grouped(res[i].total, num));
+    }
     for (uint32_t a = 0; a < s->ntarrays; a++)
         fprintf(out, "emm: array %u: %s, %llu records of %u bytes at 0x%llx\n", a,
                 emm_trace_kind_name(s->tarrays[a].kind), (unsigned long long)s->tarrays[a].count,
                 s->tarrays[a].record_size, (unsigned long long)s->tarrays[a].base);
-    fprintf(out, "emm: %llu accesses simulated; window %zu element accesses, %llu iterations\n",
+    fprintf(out, "emm: %llu accesses simulated; window %zu element reads, %llu iterations\n",
             (unsigned long long)s->accesses, s->nD, (unsigned long long)s->iterations);
-    if (s->skipped)
-        fprintf(out, "emm: %zu strategies of the comparison cannot run on this mesh\n", s->skipped);
     if (s->dropped)
         fprintf(out, "emm: %llu accesses to tagged arrays outside the traced mesh were ignored\n",
                 (unsigned long long)s->dropped);
@@ -288,13 +437,13 @@ emm_status session_write_csv(const emm_session *s, emm_error *err)
     return st == EMM_OK ? EMM_OK : emm_fail(err, st, "%s: %s", session_source(s, EMM_CONFIG_PROFILE_DUMP), e.message);
 }
 
-emm_status session_write_report(const emm_session *s, const emm_result *res, size_t nres,
-                                emm_error *err)
+emm_status session_write_report(const emm_session *s, const emm_result *res,
+                                const emm_error *skipped, size_t nres, emm_error *err)
 {
-    report_ctx ctx = {s};
+    report_ctx ctx = {s, res, skipped, nres};
     emm_error e;
     emm_status st = emm_report_write_extra(s->cfg.report, s->cfg.trace, s->machine, s->accesses,
-                                           res, nres, report_extra, &ctx, &e);
+                                           res, skipped, nres, report_extra, &ctx, &e);
     if (st != EMM_OK)
         return emm_fail(err, st, "%s: %s", session_source(s, EMM_CONFIG_REPORT), e.message);
     return EMM_OK;

@@ -512,7 +512,7 @@ emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
         emm_model_result(model, &sw->result[i]);
         sw->ran[i] = 1;
         sw->simulated++;
-        if (sw->result[i].total < best) {
+        if (emm_machine_offers(m, &s[i]) && sw->result[i].total < best) {
             best = sw->result[i].total;
             sw->best = i;
         }
@@ -541,6 +541,12 @@ void emm_sweep_free(emm_sweep *sw)
 }
 
 /* ---- the decision ---------------------------------------------------------- */
+
+int emm_decide_is_tie(uint64_t a, uint64_t b)
+{
+    uint64_t lo = a < b ? a : b, hi = a < b ? b : a;
+    return lo > 0 && (double)(hi - lo) <= EMM_DECIDE_TIE_MARGIN * (double)lo;
+}
 
 const char *emm_decided_name(emm_decided_how how)
 {
@@ -581,6 +587,17 @@ static bool program_arrays(const emm_trace_info *info, struct synth_arrays *a)
     a->vert_offset = vrs >= 32 ? 8 : 0;
     a->vert_bytes = vrs >= 32 ? 24 : (vrs < 24 ? vrs : 24);
     return a->tri_bytes > 0 && a->vert_bytes > 0;
+}
+
+static void set_runner_up(emm_window_decision *out, const emm_result *r, double margin)
+{
+    out->has_runner_up = r != NULL;
+    if (!r)
+        return;
+    out->runner_up = r->strategy;
+    out->runner_cycles = r->total;
+    out->runner_margin = margin;
+    out->tie = margin <= EMM_DECIDE_TIE_MARGIN;
 }
 
 /* The table's pattern, checked on this mesh and this window (docs/profile.md
@@ -629,25 +646,35 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
         goto done;
     }
     double sb = (double)S->result[S->best].total, wb = (double)W->result[W->best].total;
-    size_t pick = SIZE_MAX, both = 0;
-    double score = INFINITY;
+    size_t pick = SIZE_MAX, second = SIZE_MAX, both = 0;
+    double score = INFINITY, score2 = INFINITY;
     for (size_t i = 0; i < S->count; i++) {
-        if (!S->ran[i] || !W->ran[i])
+        if (!S->ran[i] || !W->ran[i] || !emm_machine_offers(m, &S->result[i].strategy))
             continue;
         both++;
         double v = (double)S->result[i].total / sb * ((double)W->result[i].total / wb);
         if (v < score) {
+            score2 = score;
+            second = pick;
             score = v;
             pick = i;
+        } else if (v < score2) {
+            score2 = v;
+            second = i;
         }
     }
     size_t c = S->cache;
     if (pick != SIZE_MAX && S->ran[c] && W->ran[c] && pick != c &&
+        emm_machine_offers(m, &S->result[c].strategy) &&
         S->result[pick].total > S->result[c].total) {
         double vs_cache = (double)S->result[pick].total / (double)S->result[c].total *
                           ((double)W->result[pick].total / (double)W->result[c].total);
-        if (vs_cache > EMM_DECIDE_CACHE_MARGIN)
+        if (vs_cache > EMM_DECIDE_CACHE_MARGIN) {
+            second = pick;
+            score2 = score;
             pick = c;
+            score = (double)S->result[c].total / sb * ((double)W->result[c].total / wb);
+        }
     }
     if (pick != SIZE_MAX) {
         out->how = EMM_DECIDED_CHECKED;
@@ -655,6 +682,7 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
         out->cycles = W->result[pick].total;
         out->candidates = both;
         out->synth_visits = (size_t)so.visits;
+        set_runner_up(out, second == SIZE_MAX ? NULL : &W->result[second], score2 / score - 1);
     }
 done:
     emm_sweep_free(S);
@@ -682,8 +710,16 @@ emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
         out->how = EMM_DECIDED_TABLE;
     }
     const emm_threads *threads = opt ? opt->threads : NULL;
-    if (!(opt && opt->simulate) && out->has_table && !out->table.novel)
-        return m ? check_pattern(m, info, recs, n, name, threads, out, err) : EMM_OK;
+    if (!(opt && opt->simulate) && out->has_table && !out->table.novel) {
+        if (!m)
+            return EMM_OK;
+        st = check_pattern(m, info, recs, n, name, threads, out, err);
+        /* A sample's strategy the machine does not have (a cache label on a
+         * machine without one) is no answer: the window decides. */
+        if (st != EMM_OK || out->how == EMM_DECIDED_CHECKED ||
+            emm_machine_offers(m, &out->strategy))
+            return st;
+    }
     emm_sweep *sw = NULL;
     st = emm_sweep_records(m, info, recs, n, threads, &sw, err);
     if (st == EMM_OK) {
@@ -692,6 +728,15 @@ emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
         out->strategy = sw->result[sw->best].strategy;
         out->cycles = sw->result[sw->best].total;
         out->candidates = sw->simulated;
+        size_t second = SIZE_MAX;
+        for (size_t i = 0; i < sw->count; i++)
+            if (i != sw->best && sw->ran[i] && emm_machine_offers(m, &sw->result[i].strategy) &&
+                (second == SIZE_MAX || sw->result[i].total < sw->result[second].total))
+                second = i;
+        if (second != SIZE_MAX)
+            set_runner_up(out, &sw->result[second],
+                          (double)sw->result[second].total / (double)(out->cycles ? out->cycles : 1) -
+                              1);
     }
     emm_sweep_free(sw);
     return st;

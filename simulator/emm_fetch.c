@@ -35,7 +35,7 @@
 #define NONE EMM_LAYOUT_NONE
 
 /* The schemes, from EMM_FETCH_LIST. */
-#define OPS_(e, n) [EMM_FETCH_##e] = &emm_fetch_##n##_ops,
+#define OPS_(e, n, w) [EMM_FETCH_##e] = &emm_fetch_##n##_ops,
 static const struct emm_fetch_ops *const schemes[EMM_FETCH_COUNT] = {EMM_FETCH_LIST(OPS_)};
 #undef OPS_
 

@@ -36,7 +36,7 @@ struct emm_fetch_ops {
 };
 
 /* One table per scheme, named from EMM_FETCH_LIST: emm_fetch_naive_ops, ... */
-#define EMM_FETCH_OPS_DECL_(e, n) extern const struct emm_fetch_ops emm_fetch_##n##_ops;
+#define EMM_FETCH_OPS_DECL_(e, n, w) extern const struct emm_fetch_ops emm_fetch_##n##_ops;
 EMM_FETCH_LIST(EMM_FETCH_OPS_DECL_)
 #undef EMM_FETCH_OPS_DECL_
 

@@ -34,7 +34,7 @@ struct emm_layout_ops {
 };
 
 /* One table per kind, named from EMM_LAYOUT_LIST: emm_layout_grid_ops, ... */
-#define EMM_LAYOUT_OPS_DECL_(e, n) extern const struct emm_layout_ops emm_layout_##n##_ops;
+#define EMM_LAYOUT_OPS_DECL_(e, n, w) extern const struct emm_layout_ops emm_layout_##n##_ops;
 EMM_LAYOUT_LIST(EMM_LAYOUT_OPS_DECL_)
 #undef EMM_LAYOUT_OPS_DECL_
 

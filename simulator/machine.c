@@ -59,7 +59,9 @@ static const struct key_desc keys[] = {
      KEY_COUNT, P(dma_chunk_cycles), 208, 0, 1000000},
     {{"dma.channels", "channels", "transfers in flight at once (thesis 3.2)", "2"},
      KEY_COUNT, P(dma_channels), 2, 1, EMM_DMA_MAX_CHANNELS},
-    {{"cache.bytes", "bytes", "hardware cache size (thesis 3.2)", "256K"},
+    {{"cache.present", "0|1", "0 (STHORM): the target has no cache; the cache below is simulated as a reference only, never chosen; 1: the target has it, and the cache strategies are candidates of the decision", "0"},
+     KEY_COUNT, P(cache_present), 0, 0, 1},
+    {{"cache.bytes", "bytes", "hardware cache size, of the target or of the reference (thesis 3.2)", "256K"},
      KEY_SIZE, P(cache_bytes), K(256), 4, G(1)},
     {{"cache.assoc", "ways", "cache associativity (thesis 3.2)", "4"},
      KEY_COUNT, P(cache_assoc), 4, 1, 256},
@@ -447,4 +449,9 @@ uint64_t emm_machine_dma_cycles(const emm_machine *m, uint64_t bytes)
     if (bytes == 0)
         return 0;
     return emm_dma_sync_cycles(&m->p, bytes);
+}
+
+int emm_machine_offers(const emm_machine *m, const emm_strategy *s)
+{
+    return s->kind != EMM_STRATEGY_CACHE || m->p.cache_present != 0;
 }

@@ -24,6 +24,7 @@ typedef struct emm_machine_params {
     uint64_t cache_line;
     uint64_t cache_fetch; /* emm_cache_fetch */
     uint64_t cache_hit;
+    uint64_t cache_present; /* 1: the target has the cache (a candidate), 0: a reference */
     uint64_t compute_per_access;
     uint64_t compute_per_work;
     uint64_t emm_lookup;

@@ -1,6 +1,7 @@
 /* emm profile TRACE: the distance profile of a trace's first accesses
  * (thesis §5, Eq. 5.1), its pattern class and the strategy the table picks. */
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -8,6 +9,7 @@
 
 #include "cli.h"
 #include "emm/profile.h"
+#include "emm/replay.h"
 #include "emm/table.h"
 #include "emm/trace.h"
 #include "json.h"
@@ -290,6 +292,27 @@ int emm_cmd_profile(int argc, char **argv)
         printf("checked:   %s over this mesh (%zu visits) and the window, %zu strategies\n",
                w.table.synth, w.synth_visits, w.candidates);
     printf("strategy:  %s\n", strat);
+    if (w.has_runner_up && m) {
+        /* The choice and the runner-up over the whole trace, as emm run's
+         * summary weighs them: within the tie margin, either will do. */
+        char other[96];
+        emm_strategy_format(&w.runner_up, other, sizeof other);
+        emm_strategy two[2] = {w.strategy, w.runner_up};
+        emm_result res[2];
+        uint64_t acc;
+        if (emm_replay(trace, m, two, 2, res, &acc, NULL, NULL, &err) != EMM_OK) {
+            rc = cli_fail(&err);
+            goto done;
+        }
+        double d = res[0].total ? (double)res[1].total / (double)res[0].total - 1 : 0;
+        printf("runner-up: %s\n", other);
+        printf("run:       %s %llu cycles, %s %llu cycles (%.1f%% %s)%s\n", strat,
+               (unsigned long long)res[0].total, other, (unsigned long long)res[1].total,
+               fabs(d) * 100, d >= 0 ? "slower" : "faster",
+               emm_decide_is_tie(res[0].total, res[1].total) ? ": a tie, either will do" : "");
+        emm_result_release(&res[0]);
+        emm_result_release(&res[1]);
+    }
     rc = EMM_EXIT_OK;
     if (learn && w.simulated) {
         emm_table_sample s;

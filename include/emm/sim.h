@@ -87,6 +87,12 @@ EMM_API uint64_t emm_machine_get(const emm_machine *m, const char *key);
  * than a number. */
 EMM_API int emm_machine_key_is_text(const char *key);
 
+/* True when the machine has what strategy s needs (docs/machine.md,
+ * cache.present): direct reads and the EMM strategies always; the cache
+ * strategies only when the machine declares its cache. The others are
+ * simulated as references, never chosen. */
+EMM_API int emm_machine_offers(const emm_machine *m, const emm_strategy *s);
+
 /* Cycles of one synchronous DMA of `bytes` bytes on an idle engine:
  * program + latency + cycles_per_8b*ceil(bytes/8) +
  * chunk_cycles*(ceil(bytes/chunk)-1); 0 bytes cost nothing. */

@@ -22,17 +22,23 @@ typedef enum emm_strategy_kind {
 } emm_strategy_kind;
 
 /* The EMM layouts (thesis §4.1) and fetch schemes (§4.2), one entry each:
- * X(ENUM, name) gives the value EMM_LAYOUT_ENUM or EMM_FETCH_ENUM and the
- * name strategy strings use. Adding a layout or a fetch scheme is a line
+ * X(ENUM, name, words) gives the value EMM_LAYOUT_ENUM or EMM_FETCH_ENUM,
+ * the name strategy strings use and what it does, in words for a summary. Adding a layout or a fetch scheme is a line
  * here, its ops file in simulator/ (layout_NAME.c, fetch_NAME.c) and its
  * documentation (docs/architecture.md, "Adding a part"): the enums, the
  * names, the parser, the standard sweep and the simulator's tables of ops
  * all follow these lists. */
-#define EMM_LAYOUT_LIST(X) X(GRID, grid) X(TILES, tiles) X(QUADTREE, quadtree)
-#define EMM_FETCH_LIST(X) X(NAIVE, naive) X(CONVOLUTION, convolution) X(EXTRAPOLATED, extrapolated)
+#define EMM_LAYOUT_LIST(X)                                                                  \
+    X(GRID, grid, "a uniform grid of cells over the mesh's plane")                          \
+    X(TILES, tiles, "tiles: cells cut to hold about equal numbers of triangles")            \
+    X(QUADTREE, quadtree, "quadtree leaves: cells split where the mesh is dense")
+#define EMM_FETCH_LIST(X)                                                                   \
+    X(NAIVE, naive, "fetch a cell when the program needs it, and wait")                     \
+    X(CONVOLUTION, convolution, "on entering a cell, prefetch its neighbours")              \
+    X(EXTRAPOLATED, extrapolated, "prefetch the neighbour the recent moves point to")
 
-#define EMM_LAYOUT_ENUM_(e, n) EMM_LAYOUT_##e,
-#define EMM_FETCH_ENUM_(e, n) EMM_FETCH_##e,
+#define EMM_LAYOUT_ENUM_(e, n, w) EMM_LAYOUT_##e,
+#define EMM_FETCH_ENUM_(e, n, w) EMM_FETCH_##e,
 
 typedef enum emm_layout_kind {
     EMM_LAYOUT_ORIGINAL = 0, /* the program's own arrays (cache only) */
@@ -69,6 +75,12 @@ EMM_API emm_status emm_strategy_parse(const char *text, emm_strategy *out, emm_e
 /* Writes the canonical string of s into buf (always NUL-terminated when
  * cap > 0); returns the length it needed, as snprintf does. */
 EMM_API size_t emm_strategy_format(const emm_strategy *s, char *buf, size_t cap);
+
+/* What s is, in words: "tiles (tiles: cells cut to hold about equal numbers
+ * of triangles), naive fetching (fetch a cell when ...), 16 triangles per
+ * cell"; "direct reads of remote memory, word by word"; "the hardware
+ * cache". Returns the length needed, as snprintf does. */
+EMM_API size_t emm_strategy_words(const emm_strategy *s, char *buf, size_t cap);
 
 EMM_API const char *emm_layout_name(emm_layout_kind k);
 EMM_API const char *emm_fetch_name(emm_fetch_kind k);

@@ -39,6 +39,9 @@ extern "C" {
 /* A profile whose nearest sample is farther than this (Euclidean, in
  * feature space) is novel. See docs/profile.md for how it was chosen. */
 #define EMM_NOVELTY_THRESHOLD 1.0
+/* A match farther than this is weak: the summary says so (the workloads'
+ * windows lie within about 0.3 of their samples; docs/profile.md). */
+#define EMM_WEAK_MATCH 0.5
 
 typedef struct emm_table_sample {
     char name[EMM_TABLE_NAME_MAX];    /* letters, digits, '-', '_', '.', '@', '+' */
@@ -113,8 +116,9 @@ typedef struct emm_sweep {
     emm_result *result;  /* count results; meaningful where ran[i] */
     int *ran;            /* count flags; 0: this strategy cannot run on this trace */
     size_t simulated;    /* how many ran */
-    size_t best;         /* index of the fewest cycles (ties: the earlier) */
-    size_t cache;        /* index of plain `cache`, the baseline */
+    size_t best;         /* index of the fewest cycles among the strategies the machine
+                            offers (emm_machine_offers; ties: the earlier) */
+    size_t cache;        /* index of plain `cache`, the reference */
 } emm_sweep;
 
 /* Simulates every strategy of the standard sweep on recs[0..n), records of
@@ -141,9 +145,13 @@ typedef enum emm_decided_how {
  * triangle visits it makes (a larger mesh is sampled by its first visits). */
 #define EMM_DECIDE_SYNTH_SEED 1
 #define EMM_DECIDE_SYNTH_VISITS 262144
-/* When the pattern's long run says the pick loses to the cache, the pick
- * must beat the cache by this factor over window and long run together. */
+/* When the machine offers a cache (cache.present) and the pattern's long
+ * run says the pick loses to it, the pick must beat the cache by this
+ * factor over window and long run together. */
 #define EMM_DECIDE_CACHE_MARGIN 0.5
+/* Two candidates whose scores differ by at most this share are a tie: the
+ * answer names both instead of one as if it were clearly better. */
+#define EMM_DECIDE_TIE_MARGIN 0.03
 
 typedef struct emm_window_decision {
     emm_decision table;      /* the nearest sample (valid when has_table) */
@@ -154,9 +162,20 @@ typedef struct emm_window_decision {
     int simulated;           /* the sweep on the window alone decided (how == WINDOW) */
     emm_strategy strategy;   /* the choice */
     uint64_t cycles;         /* the chosen strategy's cycles on the window (CHECKED, WINDOW) */
+    int has_runner_up;       /* a second candidate was simulated (CHECKED, WINDOW) */
+    emm_strategy runner_up;  /* the next best candidate by the same measure */
+    uint64_t runner_cycles;  /* its cycles on the window */
+    double runner_margin;    /* how much worse it scored: its score / the choice's - 1 */
+    int tie;                 /* runner_margin <= EMM_DECIDE_TIE_MARGIN on the window (the
+                                whole run's cycles, when simulated, decide: emm_decide_is_tie) */
     size_t candidates;       /* strategies simulated on the window (CHECKED, WINDOW) */
     size_t synth_visits;     /* triangle visits of the synthetic run (CHECKED) */
 } emm_window_decision;
+
+/* True when cycles a and b (the choice and the runner-up over the same
+ * run) are within EMM_DECIDE_TIE_MARGIN of the smaller: the answer names
+ * both. */
+EMM_API int emm_decide_is_tie(uint64_t a, uint64_t b);
 
 /* A short word for how: "table", "checked", "window" ("none"). */
 EMM_API const char *emm_decided_name(emm_decided_how how);

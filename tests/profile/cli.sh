@@ -60,9 +60,15 @@ has list-env out.txt "shuffled"
 check profile 0 "$EMM" profile walk.emmt --table user.txt --dump walk.csv --json walk.json
 has profile out.txt "pattern: *random"
 has profile out.txt "nearest: *shuffled (distance 0.0000)"
-has profile out.txt "strategy: *cache"
+# The sample's strategy is the cache; the default machine has none, so the
+# window's candidates decide instead ...
+if grep -q "strategy: *cache" out.txt; then echo "FAIL profile: chose the cache on a machine without one"; fail=1; fi
+has profile out.txt "simulated: .* strategies on the window"
 has profile out.txt "novel: *no"
 for key in pattern strategy nearest distance novel; do has json walk.json "\"$key\""; done
+# ... and a machine that declares its cache takes the sample's answer.
+check profile-cache 0 "$EMM" profile walk.emmt --table user.txt --set cache.present=1
+has profile-cache out.txt "strategy: *cache$"
 has json walk.json '"pattern": "random"'
 has csv walk.csv "^i,D$"
 lines=$(wc -l < walk.csv)

@@ -269,9 +269,11 @@ static void test_decide_from_table(void)
     fclose(sum);
     printf("%s", text);
     CHECK(has(text, "emm: test_session: pattern region (nearest mine, distance 0.00)"));
-    CHECK(has(text, "emm: strategy direct (from the table)"));
-    CHECK(has(text, "emm:   cache"));
-    CHECK(has(text, "faster)"));
+    CHECK(has(text, "emm: answer: direct (the nearest sample's strategy)"));
+    CHECK(has(text, "emm:   direct reads of remote memory, word by word"));
+    CHECK(has(text, "emm:   reference: a 256 KiB 4-way cache (not on this machine) would take"));
+    CHECK(has(text, "emm:   simulated: the whole run from the frozen mesh on, 8,000 accesses"));
+    CHECK(has(text, "emm:   next: emm replay run.emmt --all --json all.json"));
     emm_session_free(s);
 
     /* The report: the session's keys and the totals of the whole run. */
@@ -357,7 +359,8 @@ static void test_decide_checked(void)
     printf("%s", text);
     CHECK(has(text, "emm: test_session: pattern region (nearest mine, distance 0.00)"));
     CHECK(has(text, "(the table's pattern simulated over this mesh, with the window)"));
-    CHECK(!has(text, "emm: strategy direct"));
+    CHECK(!has(text, "emm: answer: direct"));
+    CHECK(has(text, "emm:   runner-up "));
     emm_session_free(s);
     char *json = slurp("checked.json");
     CHECK(json != NULL);
