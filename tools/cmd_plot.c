@@ -975,6 +975,7 @@ int emm_cmd_plot(int argc, char **argv)
     plot_report rep;
     emm_error err;
     char *outbuf = NULL;
+    char titlebuf[256];
     int created = 0, rc = EMM_EXIT_OK;
     emm_status st;
 
@@ -1048,6 +1049,14 @@ int emm_cmd_plot(int argc, char **argv)
         if (!t || !*t)
             t = trace && *trace ? trace : report;
         c.title = strrchr(t, '/') ? strrchr(t, '/') + 1 : t;
+        /* A session that simulated its window only says so in every title
+         * (docs/report.md "coverage"). */
+        const jr_value *cov = jr_get(rep.root, "coverage");
+        const char *sim = cov ? jr_string(jr_get(cov, "simulated")) : NULL;
+        if (sim && strcmp(sim, "window") == 0) {
+            snprintf(titlebuf, sizeof titlebuf, "%s (window only)", c.title);
+            c.title = titlebuf;
+        }
     }
     if (mkdir(out, 0777) == 0) {
         created = 1;
