@@ -34,6 +34,12 @@
  * and in all when the window counts iterations. */
 #define SESSION_RECORDS_PER_ELEMENT 32u
 #define SESSION_ITERATION_RECORDS (1u << 20)
+/* Element writes before the first read that are taken for the loader (a
+ * mesh of some 20,000 vertices and 40,000 triangles); a longer stretch of
+ * writes opens the window anyway. */
+#define SESSION_LOADER_ELEMENTS 65536u
+/* Element writes in the window after which it ends, in windows. */
+#define SESSION_WRITE_WINDOWS 2
 
 emm_status emm_session_new(const emm_session_config *sc, emm_session **out, emm_error *err)
 {
@@ -302,7 +308,14 @@ static void window_full_check(emm_session *s)
 {
     if (s->phase != PHASE_PROFILING)
         return;
+    /* A window of mostly writes ends too, after SESSION_WRITE_WINDOWS
+     * windows of element writes; under fault capture, which pays tens of
+     * microseconds an access, after that many windows of element accesses
+     * of any kind (a leading sweep included): capture must stay bounded. */
+    uint64_t w = s->cfg.window_accesses ? s->cfg.window_accesses : EMM_PROFILE_DEFAULT_WINDOW;
     if ((s->cfg.window_accesses && s->welements >= s->cfg.window_accesses) ||
+        s->welement_writes >= SESSION_WRITE_WINDOWS * w ||
+        (session_window_only(s) && s->wactivity >= SESSION_WRITE_WINDOWS * w) ||
         (s->cfg.window_iterations && s->iterations >= s->cfg.window_iterations) ||
         s->wn >= s->wlimit)
         s->phase = PHASE_DECIDE;
@@ -318,8 +331,16 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
          * thesis measures from the moment the mesh is frozen in memory (§5),
          * so the loader's writes are counted, not buffered nor simulated. */
         if (!s->wopen) {
-            if (r.write) {
+            /* A program that only writes, or a loader of more than
+             * SESSION_LOADER_ELEMENTS elements, opens the window anyway: capture must stay bounded (fault capture pays tens
+             * of microseconds an access until the decision). */
+            if (r.write && s->loader_elements < SESSION_LOADER_ELEMENTS) {
                 s->loader_writes++;
+                if (!s->lany || r.array != s->llast_array || r.element != s->llast_element)
+                    s->loader_elements++;
+                s->lany = true;
+                s->llast_array = r.array;
+                s->llast_element = r.element;
                 continue;
             }
             s->wopen = true;
@@ -342,10 +363,17 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
         }
         s->window[s->wn++] = r;
         s->arrays[r.array].refs++;
-        if (r.write)
+        bool next = !s->wwany || r.array != s->wwlast_array || r.element != s->wwlast_element;
+        s->wwany = true;
+        s->wwlast_array = r.array;
+        s->wwlast_element = r.element;
+        s->wactivity += next;
+        if (r.write) {
             s->wwrites++;
-        else
+            s->welement_writes += next;
+        } else {
             s->wreads++;
+        }
         /* An element access as the profiler counts it: reads only (the
          * loader's writes are not the traversal: the window opens when the
          * mesh is frozen, thesis §5), consecutive reads of one element
@@ -360,8 +388,8 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
              * still simulated: runtime/lead_sweep.h. */
             s->welements += (uint64_t)lead_sweep_step(&s->sweep, r.array, r.element);
         }
-        if (!s->sweep.over)
-            s->wlimit++; /* the sweep's records do not count against the window */
+        if (!r.write && !s->sweep.over)
+            s->wlimit++; /* the sweep's reads do not count against the window */
         window_full_check(s);
     }
 }
@@ -376,6 +404,8 @@ void session_simulate(emm_session *s, const emm_trace_record *recs, size_t n)
         s->trace = NULL;
     }
     s->accesses += n;
+    if (s->probing)
+        session_phases_see(s, recs, n);
 }
 
 static void flush_chunk(emm_session *s)
@@ -477,6 +507,7 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
         return s->failure.status;
     }
     flush_chunk(s);
+    session_phases_close(s);
     /* Every model in order, those that could not be built with only their
      * strategy (the report says why); the summary gets those that ran. */
     emm_result *all = calloc(s->nmodels ? 2 * s->nmodels : 1, sizeof *all);
@@ -546,6 +577,7 @@ void emm_session_free(emm_session *s)
     free(s->chunk);
     free(s->tarrays);
     free(s->mstrat);
+    free(s->probe);
     free(s->merr);
     free(s->xyz);
     free(s->tri);

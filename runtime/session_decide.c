@@ -304,6 +304,7 @@ emm_status session_decide(emm_session *s, emm_error *err)
         }
     }
     session_simulate(s, s->window, s->wn);
+    session_phases_start(s);
     return EMM_OK;
 }
 

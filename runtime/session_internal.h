@@ -25,6 +25,29 @@ enum session_phase { PHASE_PROFILING, PHASE_DECIDE, PHASE_SIMULATING, PHASE_FAIL
 
 enum decision_source { FROM_NONE, FROM_CONFIG, FROM_TABLE, FROM_CHECKED, FROM_SIMULATION };
 
+/* Phases (docs/profile.md "Phases"): after the window the session profiles
+ * probes of the run as long as the window, one every SESSION_PROBE_GAP + 1
+ * window lengths; two probes in a row whose pattern differs from the
+ * current phase's (the same new pattern) start a phase, whose best candidate is decided on the probe and
+ * simulated from there on, cold, as a switch would start. */
+#define SESSION_MAX_PHASES 8
+#define SESSION_PROBE_GAP 7
+
+typedef struct program_phase {
+    uint64_t start;       /* accesses simulated before its first probe */
+    char pattern[EMM_TABLE_NAME_MAX];
+    char nearest[EMM_TABLE_NAME_MAX];
+    double distance;
+    bool has_best;        /* the best candidate on its probe is known */
+    emm_strategy best;
+    size_t model;         /* the runner's model of `best` started at detection, or SIZE_MAX */
+    uint64_t detected;    /* accesses simulated when it was detected */
+    uint64_t chosen_at;   /* the chosen strategy's cycles then */
+    uint64_t chosen_span; /* at its end: the chosen strategy's cycles since detection */
+    uint64_t best_span;   /* and `best`'s, started cold at detection */
+    bool closed;
+} program_phase;
+
 typedef struct session_array {
     emm_array_kind kind;
     uint64_t base, end;  /* [base, end) */
@@ -58,8 +81,17 @@ struct emm_session {
     size_t wn, wcap, wlimit;
     uint64_t welements, iterations;
     uint64_t wreads, wwrites; /* the window's records by direction */
+    uint64_t welement_writes; /* its element writes (consecutive ones count once) */
+    uint64_t wactivity;  /* its element accesses of either direction, counted alike */
+    bool wwany;
+    uint32_t wwlast_array;
+    uint64_t wwlast_element;
     bool wopen;          /* the first read of the mesh came: the window is open */
     uint64_t loader_writes; /* writes before it: the loader's, not simulated */
+    uint64_t loader_elements; /* of them, element writes (consecutive ones count once) */
+    bool lany;
+    uint32_t llast_array;
+    uint64_t llast_element;
     bool wany;
     uint32_t wlast_array;
     uint64_t wlast_element;
@@ -94,6 +126,18 @@ struct emm_session {
     emm_trace_record *chunk;
     size_t nchunk;
     uint64_t accesses;   /* records simulated */
+    /* phases */
+    program_phase phases[SESSION_MAX_PHASES];
+    int nphases;
+    bool probing;        /* after the window's replay, with a profile and a table */
+    emm_trace_record *probe;
+    size_t pn, pcap;
+    uint64_t probe_reads, probe_len, gap, probe_start;
+    bool pany;
+    char pending[EMM_TABLE_NAME_MAX]; /* a probe's new pattern awaiting a second probe */
+    uint64_t pending_start;
+    uint32_t plast_array;
+    uint64_t plast_element;
     uint64_t dropped;    /* records of arrays left out of the trace */
 };
 
@@ -140,6 +184,18 @@ static inline bool session_window_only(const emm_session *s)
 {
     return s->capture == EMM_CAPTURE_FAULT;
 }
+
+/* The bytes of the traced mesh's records. */
+uint64_t session_mesh_bytes(const emm_session *s);
+
+/* session_phase.c: the first phase (the window's) and the probes of the
+ * records simulated after it; session_phases_close ends the last phase. */
+void session_phases_start(emm_session *s);
+void session_phases_see(emm_session *s, const emm_trace_record *recs, size_t n);
+void session_phases_close(emm_session *s);
+/* The cycles a switch costs: the mesh's bytes in by DMA and the new layout
+ * out (2 x one DMA of the mesh's bytes). */
+uint64_t session_switch_cycles(const emm_session *s);
 
 /* session.c: runs records through the models and the trace writer. */
 void session_simulate(emm_session *s, const emm_trace_record *recs, size_t n);

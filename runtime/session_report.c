@@ -117,6 +117,60 @@ static void write_profile(json_writer *w, const emm_session *s)
 
 static const emm_result *find_result(const emm_result *res, size_t n, const emm_strategy *want);
 
+/* Whether switching to the phase's best candidate pays: its cycles from the
+ * detection on, plus re-laying out the mesh, against the chosen strategy's
+ * over the same span. */
+static bool phase_pays(const emm_session *s, const program_phase *p)
+{
+    return p->model != SIZE_MAX && p->best_span + session_switch_cycles(s) < p->chosen_span;
+}
+
+/* "phases" (docs/report.md): the program's phases as the probes found them. */
+static void write_phases(json_writer *w, const emm_session *s)
+{
+    char name[64];
+    json_key(w, "phases");
+    json_begin_array(w);
+    for (int i = 0; i < s->nphases; i++) {
+        const program_phase *p = &s->phases[i];
+        json_begin_object(w);
+        json_key(w, "start");
+        json_u64(w, p->start);
+        json_key(w, "end");
+        json_u64(w, i + 1 < s->nphases ? s->phases[i + 1].start : s->accesses);
+        json_key(w, "pattern");
+        json_string(w, p->pattern);
+        json_key(w, "nearest");
+        json_string(w, p->nearest);
+        json_key(w, "distance");
+        json_double(w, p->distance);
+        json_key(w, "best");
+        if (p->has_best) {
+            emm_strategy_format(&p->best, name, sizeof name);
+            json_string(w, name);
+        } else {
+            json_null(w);
+        }
+        if (p->model != SIZE_MAX) {
+            json_key(w, "switch");
+            json_begin_object(w);
+            json_key(w, "from_access");
+            json_u64(w, p->detected);
+            json_key(w, "kept_cycles");
+            json_u64(w, p->chosen_span);
+            json_key(w, "switched_cycles");
+            json_u64(w, p->best_span);
+            json_key(w, "switch_cost");
+            json_u64(w, session_switch_cycles(s));
+            json_key(w, "pays");
+            json_bool(w, phase_pays(s, p));
+            json_end_object(w);
+        }
+        json_end_object(w);
+    }
+    json_end_array(w);
+}
+
 /* The summary's tie: the choice and the runner-up within the margin over
  * the run (the window's scores when the runner-up was not simulated). */
 static bool answer_tie(const emm_session *s, const emm_result *res, const emm_error *skipped,
@@ -217,10 +271,7 @@ static void report_extra(json_writer *w, void *ctx)
     json_end_object(w);
     /* The traced mesh: its elements and the bytes of its records, against
      * which the DMA bytes say how often cells were fetched again. */
-    uint64_t mesh_bytes = 0;
-    for (uint32_t a = 0; a < s->ntarrays; a++)
-        if (s->tarrays[a].kind != EMM_ARRAY_RAW)
-            mesh_bytes += s->tarrays[a].count * s->tarrays[a].record_size;
+    uint64_t mesh_bytes = session_mesh_bytes(s);
     json_key(w, "mesh");
     json_begin_object(w);
     json_key(w, "vertices");
@@ -248,6 +299,7 @@ static void report_extra(json_writer *w, void *ctx)
     json_u64(w, s->sweep.elements);
     json_end_object(w);
     write_profile(w, s);
+    write_phases(w, s);
 }
 
 /* The result of strategy `want` among res[0..n), or NULL. */
@@ -383,6 +435,29 @@ void session_print_summary(const emm_session *s, FILE *out, const emm_result *re
     else
         fprintf(out, "emm:   simulated: the whole run from the frozen mesh on, %s accesses\n",
                 emm_grouped(s->accesses, num));
+    if (s->nphases > 1) {
+        fprintf(out, "emm:   phases: %d —", s->nphases);
+        for (int i = 0; i < s->nphases; i++)
+            fprintf(out, "%s %s from access %s", i ? "," : "", s->phases[i].pattern,
+                    emm_grouped(s->phases[i].start, num));
+        fputc('\n', out);
+        for (int i = 1; i < s->nphases; i++) {
+            const program_phase *p = &s->phases[i];
+            if (!p->has_best)
+                continue;
+            emm_strategy_format(&p->best, name, sizeof name);
+            if (p->model == SIZE_MAX) {
+                fprintf(out, "emm:   the %s phase's best candidate is the answer too: no switch\n",
+                        p->pattern);
+                continue;
+            }
+            uint64_t cost = session_switch_cycles(s), with = p->best_span + cost;
+            fprintf(out, "emm:   the %s phase: switching to %s would take %s cycles with %s to "
+                         "re-lay out the mesh, against %s kept: switching %s\n",
+                    p->pattern, name, emm_grouped(with, num), emm_grouped(cost, num2),
+                    emm_grouped(p->chosen_span, vs), phase_pays(s, p) ? "pays" : "does not pay");
+        }
+    }
     if (s->loader_writes)
         fprintf(out, "emm:   before it, %s writes while the mesh was being built (the loader): "
                      "not simulated\n",

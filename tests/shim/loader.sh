@@ -7,8 +7,8 @@ EMM_TEST_DECIDE=1
 . "$(dirname "$0")/lib.sh"
 unset EMM_STRATEGY
 EMM_TAG='vertices:site=read_mesh,stride=24,xyz=0:f64;triangles:site=read_mesh,stride=12,vidx=0:i32'
-EMM_PROFILE=4000 EMM_REPORT="$WORK/report.json"
-export EMM_TAG EMM_PROFILE EMM_REPORT
+EMM_REPORT="$WORK/report.json"
+export EMM_TAG EMM_REPORT
 run_both loader timeout 300 "$@"
 expect_err loader '^emm: answer: '
 expect_err loader 'simulated: the profiling window only, [0-9,]+ accesses'

@@ -1,0 +1,192 @@
+/* The program's phases (docs/profile.md "Phases"; beyond the thesis, which
+ * profiles one window): after the window the session keeps a cheap running
+ * profile — a probe as long as the window every SESSION_PROBE_GAP + 1
+ * window lengths of element reads, its Eq. 5.1 profile and nearest sample —
+ * and when two probes in a row find the same pattern, other than the
+ * current phase's, a phase begins at the first of them. Its best candidate is decided on the probe as the window's
+ * was (emm_decide_features) and, when it differs from the chosen strategy,
+ * simulated from the detection on in a model of its own that starts cold:
+ * exactly what switching strategy would do (the local store flushed). At
+ * the phase's end its cycles are set against the chosen strategy's over
+ * the same span plus the cost of re-laying out the mesh. */
+#include "session_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "error.h"
+
+static uint64_t model_total(const emm_session *s, size_t i)
+{
+    emm_model *m = emm_runner_model(s->runner, i);
+    if (!m)
+        return 0;
+    emm_result r;
+    emm_model_result(m, &r);
+    uint64_t t = r.total;
+    emm_result_release(&r);
+    return t;
+}
+
+uint64_t session_mesh_bytes(const emm_session *s)
+{
+    uint64_t bytes = 0;
+    for (uint32_t a = 0; a < s->ntarrays; a++)
+        if (s->tarrays[a].kind != EMM_ARRAY_RAW)
+            bytes += s->tarrays[a].count * s->tarrays[a].record_size;
+    return bytes;
+}
+
+uint64_t session_switch_cycles(const emm_session *s)
+{
+    return 2 * emm_machine_dma_cycles(s->machine, session_mesh_bytes(s));
+}
+
+void session_phases_start(emm_session *s)
+{
+    program_phase *p = &s->phases[0];
+    memset(p, 0, sizeof *p);
+    snprintf(p->pattern, sizeof p->pattern, "%s",
+             s->has_profile ? (s->decision.novel ? "novel" : s->decision.pattern) : "unknown");
+    snprintf(p->nearest, sizeof p->nearest, "%s", s->has_profile ? s->decision.nearest : "");
+    p->distance = s->has_profile ? s->decision.distance : 0;
+    p->has_best = s->has_chosen;
+    p->best = s->chosen;
+    p->model = SIZE_MAX;
+    s->nphases = 1;
+    s->probe_len = s->nD;
+    s->gap = SESSION_PROBE_GAP * s->probe_len;
+    /* Probes need a table, a chosen strategy to weigh a switch against, and
+     * the rest of the run (fault capture stops at the decision). */
+    s->probing = s->has_profile && s->table && s->has_chosen && s->probe_len >= EMM_PROFILE_MIN &&
+                 !session_window_only(s);
+}
+
+static void close_phase(emm_session *s, program_phase *p)
+{
+    if (p->closed)
+        return;
+    p->closed = true;
+    if (p->model == SIZE_MAX)
+        return;
+    p->chosen_span = model_total(s, 0) - p->chosen_at;
+    p->best_span = model_total(s, p->model);
+    /* The phase's model runs on; the next phase measures from its own
+     * detection. Keep it from costing more: nothing else reads it. */
+}
+
+void session_phases_close(emm_session *s)
+{
+    if (s->nphases > 0)
+        close_phase(s, &s->phases[s->nphases - 1]);
+}
+
+/* The probe is full: a new phase when its pattern differs. Failures
+ * (memory) end the probing quietly: phases are an addition to the answer,
+ * never a reason to lose it. */
+static void evaluate(emm_session *s)
+{
+    emm_profiler *pr = NULL;
+    emm_error e;
+    double *D = NULL, f[EMM_FEATURES];
+    size_t n;
+    emm_decision d;
+    if (emm_profiler_new(&s->info, s->probe_reads, s->program, &pr, &e) != EMM_OK ||
+        emm_profiler_add(pr, s->probe, s->pn, &e) != EMM_OK)
+        goto off;
+    const double *xy = emm_profiler_positions(pr, &n);
+    if (n < EMM_PROFILE_MIN)
+        goto done; /* a probe that was mostly a sweep: no opinion */
+    if (!(D = malloc(n * sizeof *D)) ||
+        emm_profile_compute(xy, n, D, NULL, &s->threads, &e) != EMM_OK ||
+        emm_profile_features(D, n, s->program, f, &e) != EMM_OK ||
+        emm_table_decide(s->table, f, 0, &d, &e) != EMM_OK)
+        goto off;
+    const char *pattern = d.novel ? "novel" : d.pattern;
+    program_phase *cur = &s->phases[s->nphases - 1];
+    if (strcmp(pattern, cur->pattern) == 0 || s->nphases == SESSION_MAX_PHASES) {
+        s->pending[0] = 0;
+        goto done;
+    }
+    /* One probe is not a phase: a short stretch of the traversal can look
+     * like another pattern. The second in a row with the same new pattern
+     * confirms it, and the phase starts at the first. */
+    if (strcmp(pattern, s->pending) != 0) {
+        snprintf(s->pending, sizeof s->pending, "%s", pattern);
+        s->pending_start = s->probe_start;
+        goto done;
+    }
+    s->pending[0] = 0;
+    close_phase(s, cur);
+    program_phase *p = &s->phases[s->nphases++];
+    memset(p, 0, sizeof *p);
+    p->start = s->pending_start;
+    p->detected = s->accesses;
+    snprintf(p->pattern, sizeof p->pattern, "%s", pattern);
+    snprintf(p->nearest, sizeof p->nearest, "%s", d.nearest);
+    p->distance = d.distance;
+    p->model = SIZE_MAX;
+    emm_window_decision wd;
+    emm_decide_options opt = {0, 0, &s->threads};
+    if (emm_decide_features(s->table, s->machine, &s->info, s->probe, s->pn, f, n, s->program,
+                            &opt, &wd, &e) == EMM_OK) {
+        p->has_best = true;
+        p->best = wd.strategy;
+        if (memcmp(&wd.strategy, &s->chosen, sizeof wd.strategy) != 0) {
+            emm_error why;
+            size_t k = emm_runner_count(s->runner);
+            if (emm_runner_add(s->runner, s->machine, &wd.strategy, 1, &s->info, &why, &e) ==
+                    EMM_OK &&
+                emm_runner_model(s->runner, k)) {
+                p->model = k;
+                p->chosen_at = model_total(s, 0);
+            }
+        }
+    }
+done:
+    emm_profiler_free(pr);
+    free(D);
+    return;
+off:
+    s->probing = false;
+    goto done;
+}
+
+void session_phases_see(emm_session *s, const emm_trace_record *recs, size_t n)
+{
+    for (size_t k = 0; k < n && s->probing; k++) {
+        const emm_trace_record *r = &recs[k];
+        bool element = !r->write && s->info.arrays[r->array].kind != EMM_ARRAY_RAW &&
+                       (!s->pany || r->array != s->plast_array ||
+                        r->element != s->plast_element);
+        if (element) {
+            s->pany = true;
+            s->plast_array = r->array;
+            s->plast_element = r->element;
+        }
+        if (s->gap > 0) {
+            s->gap -= element;
+            continue;
+        }
+        if (s->pn == 0)
+            s->probe_start = s->accesses - n + k;
+        if (s->pn == s->pcap) {
+            size_t cap = s->pcap ? 2 * s->pcap : 4096;
+            emm_trace_record *b = realloc(s->probe, cap * sizeof *b);
+            if (!b) {
+                s->probing = false;
+                break;
+            }
+            s->probe = b;
+            s->pcap = cap;
+        }
+        s->probe[s->pn++] = *r;
+        s->probe_reads += element;
+        if (s->probe_reads >= s->probe_len) {
+            evaluate(s);
+            s->pn = 0;
+            s->probe_reads = 0;
+            s->gap = SESSION_PROBE_GAP * s->probe_len;
+        }
+    }
+}

@@ -1,0 +1,23 @@
+# One run, two traversals of the same arrays: a scan line, then a region
+# grown breadth-first. The session's probes after the window must find the
+# second phase: the report lists two phases with different patterns and
+# says whether switching strategy between them pays.
+#   sh phases.sh SHIM WORKDIR PROGRAM MESH --phases
+EMM_TEST_DECIDE=1
+. "$(dirname "$0")/lib.sh"
+unset EMM_STRATEGY
+EMM_TAG='vertices:site=read_mesh,stride=24,xyz=0:f64;triangles:site=read_mesh,stride=12,vidx=0:i32'
+EMM_REPORT="$WORK/report.json"
+export EMM_TAG EMM_REPORT
+run_both phases "$@"
+expect_err phases '^emm: answer: '
+expect_err phases '^emm:   phases: 2 '
+expect_err phases 'switching (pays|does not pay)'
+R=$EMM_REPORT
+n=$(grep -c '"start":' "$R")
+[ "$n" = 2 ] || { cat "$R" >&2; fail "report: $n phases, expected 2"; }
+p1=$(sed -n '/"phases"/,$s/^ *"pattern": "\(.*\)",$/\1/p' "$R" | sed -n 1p)
+p2=$(sed -n '/"phases"/,$s/^ *"pattern": "\(.*\)",$/\1/p' "$R" | sed -n 2p)
+[ -n "$p1" ] && [ -n "$p2" ] && [ "$p1" != "$p2" ] || fail "report: phase patterns '$p1' and '$p2'"
+grep -q '"pays": \(true\|false\)' "$R" || fail "report: no switch verdict"
+echo "phases: $p1 then $p2"
