@@ -337,7 +337,7 @@ static const char *how_decided(const emm_session *s)
     case FROM_SIMULATION:
         return "the best candidate of the sweep on the window";
     case FROM_CHECKED:
-        return "the table's pattern simulated over this mesh, with the window";
+        return "the table's pattern simulated over this mesh on this machine";
     default:
         return "the nearest sample's strategy";
     }

@@ -601,12 +601,16 @@ static void set_runner_up(emm_window_decision *out, const emm_result *r, double 
 }
 
 /* The table's pattern, checked on this mesh and this window (docs/profile.md
- * "The decision"): the nearest sample's canonical traversal is synthesised
- * over the program's own mesh and arrays and swept (S: the long run the
- * pattern predicts on this mesh and machine), the window is swept too (W:
- * what the program did), and the strategy with the least (S/S_best)·(W/W_best)
- * is taken — unless the long run says it loses to the cache and it is not
- * at least 1/EMM_DECIDE_CACHE_MARGIN times better than the cache over both.
+ * "The decision"): the nearest sample's canonical traversal (its recipe,
+ * or its class's for a sample from a program) is synthesised over the
+ * program's own mesh and arrays and swept (S: the long run the pattern
+ * predicts on this mesh and machine), the window is swept too (W: what the
+ * program did, cold, in its first accesses), and the strategy with the
+ * least S/S_best is taken, W breaking ties (measured: weighing W in,
+ * as (S/S_best)·(W/W_best), doubled the regret on traces not in the table:
+ * a window is too short to see cells reused) — unless, on a machine with a
+ * cache, the long run says it loses to the cache and it is not at least
+ * 1/EMM_DECIDE_CACHE_MARGIN times better than the cache over both.
  * Returns EMM_OK leaving *out alone when the trace has no geometry or
  * arrays to synthesise over; errors are out of memory only. */
 static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info,
@@ -616,9 +620,11 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
 {
     struct synth_arrays arrays;
     emm_synth_options so = {.seed = EMM_DECIDE_SYNTH_SEED};
-    if (strcmp(out->table.synth, "-") == 0 || info->geometry.nt == 0 ||
-        !program_arrays(info, &arrays) ||
-        emm_synth_recipe_parse(out->table.synth, &so, NULL) != EMM_OK)
+    /* A sample from a program (no recipe) is checked by its class's
+     * canonical traversal: its label was made on another machine and mesh. */
+    const char *recipe = strcmp(out->table.synth, "-") != 0 ? out->table.synth : out->table.pattern;
+    if (info->geometry.nt == 0 || !program_arrays(info, &arrays) ||
+        emm_synth_recipe_parse(recipe, &so, NULL) != EMM_OK)
         return EMM_OK;
     emm_mesh *mesh;
     if (emm_mesh_from_arrays(info->geometry.xyz, info->geometry.nv, info->geometry.tri,
@@ -652,7 +658,7 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
         if (!S->ran[i] || !W->ran[i] || !emm_machine_offers(m, &S->result[i].strategy))
             continue;
         both++;
-        double v = (double)S->result[i].total / sb * ((double)W->result[i].total / wb);
+        double v = (double)S->result[i].total / sb + 1e-6 * ((double)W->result[i].total / wb);
         if (v < score) {
             score2 = score;
             second = pick;

@@ -48,20 +48,20 @@ fi
 
 # Build a user table from the two traces, list it, profile against it.
 check add-grid 0 "$EMM" table add grid.emmt --name rows --pattern scanline --strategy tiles+extrapolated@64 --table user.txt
-check add-walk 0 "$EMM" table add walk.emmt --name shuffled --pattern random --strategy cache --table user.txt
+check add-walk 0 "$EMM" table add walk.emmt --name shuffled --pattern walk --strategy cache --table user.txt
 check add-dup 1 "$EMM" table add walk.emmt --name rows --strategy cache --table user.txt
 has add-dup err.txt "already in this table"
 check list 0 "$EMM" table list --table user.txt
 has list out.txt "rows .*scanline .*tiles+extrapolated@64"
-has list out.txt "shuffled .*random .*cache .*user.txt:"
+has list out.txt "shuffled .*walk .*cache .*user.txt:"
 EMM_TABLE=user.txt check list-env 0 "$EMM" table list
 has list-env out.txt "shuffled"
 
 check profile 0 "$EMM" profile walk.emmt --table user.txt --dump walk.csv --json walk.json
-has profile out.txt "pattern: *random"
+has profile out.txt "pattern: *walk"
 has profile out.txt "nearest: *shuffled (distance 0.0000)"
-# The sample's strategy is the cache; the default machine has none, so the
-# window's candidates decide instead ...
+# The sample (class walk: no canonical traversal to check it by) says the
+# cache; the default machine has none, so the window's candidates decide ...
 if grep -q "strategy: *cache" out.txt; then echo "FAIL profile: chose the cache on a machine without one"; fail=1; fi
 has profile out.txt "simulated: .* strategies on the window"
 has profile out.txt "novel: *no"
@@ -69,7 +69,7 @@ for key in pattern strategy nearest distance novel; do has json walk.json "\"$ke
 # ... and a machine that declares its cache takes the sample's answer.
 check profile-cache 0 "$EMM" profile walk.emmt --table user.txt --set cache.present=1
 has profile-cache out.txt "strategy: *cache$"
-has json walk.json '"pattern": "random"'
+has json walk.json '"pattern": "walk"'
 has csv walk.csv "^i,D$"
 lines=$(wc -l < walk.csv)
 # The default window (16384 element accesses) and the header line.
