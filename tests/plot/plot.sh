@@ -48,8 +48,12 @@ for f in breakdown compare transfer cells; do
 done
 [ -e "$W/all-plots/profile.png" ] && no "a profile figure without a profile"
 ls -A "$W/all-plots" | grep -q '^\.emm-plot' && no "the work directory was left behind"
-# The breakdown shows the nine layouts x fetch schemes; the cells are the best EMM's.
-[ "$(grep -c '^"' "$W/all-plots/breakdown.dat")" = 9 ] || no "breakdown has not 9 bars"
+# The breakdown shows every layout x fetch scheme (as many as the sweep has,
+# from emm replay --help); the cells are the best EMM's.
+lf=$("$EMM" replay --help | sed -n 's/.* \([0-9][0-9]*\) layouts x \([0-9][0-9]*\) fetch schemes.*/\1 \2/p')
+bars=$(( ${lf% *} * ${lf#* } ))
+[ "$bars" -ge 9 ] || no "emm replay --help does not say the layouts and fetch schemes"
+[ "$(grep -c '^"' "$W/all-plots/breakdown.dat")" = "$bars" ] || no "breakdown has not $bars bars"
 grep -q '^"direct"' "$W/all-plots/compare.dat" || no "compare lacks direct"
 grep -q '(best EMM)' "$W/all-plots/compare.dat" || no "compare lacks the best EMM strategy"
 # One point per EMM strategy of the sweep: layouts x fetch schemes x cells.
