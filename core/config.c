@@ -119,6 +119,16 @@ static bool parse_compare(emm_config *c, const char *v, long pid, char *why, siz
     return true;
 }
 
+static bool parse_finalists(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid; (void)why; (void)cap;
+    uint64_t x;
+    if (!emm_parse_u64(v, &x) || x > 64)
+        return false;
+    c->finalists = (unsigned)x;
+    return true;
+}
+
 /* An input file: it must exist, be readable and not be a directory. Its
  * content is the session's to check. */
 static bool input_path(const char *v, char out[EMM_CONFIG_PATH_MAX], char *why, size_t cap)
@@ -274,6 +284,11 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
     [EMM_CONFIG_COMPARE] = {{"EMM_COMPARE", "--compare", "C", "baselines, all or none", "baselines",
         "also simulate direct reads and the cache (baselines), the whole sweep (all) or nothing",
         {{0}}}, parse_compare},
+    [EMM_CONFIG_FINALISTS] = {{"EMM_FINALISTS", "--finalists", "N", "a count from 0 to 64", "4",
+        "when the whole run is captured, every candidate runs from the window on and the\n"
+        "slower half is dropped at 2, 4, 8, ... windows until N remain; the fastest of them\n"
+        "over the run is the answer (0: the window's prediction stands, as in the thesis)",
+        {{0}}}, parse_finalists},
     [EMM_CONFIG_MACHINE] = {{"EMM_MACHINE", "--machine", "FILE", "a readable machine file",
         "(built-in)", "the machine model's parameters (see emm machine --help)", {{0}}},
         parse_machine},
@@ -307,6 +322,7 @@ void emm_config_init(emm_config *c)
     c->capture = EMM_CAPTURE_AUTO;
     c->window_accesses = EMM_CONFIG_DEFAULT_WINDOW;
     c->compare = EMM_COMPARE_BASELINES;
+    c->finalists = EMM_CONFIG_DEFAULT_FINALISTS;
     c->log = 1;
 }
 
@@ -438,6 +454,7 @@ void emm_config_dump(const emm_config *c, FILE *out)
         emm_strategy_format(&c->strategy, s, sizeof s);
     fprintf(out, "emm:   EMM_STRATEGY=%s\n", s);
     fprintf(out, "emm:   EMM_COMPARE=%s\n", emm_compare_name(c->compare));
+    fprintf(out, "emm:   EMM_FINALISTS=%u\n", c->finalists);
     fprintf(out, "emm:   EMM_MACHINE=%s\n", c->machine);
     fprintf(out, "emm:   EMM_TABLE=%s\n", c->table);
     fprintf(out, "emm:   EMM_REPORT=%s\n", c->report);

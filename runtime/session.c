@@ -387,6 +387,11 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
              * the file, initialising per-element data), whose records are
              * still simulated: runtime/lead_sweep.h. */
             s->welements += (uint64_t)lead_sweep_step(&s->sweep, r.array, r.element);
+            /* Where the window filled, to the record: the batch's further
+             * records join it, but the contest counts from here, as emm
+             * profile does on the trace. */
+            if (!s->wfill && s->cfg.window_accesses && s->welements >= s->cfg.window_accesses)
+                s->wfill = s->wn;
         }
         if (!r.write && !s->sweep.over)
             s->wlimit++; /* the sweep's reads do not count against the window */
@@ -396,7 +401,10 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
 
 void session_simulate(emm_session *s, const emm_trace_record *recs, size_t n)
 {
-    emm_runner_run(s->runner, recs, n);
+    if (s->contest)
+        contest_run(s->contest, recs, n);
+    else
+        emm_runner_run(s->runner, recs, n);
     if (s->trace && !s->trace_failed &&
         emm_trace_write(s->trace, recs, n, &s->trace_error) != EMM_OK) {
         s->trace_failed = true;
@@ -508,28 +516,60 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
     }
     flush_chunk(s);
     session_phases_close(s);
-    /* Every model in order, those that could not be built with only their
-     * strategy (the report says why); the summary gets those that ran. */
-    emm_result *all = calloc(s->nmodels ? 2 * s->nmodels : 1, sizeof *all);
-    size_t nres = 0;
-    if (!all)
+    /* The contest's finalists, fastest first: the answer and the runner-up. */
+    s->answer_model = s->runner_model = SIZE_MAX;
+    if (s->contest) {
+        size_t top[2];
+        size_t in = contest_standing(s->contest, top, 2);
+        if (in >= 1)
+            s->answer_model = top[0];
+        if (in >= 2)
+            s->runner_model = top[1];
+        if (s->answer_model != SIZE_MAX && s->answer_model != 0) {
+            s->predicted = s->chosen;
+            s->has_predicted = true;
+            s->chosen = s->mstrat[s->answer_model];
+        }
+    }
+    /* Every model, the answer first, those that could not be built with
+     * only their strategy (the report says why), and without the contest's
+     * dropped candidates, whose cycles stop short of the run; the summary
+     * gets those that ran. */
+    size_t nm = s->nmodels;
+    emm_result *all = calloc(nm ? 2 * nm : 1, sizeof *all);
+    emm_error *why = calloc(nm ? nm : 1, sizeof *why);
+    size_t *order = calloc(nm ? nm : 1, sizeof *order);
+    size_t nres = 0, nall = 0;
+    if (!all || !why || !order) {
+        free(all);
+        free(why);
+        free(order);
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the results", s->program);
-    emm_result *res = all + s->nmodels;
-    for (size_t i = 0; i < s->nmodels; i++) {
+    }
+    size_t first_model = s->answer_model != SIZE_MAX ? s->answer_model : 0;
+    if (nm)
+        order[nall++] = first_model;
+    for (size_t i = 0; i < nm; i++)
+        if (i != first_model && !(s->contest && contest_retired(s->contest, i)))
+            order[nall++] = i;
+    emm_result *res = all + nm;
+    for (size_t j = 0; j < nall; j++) {
+        size_t i = order[j];
         emm_model *m = emm_runner_model(s->runner, i);
-        all[i].strategy = s->mstrat[i];
+        all[j].strategy = s->mstrat[i];
+        why[j] = s->merr[i];
         if (!m)
             continue;
-        emm_model_result(m, &all[i]);
+        emm_model_result(m, &all[j]);
         if (s->cfg.report[0]) /* the report's per-cell DMA bytes; no cells is no error */
-            emm_model_cells(m, &all[i], NULL);
-        res[nres++] = all[i];
+            emm_model_cells(m, &all[j], NULL);
+        res[nres++] = all[j];
     }
     if (summary && s->cfg.log >= 1) {
         session_print_summary(s, summary, res, nres);
         fflush(summary);
     }
-    if (s->cfg.report[0] && session_write_report(s, all, s->merr, s->nmodels, &e) != EMM_OK) {
+    if (s->cfg.report[0] && session_write_report(s, all, why, nall, &e) != EMM_OK) {
         output_failed(s, summary, &e);
         if (first == EMM_OK && err)
             *err = e;
@@ -555,9 +595,11 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
             *err = e;
         first = first == EMM_OK ? e.status : first;
     }
-    for (size_t i = 0; i < s->nmodels; i++)
-        emm_result_release(&all[i]);
+    for (size_t j = 0; j < nall; j++)
+        emm_result_release(&all[j]);
     free(all);
+    free(why);
+    free(order);
     s->phase = PHASE_DONE;
     return first;
 }
@@ -566,7 +608,9 @@ void emm_session_free(emm_session *s)
 {
     if (!s)
         return;
+    contest_free(s->contest);
     emm_runner_free(s->runner);
+    emm_model_share_unref(s->layouts);
     if (s->trace)
         emm_trace_writer_abort(s->trace);
     for (int i = 0; i < s->narrays; i++)

@@ -132,6 +132,8 @@ static emm_status freeze_arrays(emm_session *s, emm_error *err)
     size_t m = 0;
     uint64_t work = 0;
     for (size_t k = 0; k < s->wn; k++) {
+        if (k == s->wfill)
+            s->wunit = m;
         emm_trace_record r = s->window[k];
         int32_t t = s->arrays[r.array].trace_index;
         if (t < 0) {
@@ -145,6 +147,8 @@ static emm_status freeze_arrays(emm_session *s, emm_error *err)
         r.array = (uint32_t)t;
         s->window[m++] = r;
     }
+    if (s->wfill == 0 || s->wfill >= s->wn)
+        s->wunit = m;
     s->wn = m;
     return EMM_OK;
 }
@@ -196,13 +200,16 @@ static emm_status choose(emm_session *s, emm_error *err)
 {
     emm_window_decision wd;
     emm_decide_options opt = {0, 0, &s->threads};
-    emm_status st = emm_decide_features(s->table, s->machine, &s->info, s->window + s->wskip,
-                                        s->wn - s->wskip, s->features, s->nD, s->program, &opt,
-                                        &wd, err);
+    emm_status st = decide_features_shared(s->table, s->machine, &s->info, s->window + s->wskip,
+                                           s->wn - s->wskip, s->features, s->nD, s->program, &opt,
+                                           s->layouts, &wd, err);
     if (st != EMM_OK)
         return st;
     s->chosen = wd.strategy;
     s->has_chosen = true;
+    /* The class checked on this mesh is the pattern the report names. */
+    if (wd.reclassified)
+        s->decision = wd.table;
     s->wd = wd;
     s->has_wd = true;
     s->source = wd.how == EMM_DECIDED_WINDOW    ? FROM_SIMULATION
@@ -217,40 +224,69 @@ static bool same_strategy(const emm_strategy *a, const emm_strategy *b)
            a->cell == b->cell;
 }
 
-/* The models: the chosen strategy first, then the comparison. A comparison
- * strategy that cannot run on this mesh is skipped; the chosen one failing
- * is reported, and the baselines still run. */
+/* Whether the run confirms the choice (docs/profile.md "The contest"): the
+ * session decided (no configured strategy), finalists are asked for, and
+ * the capture sees the run past the window. */
+static bool wants_contest(const emm_session *s)
+{
+    return s->has_chosen && s->source != FROM_CONFIG && s->cfg.finalists > 0 &&
+           !session_window_only(s);
+}
+
+/* The models: the chosen strategy first, then the comparison, then the
+ * contest's other candidates. A comparison strategy that cannot run on
+ * this mesh is skipped; the chosen one failing is reported, and the
+ * baselines still run. */
 static emm_status build_models(emm_session *s, emm_error *err)
 {
-    size_t cap = 4 + (s->cfg.compare == EMM_COMPARE_ALL ? emm_strategy_sweep(NULL, 0) : 0);
+    bool racing = wants_contest(s);
+    size_t sweep = emm_strategy_sweep(NULL, 0);
+    size_t cap = 4 + (s->cfg.compare == EMM_COMPARE_ALL || racing ? 2 * sweep : 0);
     emm_strategy *all = calloc(cap, sizeof *all), *list = calloc(cap, sizeof *list);
     emm_error *errs = calloc(cap, sizeof *errs);
-    size_t n = 0, k = 0;
+    size_t *entrants = calloc(cap, sizeof *entrants);
+    bool *pinned = calloc(cap, sizeof *pinned);
+    size_t n = 0, k = 0, shown = 0, ne = 0;
     emm_status st = EMM_OK;
-    if (!all || !list || !errs) {
+    if (!all || !list || !errs || !entrants || !pinned) {
         st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", s->program);
         goto out;
     }
     if (s->has_chosen)
         all[n++] = s->chosen;
     /* The runner-up, direct reads and the reference cache come first after
-     * the choice in every comparison: the summary's answer is made of them. */
+     * the choice in every comparison: the summary's answer is made of them.
+     * With a contest the runner-up is the contest's. */
     if (s->cfg.compare != EMM_COMPARE_NONE || !s->has_chosen) {
-        if (s->has_wd && s->wd.has_runner_up)
+        if (s->has_wd && s->wd.has_runner_up && !racing)
             all[n++] = s->wd.runner_up;
         all[n++] = (emm_strategy){EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
         all[n++] = (emm_strategy){EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
     }
     if (s->cfg.compare == EMM_COMPARE_ALL)
         n += emm_strategy_sweep(all + n, cap - n);
+    shown = n;
+    if (racing)
+        n += emm_strategy_sweep(all + n, cap - n);
     for (size_t i = 0; i < n; i++) {
-        bool dup = false;
-        for (size_t j = 0; j < k; j++)
-            dup = dup || same_strategy(&all[i], &list[j]);
-        if (!dup)
+        size_t j = 0;
+        while (j < k && !same_strategy(&all[i], &list[j]))
+            j++;
+        if (j == k)
             list[k++] = all[i];
+        /* Every candidate of the sweep the machine offers enters the
+         * contest once; what the report shows keeps running when dropped. */
+        if (racing && i >= shown && emm_machine_offers(s->machine, &all[i])) {
+            bool in = false;
+            for (size_t e = 0; e < ne; e++)
+                in = in || entrants[e] == j;
+            if (!in) {
+                pinned[ne] = j < shown;
+                entrants[ne++] = j;
+            }
+        }
     }
-    if ((st = emm_runner_new(&s->threads, &s->runner, err)) != EMM_OK ||
+    if ((st = emm_runner_new_shared(&s->threads, s->layouts, &s->runner, err)) != EMM_OK ||
         (st = emm_runner_add(s->runner, s->machine, list, k, &s->info, errs, err)) != EMM_OK)
         goto out;
     s->nmodels = k;
@@ -269,13 +305,26 @@ static emm_status build_models(emm_session *s, emm_error *err)
             s->skipped++;
         }
     }
-    if (built == 0)
+    if (built == 0) {
         st = emm_fail(err, EMM_ERR_UNSUPPORTED, "%s: no strategy can be simulated: %s",
                       s->program, s->strategy_note[0] ? s->strategy_note : "none was asked for");
+        goto out;
+    }
+    /* The contest's unit is the window: its records past the leading sweep
+     * up to where it filled (the same counts emm profile reads off the
+     * trace). */
+    if (racing && s->has_chosen) {
+        size_t lead = s->wskip < s->wunit ? s->wskip : 0;
+        st = contest_new(s->runner, entrants, pinned, ne, lead,
+                         s->wunit > lead ? s->wunit - lead : 1, s->cfg.finalists, &s->contest,
+                         err);
+    }
 out:
     free(all);
     free(list);
     free(errs);
+    free(entrants);
+    free(pinned);
     return st;
 }
 
@@ -284,6 +333,9 @@ emm_status session_decide(emm_session *s, emm_error *err)
     emm_status st;
     if ((st = read_geometry(s, err)) != EMM_OK || (st = freeze_arrays(s, err)) != EMM_OK)
         return st;
+    if (!(s->layouts = emm_model_share_new()))
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", s->program);
+    emm_model_share_keep(s->layouts);
     if ((st = profile_window(s, err)) != EMM_OK)
         return st;
     if (s->cfg.has_strategy) {

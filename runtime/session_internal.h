@@ -15,8 +15,11 @@
 #include "emm/session.h"
 #include "emm/sim.h"
 #include "emm/table.h"
+#include "contest.h"
 #include "lead_sweep.h"
 #include "runner.h"
+#include "share.h"
+#include "table_internal.h"
 
 /* Arrays the session keeps at once (live or still referenced by the window). */
 #define SESSION_MAX_ARRAYS 16
@@ -97,6 +100,8 @@ struct emm_session {
     uint64_t wlast_element;
     lead_sweep sweep;    /* the leading index-order sweep */
     size_t wskip;        /* window records of that sweep (the profiler's count) */
+    size_t wfill;        /* records when the window's element reads filled it (0: never) */
+    size_t wunit;        /* the same once the window is frozen: the contest's unit */
 
     /* frozen at the decision */
     emm_trace_array *tarrays;
@@ -115,7 +120,17 @@ struct emm_session {
     char strategy_note[512]; /* why the chosen strategy has no model, or "" */
     emm_strategy chosen;
     bool has_chosen;
-    emm_runner *runner;  /* the chosen strategy first (when has_chosen), then the comparison */
+    emm_runner *runner;  /* the chosen strategy first (when has_chosen), then the comparison,
+                            then the contest's other candidates */
+    emm_model_share *layouts; /* every layout built for this mesh, kept: the decision's
+                                 sweeps, the models and the probes build each once */
+    contest *contest;    /* the run's confirmation of the choice, or NULL (docs/profile.md
+                            "The contest") */
+    /* At finish, with a contest: the models of the answer and of the
+     * runner-up (SIZE_MAX: none) among the finalists. */
+    size_t answer_model, runner_model;
+    emm_strategy predicted; /* the window's choice, when a contest changed the answer */
+    bool has_predicted;
     size_t nmodels;      /* models added to the runner (built or skipped) */
     emm_strategy *mstrat; /* their strategies, nmodels */
     emm_error *merr;     /* why each could not be built (status != EMM_OK), nmodels */

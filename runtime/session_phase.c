@@ -128,8 +128,8 @@ static void evaluate(emm_session *s)
     p->model = SIZE_MAX;
     emm_window_decision wd;
     emm_decide_options opt = {0, 0, &s->threads};
-    if (emm_decide_features(s->table, s->machine, &s->info, s->probe, s->pn, f, n, s->program,
-                            &opt, &wd, &e) == EMM_OK) {
+    if (decide_features_shared(s->table, s->machine, &s->info, s->probe, s->pn, f, n, s->program,
+                               &opt, s->layouts, &wd, &e) == EMM_OK) {
         p->has_best = true;
         p->best = wd.strategy;
         if (memcmp(&wd.strategy, &s->chosen, sizeof wd.strategy) != 0) {

@@ -176,6 +176,12 @@ static void write_phases(json_writer *w, const emm_session *s)
 static bool answer_tie(const emm_session *s, const emm_result *res, const emm_error *skipped,
                        size_t n)
 {
+    if (s->contest) {
+        const emm_result *r = s->runner_model != SIZE_MAX
+                                  ? find_result(res, n, &s->mstrat[s->runner_model])
+                                  : NULL;
+        return n > 0 && r && r != res && emm_decide_is_tie(res[0].total, r->total);
+    }
     if (!s->has_chosen || !s->has_wd || !s->wd.has_runner_up || n == 0 ||
         (skipped && skipped[0].status != EMM_OK))
         return false;
@@ -239,7 +245,10 @@ static void report_extra(json_writer *w, void *ctx)
                        ? "direct, the EMM strategies and the cache"
                        : "direct and the EMM strategies (the cache is a reference)");
     json_key(w, "runner_up");
-    if (s->has_wd && s->wd.has_runner_up) {
+    if (s->contest && s->runner_model != SIZE_MAX) {
+        emm_strategy_format(&s->mstrat[s->runner_model], name, sizeof name);
+        json_string(w, name);
+    } else if (!s->contest && s->has_wd && s->wd.has_runner_up) {
         emm_strategy_format(&s->wd.runner_up, name, sizeof name);
         json_string(w, name);
         json_key(w, "runner_up_margin");
@@ -247,6 +256,60 @@ static void report_extra(json_writer *w, void *ctx)
     } else {
         json_null(w);
     }
+    /* The window's own choice, and the run's contest that confirmed or
+     * replaced it (docs/report.md "decision"). */
+    json_key(w, "predicted");
+    if (s->has_predicted || (s->has_chosen && s->source != FROM_CONFIG)) {
+        emm_strategy_format(s->has_predicted ? &s->predicted : &s->chosen, name, sizeof name);
+        json_string(w, name);
+    } else {
+        json_null(w);
+    }
+    json_key(w, "contest");
+    if (s->contest) {
+        const uint64_t *at;
+        const size_t *kept;
+        size_t rounds = contest_rounds(s->contest, &at, &kept);
+        json_begin_object(w);
+        json_key(w, "entrants");
+        json_u64(w, contest_entrants(s->contest));
+        json_key(w, "finalists");
+        json_u64(w, s->cfg.finalists);
+        json_key(w, "lead");
+        json_u64(w, contest_lead(s->contest));
+        json_key(w, "unit");
+        json_u64(w, contest_unit(s->contest));
+        json_key(w, "rounds");
+        json_begin_array(w);
+        for (size_t k = 0; k < rounds; k++) {
+            json_begin_object(w);
+            json_key(w, "at");
+            json_u64(w, at[k]);
+            json_key(w, "kept");
+            json_u64(w, kept[k]);
+            json_end_object(w);
+        }
+        json_end_array(w);
+        json_end_object(w);
+    } else {
+        json_null(w);
+    }
+    json_key(w, "classes");
+    json_begin_array(w);
+    for (size_t k = 0; s->has_wd && k < s->wd.nclasses; k++) {
+        json_begin_object(w);
+        json_key(w, "pattern");
+        json_string(w, s->wd.classes[k].pattern);
+        json_key(w, "distance");
+        json_double(w, s->wd.classes[k].distance);
+        json_key(w, "synth_distance");
+        if (s->wd.classes[k].synth_distance >= 0)
+            json_double(w, s->wd.classes[k].synth_distance);
+        else
+            json_null(w);
+        json_end_object(w);
+    }
+    json_end_array(w);
     json_key(w, "tie");
     json_bool(w, answer_tie(s, c->res, c->skipped, c->n));
     json_key(w, "tie_margin");
@@ -329,7 +392,7 @@ static const char *versus(uint64_t a, uint64_t b, char *buf, size_t cap)
     return buf;
 }
 
-static const char *how_decided(const emm_session *s)
+static const char *how_predicted(const emm_session *s)
 {
     switch (s->source) {
     case FROM_CONFIG:
@@ -341,6 +404,22 @@ static const char *how_decided(const emm_session *s)
     default:
         return "the nearest sample's strategy";
     }
+}
+
+/* How the answer was reached: the window's prediction, or the contest. */
+static const char *how_decided(const emm_session *s, char *buf, size_t cap)
+{
+    if (!s->contest || s->answer_model == SIZE_MAX)
+        return how_predicted(s);
+    const uint64_t *at;
+    const size_t *kept;
+    size_t rounds = contest_rounds(s->contest, &at, &kept);
+    size_t in = rounds ? kept[rounds - 1] : contest_entrants(s->contest);
+    snprintf(buf, cap,
+             "measured over the run: the fastest of %zu candidates, %s%zu of them run to the end",
+             contest_entrants(s->contest),
+             rounds ? "the slower half dropped at 2, 4, 8, ... windows; " : "", in);
+    return buf;
 }
 
 /* The summary is the answer (docs/report.md "The summary"): the pattern, the
@@ -379,20 +458,26 @@ void session_print_summary(const emm_session *s, FILE *out, const emm_result *re
     const emm_result *chosen = s->has_chosen && nres ? &res[0] : NULL;
     const emm_result *direct = find_result(res, nres, &direct_strategy);
     const emm_result *cache = find_result(res, nres, &cache_strategy);
-    const emm_result *runner =
-        s->has_wd && s->wd.has_runner_up ? find_result(res, nres, &s->wd.runner_up) : NULL;
+    const emm_result *runner = NULL;
+    if (s->contest)
+        runner = s->runner_model != SIZE_MAX ? find_result(res, nres, &s->mstrat[s->runner_model])
+                                             : NULL;
+    else if (s->has_wd && s->wd.has_runner_up)
+        runner = find_result(res, nres, &s->wd.runner_up);
+    char how[200];
     if (chosen) {
         emm_strategy_format(&chosen->strategy, name, sizeof name);
         emm_strategy_words(&chosen->strategy, words, sizeof words);
         if (runner && runner != chosen ? emm_decide_is_tie(chosen->total, runner->total)
-                                       : s->has_wd && s->wd.tie) {
+                                       : !s->contest && s->has_wd && s->wd.tie) {
             char other[64];
             emm_strategy_format(&runner->strategy, other, sizeof other);
             fprintf(out, "emm: answer: a tie between %s and %s (within %.0f%%: either will "
                          "do); %s named first (%s)\n",
-                    name, other, EMM_DECIDE_TIE_MARGIN * 100, name, how_decided(s));
+                    name, other, EMM_DECIDE_TIE_MARGIN * 100, name,
+                    how_decided(s, how, sizeof how));
         } else {
-            fprintf(out, "emm: answer: %s (%s)\n", name, how_decided(s));
+            fprintf(out, "emm: answer: %s (%s)\n", name, how_decided(s, how, sizeof how));
         }
         fprintf(out, "emm:   %s\n", words);
         if (direct && direct != chosen)
@@ -407,6 +492,16 @@ void session_print_summary(const emm_session *s, FILE *out, const emm_result *re
             double d = chosen->total ? (double)runner->total / (double)chosen->total - 1 : 0;
             fprintf(out, "emm:   runner-up %s: %s cycles (%.1f%% %s over the run)\n", name,
                     emm_grouped(runner->total, num), fabs(d) * 100, d >= 0 ? "slower" : "faster");
+        }
+        /* What the window alone predicted, against the run's answer. */
+        const emm_result *pred = s->has_predicted ? find_result(res, nres, &s->predicted) : NULL;
+        if (s->contest && s->answer_model != SIZE_MAX && !s->has_predicted)
+            fprintf(out, "emm:   the window predicted it too (%s)\n", how_predicted(s));
+        else if (pred && pred != chosen && chosen->total) {
+            emm_strategy_format(&pred->strategy, name, sizeof name);
+            fprintf(out, "emm:   the window predicted %s (%s): %s cycles, %.2fx the answer\n",
+                    name, how_predicted(s), emm_grouped(pred->total, num),
+                    (double)pred->total / (double)chosen->total);
         }
     } else if (s->strategy_note[0]) {
         fprintf(out, "emm: no answer: the chosen strategy cannot be simulated: %s\n",

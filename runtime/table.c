@@ -20,7 +20,9 @@
 #include "outfile.h"
 #include "parse.h"
 #include "runner.h"
+#include "share.h"
 #include "synth_internal.h"
+#include "table_internal.h"
 
 #ifndef EMM_SOURCE_DIR
 #define EMM_SOURCE_DIR "."
@@ -480,6 +482,14 @@ emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
                              const emm_trace_record *recs, size_t n, const emm_threads *threads,
                              emm_sweep **out, emm_error *err)
 {
+    return sweep_records_shared(m, info, recs, n, threads, NULL, out, err);
+}
+
+emm_status sweep_records_shared(const emm_machine *m, const emm_trace_info *info,
+                                const emm_trace_record *recs, size_t n,
+                                const emm_threads *threads, emm_model_share *share,
+                                emm_sweep **out, emm_error *err)
+{
     *out = NULL;
     size_t count = emm_strategy_sweep(NULL, 0);
     emm_sweep *sw = calloc(1, sizeof *sw);
@@ -497,7 +507,7 @@ emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
     }
     emm_strategy_sweep(s, count);
     sw->count = count;
-    if ((st = emm_runner_new(threads, &run, err)) != EMM_OK ||
+    if ((st = emm_runner_new_shared(threads, share, &run, err)) != EMM_OK ||
         (st = emm_runner_add(run, m, s, count, info, skipped, err)) != EMM_OK)
         goto out;
     emm_runner_run(run, recs, n);
@@ -600,6 +610,161 @@ static void set_runner_up(emm_window_decision *out, const emm_result *r, double 
     out->tie = margin <= EMM_DECIDE_TIE_MARGIN;
 }
 
+/* The features of the profile of recs[0..n) (trace `info`): a window of
+ * `window` element accesses less a leading index-order sweep, as the
+ * session profiles its own. *np gets the element accesses profiled and
+ * *skip (may be NULL) the records of the leading sweep. EMM_ERR_RANGE when
+ * fewer than EMM_PROFILE_MIN element accesses were found. */
+static emm_status records_features(const emm_trace_info *info, const emm_trace_record *recs,
+                                   size_t n, uint64_t window, const char *name,
+                                   const emm_threads *threads, double f[EMM_FEATURES],
+                                   size_t *np, size_t *skip, emm_error *err)
+{
+    emm_profiler *p;
+    emm_status st = emm_profiler_new(info, window ? window : 1, name, &p, err);
+    if (st != EMM_OK)
+        return st;
+    if ((st = emm_profiler_add(p, recs, n, err)) != EMM_OK) {
+        emm_profiler_free(p);
+        return st;
+    }
+    const double *xy = emm_profiler_positions(p, np);
+    size_t swept;
+    emm_profiler_swept(p, &swept);
+    if (skip)
+        *skip = swept;
+    if (*np < EMM_PROFILE_MIN) {
+        emm_profiler_free(p);
+        return emm_fail(err, EMM_ERR_RANGE,
+                        "%s: only %zu element accesses; a profile needs at least %u", name, *np,
+                        EMM_PROFILE_MIN);
+    }
+    double *D = malloc(*np * sizeof *D);
+    if (!D) {
+        emm_profiler_free(p);
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile", name);
+    }
+    st = emm_profile_compute(xy, *np, D, NULL, threads, err);
+    emm_profiler_free(p);
+    if (st == EMM_OK)
+        st = emm_profile_features(D, *np, name, f, err);
+    free(D);
+    return st;
+}
+
+/* The canonical traversal of recipe over this mesh, against the program's
+ * arrays: a region grows from where the program's did (its first
+ * triangle). EMM_ERR_INVALID for a recipe that names no traversal. */
+static emm_status synth_over(const emm_mesh *mesh, const struct synth_arrays *arrays,
+                             const char *recipe, const emm_trace_record *recs, size_t n,
+                             uint64_t visits, const char *name, emm_trace_record **syn,
+                             size_t *ns, emm_error *err)
+{
+    emm_synth_options so = {.seed = EMM_DECIDE_SYNTH_SEED};
+    if (emm_synth_recipe_parse(recipe, &so, err) != EMM_OK)
+        return EMM_ERR_INVALID;
+    for (size_t i = 0; i < n && !so.has_start; i++)
+        if (recs[i].array == arrays->tri && recs[i].element < emm_mesh_triangle_count(mesh)) {
+            so.has_start = 1;
+            so.start = (uint32_t)recs[i].element;
+        }
+    so.visits = visits;
+    return emm_synth_records(mesh, &so, arrays, name, syn, ns, err);
+}
+
+/* The recipe a sample is checked by: its own, or its class's canonical
+ * traversal for a sample from a program (its label was made on another
+ * machine and mesh). */
+static const char *sample_recipe(const emm_table_sample *t)
+{
+    return t->synth[0] && strcmp(t->synth, "-") != 0 ? t->synth : t->pattern;
+}
+
+/* The pattern's class checked on this mesh (docs/profile.md "The
+ * decision"): a window may lie near samples of several classes (a scan
+ * line is a long straight curve at some scales), and the samples were made
+ * on other meshes. Each class whose nearest sample lies within
+ * EMM_DECIDE_CLASS_MARGIN of the nearest distance is synthesised over this
+ * mesh for as many element accesses as the window, and profiled; the class
+ * whose traversal profiles nearest the window's own is taken, with its
+ * nearest sample. */
+static emm_status pick_class(const emm_table *t, const emm_trace_info *info, const emm_mesh *mesh,
+                             const struct synth_arrays *arrays, const emm_trace_record *recs,
+                             size_t n, const double f[EMM_FEATURES], size_t accesses,
+                             const char *name, const emm_threads *threads, emm_window_decision *out,
+                             emm_error *err)
+{
+    size_t cand[EMM_DECIDE_CLASSES_MAX], nc = 0;
+    for (size_t i = 0; i < t->n; i++) {
+        double d = emm_feature_distance(f, t->s[i].f);
+        if (d > out->table.distance * EMM_DECIDE_CLASS_MARGIN)
+            continue;
+        size_t k = 0;
+        while (k < nc && strcmp(t->s[cand[k]].pattern, t->s[i].pattern) != 0)
+            k++;
+        if (k < nc) {
+            if (d < emm_feature_distance(f, t->s[cand[k]].f))
+                cand[k] = i;
+        } else if (nc < EMM_DECIDE_CLASSES_MAX) {
+            cand[nc++] = i;
+        } else {
+            /* Full: a nearer class displaces the farthest. */
+            size_t far = 0;
+            for (size_t j = 1; j < nc; j++)
+                if (emm_feature_distance(f, t->s[cand[j]].f) >
+                    emm_feature_distance(f, t->s[cand[far]].f))
+                    far = j;
+            if (d < emm_feature_distance(f, t->s[cand[far]].f))
+                cand[far] = i;
+        }
+    }
+    if (nc < 2)
+        return EMM_OK;
+    size_t best = SIZE_MAX;
+    double bd = INFINITY, mine = INFINITY;
+    for (size_t k = 0; k < nc; k++) {
+        const emm_table_sample *smp = &t->s[cand[k]];
+        emm_trace_record *syn = NULL;
+        size_t ns = 0, np;
+        double g[EMM_FEATURES];
+        uint64_t visits = accesses < info->geometry.nt ? accesses : info->geometry.nt;
+        emm_error e;
+        emm_status st = synth_over(mesh, arrays, sample_recipe(smp), recs, n, visits, name, &syn,
+                                   &ns, &e);
+        if (st == EMM_OK)
+            st = records_features(info, syn, ns, accesses, name, threads, g, &np, NULL, &e);
+        free(syn);
+        if (st == EMM_ERR_NOMEM)
+            return emm_fail(err, st, "%s", e.message);
+        out->classes[out->nclasses].distance = emm_feature_distance(f, smp->f);
+        out->classes[out->nclasses].synth_distance = st == EMM_OK ? emm_feature_distance(f, g) : -1;
+        snprintf(out->classes[out->nclasses].pattern, sizeof out->classes[0].pattern, "%s",
+                 smp->pattern);
+        out->nclasses++;
+        if (st == EMM_OK && strcmp(smp->pattern, out->table.pattern) == 0)
+            mine = emm_feature_distance(f, g);
+        if (st == EMM_OK && emm_feature_distance(f, g) < bd) {
+            bd = emm_feature_distance(f, g);
+            best = cand[k];
+        }
+    }
+    /* Another class only when its traversal is clearly nearer the window
+     * than the nearest sample's class's own on this mesh. */
+    if (best != SIZE_MAX && !(bd < EMM_DECIDE_CLASS_SWITCH * mine))
+        best = SIZE_MAX;
+    if (best == SIZE_MAX || strcmp(t->s[best].pattern, out->table.pattern) == 0)
+        return EMM_OK;
+    const emm_table_sample *b = &t->s[best];
+    snprintf(out->table.pattern, sizeof out->table.pattern, "%s", b->pattern);
+    snprintf(out->table.nearest, sizeof out->table.nearest, "%s", b->name);
+    snprintf(out->table.synth, sizeof out->table.synth, "%s", b->synth[0] ? b->synth : "-");
+    out->table.strategy = b->strategy;
+    out->table.distance = emm_feature_distance(f, b->f);
+    out->strategy = b->strategy;
+    out->reclassified = 1;
+    return EMM_OK;
+}
+
 /* The table's pattern, checked on this mesh and this window (docs/profile.md
  * "The decision"): the nearest sample's canonical traversal (its recipe,
  * or its class's for a sample from a program) is synthesised over the
@@ -611,43 +776,28 @@ static void set_runner_up(emm_window_decision *out, const emm_result *r, double 
  * a window is too short to see cells reused) — unless, on a machine with a
  * cache, the long run says it loses to the cache and it is not at least
  * 1/EMM_DECIDE_CACHE_MARGIN times better than the cache over both.
- * Returns EMM_OK leaving *out alone when the trace has no geometry or
- * arrays to synthesise over; errors are out of memory only. */
+ * Returns EMM_OK leaving *out alone when the recipe names no traversal;
+ * errors are out of memory only. */
 static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info,
+                                const emm_mesh *mesh, const struct synth_arrays *arrays,
                                 const emm_trace_record *recs, size_t n, const char *name,
-                                const emm_threads *threads, emm_window_decision *out,
-                                emm_error *err)
+                                const emm_threads *threads, emm_model_share *share,
+                                emm_window_decision *out, emm_error *err)
 {
-    struct synth_arrays arrays;
-    emm_synth_options so = {.seed = EMM_DECIDE_SYNTH_SEED};
-    /* A sample from a program (no recipe) is checked by its class's
-     * canonical traversal: its label was made on another machine and mesh. */
     const char *recipe = strcmp(out->table.synth, "-") != 0 ? out->table.synth : out->table.pattern;
-    if (info->geometry.nt == 0 || !program_arrays(info, &arrays) ||
-        emm_synth_recipe_parse(recipe, &so, NULL) != EMM_OK)
-        return EMM_OK;
-    emm_mesh *mesh;
-    if (emm_mesh_from_arrays(info->geometry.xyz, info->geometry.nv, info->geometry.tri,
-                             info->geometry.nt, name, &mesh, NULL) != EMM_OK)
-        return EMM_OK;
-    /* A region grows from where the program's did: its first triangle. */
-    for (size_t i = 0; i < n && !so.has_start; i++)
-        if (recs[i].array == arrays.tri && recs[i].element < info->geometry.nt) {
-            so.has_start = 1;
-            so.start = (uint32_t)recs[i].element;
-        }
-    so.visits = info->geometry.nt < EMM_DECIDE_SYNTH_VISITS ? info->geometry.nt
-                                                             : EMM_DECIDE_SYNTH_VISITS;
+    uint64_t visits = info->geometry.nt < EMM_DECIDE_SYNTH_VISITS ? info->geometry.nt
+                                                                  : EMM_DECIDE_SYNTH_VISITS;
     emm_trace_record *syn = NULL;
     size_t ns = 0;
-    emm_status st = emm_synth_records(mesh, &so, &arrays, name, &syn, &ns, err);
-    emm_mesh_free(mesh);
+    emm_status st = synth_over(mesh, arrays, recipe, recs, n, visits, name, &syn, &ns, err);
+    if (st == EMM_ERR_INVALID)
+        return EMM_OK;
     if (st != EMM_OK)
         return st;
     emm_sweep *S = NULL, *W = NULL;
     emm_error e;
-    if (emm_sweep_records(m, info, syn, ns, threads, &S, &e) != EMM_OK ||
-        emm_sweep_records(m, info, recs, n, threads, &W, &e) != EMM_OK) {
+    if (sweep_records_shared(m, info, syn, ns, threads, share, &S, &e) != EMM_OK ||
+        sweep_records_shared(m, info, recs, n, threads, share, &W, &e) != EMM_OK) {
         st = e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
         goto done;
     }
@@ -687,7 +837,7 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
         out->strategy = W->result[pick].strategy;
         out->cycles = W->result[pick].total;
         out->candidates = both;
-        out->synth_visits = (size_t)so.visits;
+        out->synth_visits = (size_t)visits;
         set_runner_up(out, second == SIZE_MAX ? NULL : &W->result[second], score2 / score - 1);
     }
 done:
@@ -702,6 +852,23 @@ emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
                                const double f[EMM_FEATURES], size_t accesses, const char *name,
                                const emm_decide_options *opt, emm_window_decision *out,
                                emm_error *err)
+{
+    emm_model_share *share = emm_model_share_new();
+    if (!share)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+    emm_model_share_keep(share); /* the sweeps build each layout once */
+    emm_status st = decide_features_shared(t, m, info, recs, n, f, accesses, name, opt, share,
+                                           out, err);
+    emm_model_share_unref(share);
+    return st;
+}
+
+emm_status decide_features_shared(const emm_table *t, const emm_machine *m,
+                                  const emm_trace_info *info, const emm_trace_record *recs,
+                                  size_t n, const double f[EMM_FEATURES], size_t accesses,
+                                  const char *name, const emm_decide_options *opt,
+                                  emm_model_share *share, emm_window_decision *out,
+                                  emm_error *err)
 {
     memset(out, 0, sizeof *out);
     memcpy(out->f, f, sizeof out->f);
@@ -719,7 +886,18 @@ emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
     if (!(opt && opt->simulate) && out->has_table && !out->table.novel) {
         if (!m)
             return EMM_OK;
-        st = check_pattern(m, info, recs, n, name, threads, out, err);
+        struct synth_arrays arrays;
+        emm_mesh *mesh = NULL;
+        st = EMM_OK;
+        if (info->geometry.nt > 0 && program_arrays(info, &arrays) &&
+            emm_mesh_from_arrays(info->geometry.xyz, info->geometry.nv, info->geometry.tri,
+                                 info->geometry.nt, name, &mesh, NULL) == EMM_OK) {
+            st = pick_class(t, info, mesh, &arrays, recs, n, f, accesses, name, threads, out, err);
+            if (st == EMM_OK)
+                st = check_pattern(m, info, mesh, &arrays, recs, n, name, threads, share, out,
+                                   err);
+        }
+        emm_mesh_free(mesh);
         /* A sample's strategy the machine does not have (a cache label on a
          * machine without one) is no answer: the window decides. */
         if (st != EMM_OK || out->how == EMM_DECIDED_CHECKED ||
@@ -727,7 +905,7 @@ emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
             return st;
     }
     emm_sweep *sw = NULL;
-    st = emm_sweep_records(m, info, recs, n, threads, &sw, err);
+    st = sweep_records_shared(m, info, recs, n, threads, share, &sw, err);
     if (st == EMM_OK) {
         out->simulated = 1;
         out->how = EMM_DECIDED_WINDOW;
@@ -754,35 +932,10 @@ emm_status emm_decide_window(const emm_table *t, const emm_machine *m, const emm
                              emm_error *err)
 {
     memset(out, 0, sizeof *out);
-    emm_profiler *p;
-    emm_status st = emm_profiler_new(info, n ? n : 1, name, &p, err);
-    if (st != EMM_OK)
-        return st;
-    if ((st = emm_profiler_add(p, recs, n, err)) != EMM_OK) {
-        emm_profiler_free(p);
-        return st;
-    }
-    size_t np;
-    const double *xy = emm_profiler_positions(p, &np);
-    if (np < EMM_PROFILE_MIN) {
-        emm_profiler_free(p);
-        return emm_fail(err, EMM_ERR_RANGE,
-                        "%s: only %zu element accesses; a profile needs at least %u", name, np,
-                        EMM_PROFILE_MIN);
-    }
-    double *D = malloc(np * sizeof *D);
-    if (!D) {
-        emm_profiler_free(p);
-        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile", name);
-    }
     double f[EMM_FEATURES];
-    size_t skip;
-    emm_profiler_swept(p, &skip);
-    st = emm_profile_compute(xy, np, D, NULL, opt ? opt->threads : NULL, err);
-    emm_profiler_free(p);
-    if (st == EMM_OK)
-        st = emm_profile_features(D, np, name, f, err);
-    free(D);
+    size_t np, skip;
+    emm_status st = records_features(info, recs, n, n ? n : 1, name, opt ? opt->threads : NULL, f,
+                                     &np, &skip, err);
     if (st != EMM_OK)
         return st;
     /* The window proper starts after the leading sweep, as the session's does. */

@@ -20,10 +20,18 @@ struct emm_runner {
 
 emm_status emm_runner_new(const emm_threads *t, emm_runner **out, emm_error *err)
 {
+    return emm_runner_new_shared(t, NULL, out, err);
+}
+
+emm_status emm_runner_new_shared(const emm_threads *t, emm_model_share *share, emm_runner **out,
+                                 emm_error *err)
+{
     emm_runner *r = calloc(1, sizeof *r);
     if (!r)
         return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the model runner");
-    r->share = emm_model_share_new();
+    if (share)
+        emm_model_share_ref(share);
+    r->share = share ? share : emm_model_share_new();
     if (!r->share) {
         free(r);
         return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the model runner");
@@ -104,6 +112,18 @@ size_t emm_runner_count(const emm_runner *r)
 emm_model *emm_runner_model(const emm_runner *r, size_t i)
 {
     return i < r->n ? r->models[i] : NULL;
+}
+
+void emm_runner_retire(emm_runner *r, size_t i)
+{
+    if (i >= r->n || !r->models[i])
+        return;
+    for (size_t k = 0; k < r->nlive; k++)
+        if (r->live[k] == r->models[i]) {
+            memmove(r->live + k, r->live + k + 1, (r->nlive - k - 1) * sizeof *r->live);
+            r->nlive--;
+            return;
+        }
 }
 
 struct run_job {

@@ -17,6 +17,13 @@ typedef struct emm_runner emm_runner;
  * online CPUs, no start hook). EMM_ERR_NOMEM when memory runs out. */
 emm_status emm_runner_new(const emm_threads *t, emm_runner **out, emm_error *err);
 
+/* The same, building its models' layouts in `share` (which it holds a
+ * reference to; NULL: a share of its own), so that runners over one trace
+ * can build each layout once (emm_model_share_keep). */
+struct emm_model_share;
+emm_status emm_runner_new_shared(const emm_threads *t, struct emm_model_share *share,
+                                 emm_runner **out, emm_error *err);
+
 /* Adds one model per strategy s[0..n) on machine m (validated) for a trace
  * described by `info`, built in parallel. A strategy whose model cannot be
  * built gets the reason in errs[i] (status != EMM_OK) and no model; the
@@ -31,7 +38,12 @@ emm_status emm_runner_add(emm_runner *r, const emm_machine *m, const emm_strateg
 size_t emm_runner_count(const emm_runner *r);
 emm_model *emm_runner_model(const emm_runner *r, size_t i);
 
-/* Runs recs[0..n) through every model. */
+/* Stops running model i: later batches skip it, and its results stay as
+ * they were (readable until the runner is freed). Retiring a model twice,
+ * or one that could not be built, does nothing. */
+void emm_runner_retire(emm_runner *r, size_t i);
+
+/* Runs recs[0..n) through every model not retired. */
 void emm_runner_run(emm_runner *r, const emm_trace_record *recs, size_t n);
 
 /* Frees the runner and its models; NULL is allowed. */

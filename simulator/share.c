@@ -27,6 +27,7 @@ struct emm_model_share {
     size_t n, cap;
     int32_t *tri;
     bool tri_done;
+    bool keep; /* layouts stay built until the share goes */
 };
 
 emm_model_share *emm_model_share_new(void)
@@ -38,6 +39,13 @@ emm_model_share *emm_model_share_new(void)
     pthread_mutex_init(&sh->mu, NULL);
     pthread_cond_init(&sh->built, NULL);
     return sh;
+}
+
+void emm_model_share_keep(emm_model_share *sh)
+{
+    pthread_mutex_lock(&sh->mu);
+    sh->keep = true;
+    pthread_mutex_unlock(&sh->mu);
 }
 
 void emm_model_share_ref(emm_model_share *sh)
@@ -139,7 +147,7 @@ void emm_model_share_release(emm_model_share *sh, const emm_layout *l)
     emm_layout *gone = NULL;
     pthread_mutex_lock(&sh->mu);
     for (size_t i = 0; i < sh->n; i++)
-        if (sh->e[i].layout == l && --sh->e[i].refs == 0) {
+        if (sh->e[i].layout == l && --sh->e[i].refs == 0 && !sh->keep) {
             gone = sh->e[i].layout;
             sh->e[i].layout = NULL;
             sh->e[i].state = READY;

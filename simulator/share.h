@@ -16,6 +16,11 @@ typedef struct emm_model_share emm_model_share;
 /* A share with one reference (NULL when memory runs out). */
 emm_model_share *emm_model_share_new(void);
 void emm_model_share_ref(emm_model_share *sh);
+/* Keeps every layout built until the share is freed, instead of freeing
+ * one when its last model goes: for a caller that builds models of the
+ * same trace several times (the decision's sweeps, then the session's
+ * models, then its probes). */
+void emm_model_share_keep(emm_model_share *sh);
 /* Drops a reference; the last one frees the share. NULL is allowed. */
 void emm_model_share_unref(emm_model_share *sh);
 

@@ -42,6 +42,10 @@ static void usage(FILE *out)
             "  --table FILE    a user table added to the default one (default: $EMM_TABLE)\n"
             "  --threshold X   novelty threshold on the nearest distance (default %g)\n"
             "  --simulate      simulate the sweep on the window even when not novel\n"
+            "  --finalists N   the run's contest, as emm run holds it: every candidate from\n"
+            "                  the trace's start, the slower half dropped at 2, 4, 8, ...\n"
+            "                  windows until N remain; the fastest over the trace is the\n"
+            "                  answer (default %u; 0: the window's prediction stands)\n"
             "  --learn NAME    when the sweep ran, append the profile as sample NAME with\n"
             "                  the sweep's best strategy to the user table (--table or\n"
             "                  $EMM_TABLE, created when missing)\n"
@@ -52,7 +56,7 @@ static void usage(FILE *out)
             "\n"
             "The default table is %s.\n",
             EMM_PROFILE_DEFAULT_WINDOW, EMM_PROFILE_EXACT_MAX, EMM_NOVELTY_THRESHOLD,
-            emm_table_default_path());
+            EMM_CONFIG_DEFAULT_FINALISTS, emm_table_default_path());
 }
 
 /* Commits an output file; the exit status. */
@@ -75,15 +79,16 @@ static int write_dump(const char *path, const double *D, size_t n)
 }
 
 static int write_json(const char *path, const char *trace, int exact,
-                      const emm_window_decision *w)
+                      const emm_window_decision *w, const emm_strategy *answer)
 {
     emm_error err;
     emm_outfile o;
     if (emm_outfile_open(&o, path, "the JSON", &err) != EMM_OK)
         return cli_fail(&err);
     const emm_decision *d = &w->table;
-    char strat[96];
-    emm_strategy_format(&w->strategy, strat, sizeof strat);
+    char strat[96], pred[96];
+    emm_strategy_format(answer ? answer : &w->strategy, strat, sizeof strat);
+    emm_strategy_format(&w->strategy, pred, sizeof pred);
     json_writer jw;
     json_init(&jw, o.f, true);
     json_begin_object(&jw);
@@ -97,6 +102,8 @@ static int write_json(const char *path, const char *trace, int exact,
     json_string(&jw, d->pattern);
     json_key(&jw, "strategy");
     json_string(&jw, strat);
+    json_key(&jw, "predicted");
+    json_string(&jw, pred);
     json_key(&jw, "nearest");
     json_string(&jw, d->nearest);
     json_key(&jw, "distance");
@@ -126,7 +133,7 @@ static int write_json(const char *path, const char *trace, int exact,
 /* The profile of a window of records, for --dump. */
 static emm_status window_profile(const emm_trace_info *info, const emm_trace_record *recs,
                                  size_t n, const char *name, double **D, size_t *nD, int *exact,
-                                 emm_error *err)
+                                 size_t *skip, emm_error *err)
 {
     emm_profiler *p = NULL;
     *D = NULL;
@@ -134,6 +141,7 @@ static emm_status window_profile(const emm_trace_info *info, const emm_trace_rec
     emm_status st = emm_profiler_new(info, n ? n : 1, name, &p, err);
     if (st == EMM_OK && (st = emm_profiler_add(p, recs, n, err)) == EMM_OK) {
         size_t np;
+        emm_profiler_swept(p, skip);
         const double *xy = emm_profiler_positions(p, &np);
         *D = malloc((np ? np : 1) * sizeof **D);
         if (!*D) {
@@ -157,6 +165,9 @@ int emm_cmd_profile(int argc, char **argv)
     uint64_t window = EMM_PROFILE_DEFAULT_WINDOW;
     double threshold = EMM_NOVELTY_THRESHOLD;
     int simulate = 0;
+    unsigned finalists = EMM_CONFIG_DEFAULT_FINALISTS;
+    emm_strategy answer;
+    int has_answer = 0;
     machine_cli mc = {0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -185,6 +196,14 @@ int emm_cmd_profile(int argc, char **argv)
             threshold = strtod(v, &end);
             if (*v == '\0' || *end != '\0' || !(threshold > 0))
                 return cli_usage_error(CMD, "--threshold expects a positive number, not '%s'", v);
+        } else if (strcmp(a, "--finalists") == 0) {
+            const char *v = cli_value(CMD, argc, argv, &i);
+            uint64_t x;
+            if (!v || !cli_u64(CMD, a, v, &x))
+                return EMM_EXIT_USAGE;
+            if (x > 64)
+                return cli_usage_error(CMD, "--finalists takes a count from 0 to 64, not %s", v);
+            finalists = (unsigned)x;
         } else if (strcmp(a, "--simulate") == 0) {
             simulate = 1;
         } else if (strcmp(a, "--learn") == 0) {
@@ -234,13 +253,13 @@ int emm_cmd_profile(int argc, char **argv)
     }
     emm_trace_record *recs = NULL;
     double *D = NULL;
-    size_t n = 0, nD = 0;
+    size_t n = 0, nD = 0, skip = 0;
     int exact = 1;
     rc = EMM_EXIT_FAIL;
     emm_table *t = NULL;
     const emm_trace_info *info = emm_trace_reader_info(r);
     if (emm_profile_trace_window(r, window, trace, &recs, &n, &err) != EMM_OK ||
-        window_profile(info, recs, n, trace, &D, &nD, &exact, &err) != EMM_OK) {
+        window_profile(info, recs, n, trace, &D, &nD, &exact, &skip, &err) != EMM_OK) {
         rc = cli_fail(&err);
         goto done;
     }
@@ -291,8 +310,44 @@ int emm_cmd_profile(int argc, char **argv)
     else if (w.how == EMM_DECIDED_CHECKED)
         printf("checked:   %s over this mesh (%zu visits) and the window, %zu strategies\n",
                w.table.synth, w.synth_visits, w.candidates);
-    printf("strategy:  %s\n", strat);
-    if (w.has_runner_up && m) {
+    if (!(finalists > 0 && m))
+        printf("strategy:  %s\n", strat);
+    if (finalists > 0 && m) {
+        /* The run's contest over the whole trace, as emm run holds it when
+         * it sees the whole run: the same answer on the trace it wrote. */
+        emm_contest_result cr;
+        if (emm_contest_trace(trace, m, &w.strategy, skip, n > skip ? n - skip : 1, finalists,
+                              NULL, &cr, &err) != EMM_OK) {
+            rc = cli_fail(&err);
+            goto done;
+        }
+        char best[96], other[96] = "";
+        emm_strategy_format(&cr.answer.strategy, best, sizeof best);
+        printf("predicted: %s\n", strat);
+        printf("contest:   %zu candidates over the whole trace (%llu records), the slower half\n"
+               "           dropped at 2, 4, 8, ... windows of %zu records after the leading\n"
+               "           sweep's %zu: %zu finalists\n",
+               cr.entrants, (unsigned long long)cr.accesses, n - skip, skip, cr.finalists);
+        printf("strategy:  %s\n", best);
+        printf("run:       %s %llu cycles\n", best, (unsigned long long)cr.answer.total);
+        if (cr.has_runner_up) {
+            emm_strategy_format(&cr.runner_up.strategy, other, sizeof other);
+            double d = cr.answer.total
+                           ? (double)cr.runner_up.total / (double)cr.answer.total - 1
+                           : 0;
+            printf("runner-up: %s, %llu cycles (%.1f%% slower)%s\n", other,
+                   (unsigned long long)cr.runner_up.total, d * 100,
+                   emm_decide_is_tie(cr.answer.total, cr.runner_up.total)
+                       ? ": a tie, either will do"
+                       : "");
+        }
+        if (cr.has_predicted && cr.answer.total)
+            printf("predicted: %s, %llu cycles over the trace, %.2fx the answer\n", strat,
+                   (unsigned long long)cr.predicted.total,
+                   (double)cr.predicted.total / (double)cr.answer.total);
+        answer = cr.answer.strategy;
+        has_answer = 1;
+    } else if (w.has_runner_up && m) {
         /* The choice and the runner-up over the whole trace, as emm run's
          * summary weighs them: within the tie margin, either will do. */
         char other[96];
@@ -330,7 +385,7 @@ int emm_cmd_profile(int argc, char **argv)
         printf("learnt:    nothing (not novel; --simulate learns anyway)\n");
     }
     if (json)
-        rc = write_json(json, trace, exact, &w);
+        rc = write_json(json, trace, exact, &w, has_answer ? &answer : NULL);
 done:
     emm_table_free(t);
     free(recs);

@@ -96,6 +96,7 @@ typedef enum emm_config_key {
     EMM_CONFIG_PROFILE,
     EMM_CONFIG_STRATEGY,
     EMM_CONFIG_COMPARE,
+    EMM_CONFIG_FINALISTS,
     EMM_CONFIG_MACHINE,
     EMM_CONFIG_TABLE,
     EMM_CONFIG_REPORT,
@@ -106,6 +107,9 @@ typedef enum emm_config_key {
 } emm_config_key;
 
 #define EMM_CONFIG_PATH_MAX 4096
+/* Candidates that run to the end of the run to confirm the window's
+ * prediction when EMM_FINALISTS is unset (docs/profile.md "The contest"). */
+#define EMM_CONFIG_DEFAULT_FINALISTS 4u
 /* The profile window when EMM_PROFILE is unset, in element accesses. */
 #define EMM_CONFIG_DEFAULT_WINDOW 16384u
 
@@ -120,6 +124,7 @@ typedef struct emm_config {
     int has_strategy;             /* EMM_STRATEGY given: no decision */
     emm_strategy strategy;
     emm_compare compare;          /* EMM_COMPARE */
+    unsigned finalists;           /* EMM_FINALISTS: 0, the window's prediction stands */
     char machine[EMM_CONFIG_PATH_MAX];      /* EMM_MACHINE; "": built-in */
     char table[EMM_CONFIG_PATH_MAX];        /* EMM_TABLE; "": the shipped table only */
     char report[EMM_CONFIG_PATH_MAX];       /* EMM_REPORT */

@@ -61,6 +61,35 @@ EMM_API emm_status emm_replay_ex(const char *path, const emm_machine *m, const e
                                  size_t n, const emm_replay_options *opt, emm_result *results,
                                  emm_error *skipped, uint64_t *accesses, emm_error *err);
 
+/* ---- the run's contest (docs/profile.md "The contest") ------------------- */
+
+typedef struct emm_contest_result {
+    emm_result answer;    /* the fastest finalist over the whole trace */
+    emm_result runner_up; /* the next (valid when has_runner_up) */
+    int has_runner_up;
+    emm_result predicted; /* the prediction over the whole trace (valid when has_predicted) */
+    int has_predicted;
+    size_t entrants;      /* candidates that entered */
+    size_t finalists;     /* those that ran to the end */
+    size_t rounds;        /* halvings made */
+    uint64_t accesses;    /* records run */
+} emm_contest_result;
+
+/* The contest a session runs when it sees the whole run, over the trace at
+ * `path`: the prediction and every other candidate machine m offers (the
+ * standard sweep) from the trace's first record; when the records run
+ * reach lead + 2·unit, lead + 4·unit, ... (lead: the records of the
+ * window's leading sweep; unit: the window's other records) the slower
+ * half is dropped, never below `finalists` (at least 1); the fastest
+ * finalist is the answer. A candidate that cannot run on the trace does
+ * not enter. `threads` may be NULL (the online CPUs). On the trace a
+ * session wrote, with its window's lead and unit, the answer is the
+ * session's. */
+EMM_API emm_status emm_contest_trace(const char *path, const emm_machine *m,
+                                     const emm_strategy *predicted, uint64_t lead, uint64_t unit,
+                                     unsigned finalists, const emm_threads *threads,
+                                     emm_contest_result *out, emm_error *err);
+
 /* Writes the JSON report of docs/report.md to `path` (whole or not at all).
  * A result with cells (emm_model_cells) gets its "cells" key. */
 EMM_API emm_status emm_report_write(const char *path, const char *trace_name,

@@ -153,6 +153,16 @@ typedef enum emm_decided_how {
  * answer names both instead of one as if it were clearly better. */
 #define EMM_DECIDE_TIE_MARGIN 0.03
 
+/* Classes whose nearest sample lies within this factor of the nearest
+ * distance are each synthesised over the program's mesh and profiled; the
+ * one nearest the window's profile is the pattern (at most
+ * EMM_DECIDE_CLASSES_MAX of them). */
+#define EMM_DECIDE_CLASS_MARGIN 1.5
+#define EMM_DECIDE_CLASSES_MAX 3
+/* ... and another class than the nearest sample's is taken only when its
+ * traversal's profile is nearer the window's by this factor. */
+#define EMM_DECIDE_CLASS_SWITCH 0.75
+
 typedef struct emm_window_decision {
     emm_decision table;      /* the nearest sample (valid when has_table) */
     int has_table;           /* a table with samples was given */
@@ -170,6 +180,17 @@ typedef struct emm_window_decision {
                                 whole run's cycles, when simulated, decide: emm_decide_is_tie) */
     size_t candidates;       /* strategies simulated on the window (CHECKED, WINDOW) */
     size_t synth_visits;     /* triangle visits of the synthetic run (CHECKED) */
+    /* The classes checked on this mesh (nclasses 0: the nearest sample's
+     * class stood alone): each one's nearest sample distance, and the
+     * distance of its traversal over this mesh from the window's profile
+     * (-1: it could not be synthesised). reclassified: the table decision
+     * above was moved to another class than the nearest sample's. */
+    struct {
+        char pattern[EMM_TABLE_NAME_MAX];
+        double distance, synth_distance;
+    } classes[EMM_DECIDE_CLASSES_MAX];
+    size_t nclasses;
+    int reclassified;
 } emm_window_decision;
 
 /* True when cycles a and b (the choice and the runner-up over the same

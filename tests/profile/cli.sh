@@ -66,9 +66,20 @@ if grep -q "strategy: *cache" out.txt; then echo "FAIL profile: chose the cache 
 has profile out.txt "simulated: .* strategies on the window"
 has profile out.txt "novel: *no"
 for key in pattern strategy nearest distance novel; do has json walk.json "\"$key\""; done
-# ... and a machine that declares its cache takes the sample's answer.
-check profile-cache 0 "$EMM" profile walk.emmt --table user.txt --set cache.present=1
+# ... and a machine that declares its cache takes the sample's answer (the
+# window's prediction: --finalists 0 holds no contest over the trace).
+check profile-cache 0 "$EMM" profile walk.emmt --table user.txt --set cache.present=1 --finalists 0
 has profile-cache out.txt "strategy: *cache$"
+# The contest over the whole trace (the default): the prediction, the
+# candidates, the answer and its cycles, and the prediction's against it.
+check profile-contest 0 "$EMM" profile walk.emmt --table user.txt --set cache.present=1 --json walk.json
+has profile-contest out.txt "^predicted: *cache$"
+has profile-contest out.txt "^contest: *68 candidates over the whole trace"
+has profile-contest out.txt "^strategy: "
+has profile-contest out.txt "^predicted: cache, [0-9]* cycles over the trace, [0-9.]*x the answer$"
+has json walk.json '"predicted": "cache"'
+check bad-finalists 2 "$EMM" profile walk.emmt --finalists 65
+has bad-finalists err.txt "finalists"
 has json walk.json '"pattern": "walk"'
 has csv walk.csv "^i,D$"
 lines=$(wc -l < walk.csv)

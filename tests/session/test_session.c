@@ -156,6 +156,9 @@ static emm_session_config base_config(void)
     emm_config_init(&tcfg);
     tcfg.window_accesses = WINDOW;
     tcfg.compare = EMM_COMPARE_BASELINES;
+    /* These tests check the window's prediction; test_contest the run's
+     * contest that confirms it. */
+    tcfg.finalists = 0;
     strcpy(tcfg.table, "table.txt");
     tcfg.log = 1;
     c.config = &tcfg;
@@ -512,10 +515,92 @@ static void test_compare_all(void)
     size_t results = 0;
     for (const char *p = json; p && (p = strstr(p, "\"seconds\"")); p++)
         results++;
-    emm_strategy sweep[64];
-    size_t n = emm_strategy_sweep(sweep, 64);
+    size_t n = emm_strategy_sweep(NULL, 0);
     CHECKF(results >= 2 && results <= n, "%zu results", results);
     printf("compare all: %zu of %zu strategies simulated\n", results, n);
+    free(json);
+}
+
+/* The run's contest (docs/profile.md "The contest"): with the whole run
+ * fed, the answer is the contest's over the run, whatever the table
+ * predicted — the same as emm_contest_trace over the same records (what
+ * emm profile runs on the trace), and no slower than any whole-run result
+ * the report shows. */
+static void test_contest(void)
+{
+    emm_error err;
+    emm_session *s;
+    write_table("table.txt", "direct", 0);
+    emm_session_config c = base_config();
+    tcfg.finalists = 4;
+    strcpy(tcfg.report, "contest.json");
+    remove("contest.json");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    CHECK(feed(s, 300, 0) == 1);
+    FILE *sum = fopen("contest.txt", "w+");
+    REQUIRE(sum);
+    CHECKF(emm_session_finish(s, sum, &err) == EMM_OK, "%s", err.message);
+    emm_session_free(s);
+    char text[8192] = "";
+    rewind(sum);
+    CHECK(fread(text, 1, sizeof text - 1, sum) > 0);
+    fclose(sum);
+    printf("%s", text);
+    CHECK(has(text, "(measured over the run: the fastest of 64 candidates"));
+
+    /* The same contest over the same records, from the trace. */
+    emm_trace_reader *r;
+    emm_trace_record *win;
+    size_t unit;
+    REQUIRE(emm_trace_reader_open("expect.emmt", &r, &err) == EMM_OK);
+    REQUIRE(emm_profile_trace_window(r, WINDOW, "expect", &win, &unit, &err) == EMM_OK);
+    free(win);
+    emm_trace_reader_close(r);
+    emm_machine *m;
+    REQUIRE(emm_machine_new(&m, &err) == EMM_OK);
+    emm_strategy direct;
+    emm_strategy_parse("direct", &direct, NULL);
+    emm_contest_result cr;
+    /* The window's leading sweep, as the session counted it. */
+    char *rep = slurp("contest.json");
+    REQUIRE(rep && strstr(rep, "\"lead\": "));
+    uint64_t lead = strtoull(strstr(rep, "\"lead\": ") + 8, NULL, 10);
+    free(rep);
+    CHECK(lead < unit);
+    REQUIRE(emm_contest_trace("expect.emmt", m, &direct, lead, unit - lead, 4, NULL, &cr, &err) ==
+            EMM_OK);
+    emm_machine_free(m);
+    CHECK(cr.entrants == 64 && cr.accesses == nrecs && cr.has_predicted);
+    CHECK(cr.answer.total <= cr.predicted.total);
+    char want[64], line[128];
+    emm_strategy_format(&cr.answer.strategy, want, sizeof want);
+    snprintf(line, sizeof line, "\"strategy\": \"%s\"", want);
+    char *json = slurp("contest.json");
+    REQUIRE(json);
+    CHECKF(has(json, line), "the session's answer is not %s", want);
+    CHECK(has_u64(json, "total", cr.answer.total));
+    CHECK(has(json, "\"predicted\": \"direct\""));
+    CHECK(has(json, "\"entrants\": 64"));
+    /* No whole-run result of a candidate in the report is faster than the
+     * answer (the cache is a reference on this machine). */
+    const char *p = strstr(json, "\"results\"");
+    const char *end = p ? strstr(p, "\"program\"") : NULL;
+    size_t seen = 0;
+    REQUIRE(p && end);
+    while ((p = strstr(p, "\"strategy\": \"")) && p < end) {
+        p += 13;
+        const char *t = strstr(p, "\"total\": ");
+        if (!t || t > end)
+            break;
+        if (strncmp(p, "cache", 5) != 0) {
+            CHECKF(strtoull(t + 9, NULL, 10) >= cr.answer.total, "%.40s", p);
+            seen++;
+        }
+    }
+    CHECK(seen >= 4); /* the answer, direct, and the other finalists */
+    printf("contest: %s, %llu cycles (direct predicted: %llu)\n", want,
+           (unsigned long long)cr.answer.total, (unsigned long long)cr.predicted.total);
     free(json);
 }
 
@@ -655,6 +740,7 @@ int main(void)
     test_decide_checked();
     test_window_not_filled();
     test_novel();
+    test_contest();
     test_compare_all();
     test_iterations();
     test_report_whole_or_absent();

@@ -1,0 +1,297 @@
+/* The contest of runtime/contest.h: successive halving over the run. */
+#include "contest.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "emm/replay.h"
+#include "error.h"
+
+struct contest {
+    emm_runner *runner;
+    size_t *in;       /* runner indices still in, in entry order */
+    size_t nin, entrants;
+    size_t *pinned;   /* runner indices that keep running when dropped */
+    size_t npinned;
+    size_t *retired;  /* runner indices retired */
+    size_t nretired;
+    size_t finalists;
+    uint64_t lead, unit, done, next, step;
+    uint64_t at[CONTEST_MAX_ROUNDS];
+    size_t kept[CONTEST_MAX_ROUNDS];
+    size_t rounds;
+    size_t *order;    /* scratch for the ranking */
+    uint64_t *total;  /* scratch: each contender's cycles so far */
+    emm_strategy *strategy; /* scratch: and its strategy */
+};
+
+emm_status contest_new(emm_runner *r, const size_t *models, const bool *pinned, size_t n,
+                       uint64_t lead, uint64_t unit, size_t finalists, contest **out,
+                       emm_error *err)
+{
+    *out = NULL;
+    contest *c = calloc(1, sizeof *c);
+    if (c) {
+        c->in = calloc(n ? n : 1, sizeof *c->in);
+        c->pinned = calloc(n ? n : 1, sizeof *c->pinned);
+        c->retired = calloc(n ? n : 1, sizeof *c->retired);
+        c->order = calloc(n ? n : 1, sizeof *c->order);
+        c->total = calloc(n ? n : 1, sizeof *c->total);
+        c->strategy = calloc(n ? n : 1, sizeof *c->strategy);
+    }
+    if (!c || !c->in || !c->pinned || !c->retired || !c->order || !c->total || !c->strategy) {
+        contest_free(c);
+        return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the contest of %zu candidates", n);
+    }
+    c->runner = r;
+    for (size_t j = 0; j < n; j++) {
+        if (!emm_runner_model(r, models[j]))
+            continue;
+        c->in[c->nin++] = models[j];
+        if (pinned && pinned[j])
+            c->pinned[c->npinned++] = models[j];
+    }
+    c->entrants = c->nin;
+    c->finalists = finalists ? finalists : 1;
+    c->lead = lead;
+    c->unit = unit ? unit : 1;
+    c->step = 2 * c->unit;
+    c->next = c->lead + c->step;
+    *out = c;
+    return EMM_OK;
+}
+
+static bool member(const size_t *set, size_t n, size_t x)
+{
+    for (size_t k = 0; k < n; k++)
+        if (set[k] == x)
+            return true;
+    return false;
+}
+
+/* Whether contender a ranks behind contender b: more cycles, or as many and
+ * a later strategy in a fixed order (kind, layout, fetch, cell), so that
+ * the ranking does not depend on the order the models entered in. */
+static bool behind(const contest *c, size_t a, size_t b)
+{
+    if (c->total[a] != c->total[b])
+        return c->total[a] > c->total[b];
+    const emm_strategy *x = &c->strategy[a], *y = &c->strategy[b];
+    if (x->kind != y->kind)
+        return x->kind > y->kind;
+    if (x->layout != y->layout)
+        return x->layout > y->layout;
+    if (x->fetch != y->fetch)
+        return x->fetch > y->fetch;
+    return x->cell > y->cell;
+}
+
+/* The contenders' order, fastest first. */
+static size_t rank(const contest *c, size_t *order)
+{
+    for (size_t k = 0; k < c->nin; k++) {
+        emm_result res;
+        emm_model_result(emm_runner_model(c->runner, c->in[k]), &res);
+        c->total[k] = res.total;
+        c->strategy[k] = res.strategy;
+        emm_result_release(&res);
+        order[k] = k;
+    }
+    /* insertion sort: a few dozen contenders */
+    for (size_t i = 1; i < c->nin; i++) {
+        size_t x = order[i], j = i;
+        while (j > 0 && behind(c, order[j - 1], x)) {
+            order[j] = order[j - 1];
+            j--;
+        }
+        order[j] = x;
+    }
+    return c->nin;
+}
+
+/* Drops the slower half of the contenders still in (keeping at least
+ * `finalists`), retiring those not pinned. */
+static void halve(contest *c)
+{
+    size_t keep = (c->nin + 1) / 2;
+    if (keep < c->finalists)
+        keep = c->finalists;
+    if (c->rounds < CONTEST_MAX_ROUNDS) {
+        c->at[c->rounds] = c->done;
+        c->kept[c->rounds] = keep < c->nin ? keep : c->nin;
+        c->rounds++;
+    }
+    if (keep >= c->nin)
+        return;
+    rank(c, c->order);
+    bool *stay = calloc(c->nin, sizeof *stay);
+    if (!stay) /* no memory to drop anyone: all stay in, which is only slower */
+        return;
+    for (size_t k = 0; k < keep; k++)
+        stay[c->order[k]] = true;
+    size_t m = 0;
+    for (size_t k = 0; k < c->nin; k++) {
+        size_t i = c->in[k];
+        if (stay[k]) {
+            c->in[m++] = i;
+        } else if (!member(c->pinned, c->npinned, i)) {
+            emm_runner_retire(c->runner, i);
+            c->retired[c->nretired++] = i;
+        }
+    }
+    c->nin = m;
+    free(stay);
+}
+
+void contest_run(contest *c, const emm_trace_record *recs, size_t n)
+{
+    while (n > 0) {
+        uint64_t room = c->next - c->done;
+        size_t part = room < n ? (size_t)room : n;
+        emm_runner_run(c->runner, recs, part);
+        c->done += part;
+        recs += part;
+        n -= part;
+        if (c->done == c->next) {
+            if (c->nin > c->finalists)
+                halve(c);
+            c->step = c->step > UINT64_MAX / 4 ? UINT64_MAX / 2 : 2 * c->step;
+            c->next = c->lead + c->step;
+        }
+    }
+}
+
+size_t contest_standing(const contest *c, size_t *idx, size_t cap)
+{
+    rank(c, c->order);
+    for (size_t k = 0; k < c->nin && k < cap; k++)
+        idx[k] = c->in[c->order[k]];
+    return c->nin;
+}
+
+size_t contest_entrants(const contest *c)
+{
+    return c->entrants;
+}
+
+uint64_t contest_unit(const contest *c)
+{
+    return c->unit;
+}
+
+uint64_t contest_lead(const contest *c)
+{
+    return c->lead;
+}
+
+size_t contest_rounds(const contest *c, const uint64_t **at, const size_t **kept)
+{
+    *at = c->at;
+    *kept = c->kept;
+    return c->rounds;
+}
+
+bool contest_retired(const contest *c, size_t i)
+{
+    return member(c->retired, c->nretired, i);
+}
+
+void contest_free(contest *c)
+{
+    if (!c)
+        return;
+    free(c->in);
+    free(c->pinned);
+    free(c->retired);
+    free(c->order);
+    free(c->total);
+    free(c->strategy);
+    free(c);
+}
+
+/* ---- over a trace file (emm/replay.h) ------------------------------------- */
+
+emm_status emm_contest_trace(const char *path, const emm_machine *m, const emm_strategy *predicted,
+                             uint64_t lead, uint64_t unit, unsigned finalists,
+                             const emm_threads *threads, emm_contest_result *out, emm_error *err)
+{
+    memset(out, 0, sizeof *out);
+    emm_trace_reader *r = NULL;
+    emm_runner *run = NULL;
+    contest *c = NULL;
+    emm_trace_record *buf = NULL;
+    size_t count = emm_strategy_sweep(NULL, 0), n = 0;
+    emm_strategy *list = calloc(count + 1, sizeof *list);
+    emm_error *errs = calloc(count + 1, sizeof *errs);
+    size_t *idx = calloc(count + 1, sizeof *idx);
+    bool *pinned = calloc(count + 1, sizeof *pinned);
+    emm_strategy *sweep = calloc(count, sizeof *sweep);
+    emm_status st;
+    if (!list || !errs || !idx || !pinned || !sweep) {
+        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the contest", path);
+        goto out;
+    }
+    /* The prediction first (kept running to the end, to set against the
+     * answer), then every other candidate of the sweep the machine offers. */
+    list[n++] = *predicted;
+    emm_strategy_sweep(sweep, count);
+    for (size_t i = 0; i < count; i++)
+        if (emm_machine_offers(m, &sweep[i]) && memcmp(&sweep[i], predicted, sizeof *predicted))
+            list[n++] = sweep[i];
+    for (size_t i = 0; i < n; i++)
+        idx[i] = i;
+    pinned[0] = true;
+    if ((st = emm_trace_reader_open(path, &r, err)) != EMM_OK ||
+        (st = emm_runner_new(threads, &run, err)) != EMM_OK ||
+        (st = emm_runner_add(run, m, list, n, emm_trace_reader_info(r), errs, err)) != EMM_OK ||
+        (st = contest_new(run, idx, pinned, n, lead, unit, finalists, &c, err)) != EMM_OK)
+        goto out;
+    enum { BATCH = 65536 };
+    if (!(buf = malloc(BATCH * sizeof *buf))) {
+        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the contest", path);
+        goto out;
+    }
+    for (;;) {
+        size_t got;
+        if ((st = emm_trace_read(r, buf, BATCH, &got, err)) != EMM_OK)
+            goto out;
+        if (got == 0)
+            break;
+        contest_run(c, buf, got);
+        out->accesses += got;
+    }
+    size_t top[2];
+    size_t in = contest_standing(c, top, 2);
+    if (in == 0) {
+        st = emm_fail(err, EMM_ERR_UNSUPPORTED, "%s: no candidate can be simulated on this trace",
+                      path);
+        goto out;
+    }
+    emm_model_result(emm_runner_model(run, top[0]), &out->answer);
+    if (in >= 2) {
+        emm_model_result(emm_runner_model(run, top[1]), &out->runner_up);
+        out->has_runner_up = 1;
+    }
+    if (emm_runner_model(run, 0)) {
+        emm_model_result(emm_runner_model(run, 0), &out->predicted);
+        out->has_predicted = 1;
+    }
+    const uint64_t *at;
+    const size_t *kept;
+    size_t rounds = contest_rounds(c, &at, &kept);
+    out->entrants = contest_entrants(c);
+    out->finalists = rounds ? kept[rounds - 1] : out->entrants;
+    out->rounds = rounds;
+out:
+    free(buf);
+    contest_free(c);
+    emm_runner_free(run);
+    if (r)
+        emm_trace_reader_close(r);
+    free(list);
+    free(errs);
+    free(idx);
+    free(pinned);
+    free(sweep);
+    return st;
+}

@@ -1,0 +1,63 @@
+/* Internal: the run confirms the window's prediction (docs/profile.md "The
+ * contest"). The thesis decides on the window alone and runs one strategy;
+ * a window sees the start of a run, cold, and a canonical traversal over the
+ * program's mesh is only a proxy for the program. When the whole run is
+ * captured, emm goes beyond that: every candidate runs from the window's
+ * first record, and each time the run reaches 2, 4, 8, ... window lengths
+ * of records the slower half of the candidates still in is dropped (never
+ * fewer than `finalists` stay) — successive halving (Jamieson & Talwalkar,
+ * 2016). The finalists run to the end, and the fastest is the answer: a
+ * measurement over the program's own run, not a prediction.
+ *
+ * The session and `emm profile` (which replays a trace the session wrote)
+ * run the same contest over the same records, so they give the same answer
+ * whatever their batch sizes: a batch is cut at each check. */
+#ifndef EMM_RUNTIME_CONTEST_H
+#define EMM_RUNTIME_CONTEST_H
+
+#include <stdbool.h>
+
+#include "emm/trace.h"
+#include "runner.h"
+
+/* At most this many halvings are recorded (2^CONTEST_MAX_ROUNDS windows). */
+#define CONTEST_MAX_ROUNDS 40
+
+typedef struct contest contest;
+
+/* A contest among models[0..n) of runner r (indices into the runner; a model
+ * that could not be built is left out). It checks when the records run
+ * reach lead + unit·2, lead + unit·4, ... (lead: the records of the
+ * window's leading sweep, which the profile leaves out; unit > 0: the
+ * window's other records). A dropped
+ * model is retired from the runner unless pinned[j] (pinned may be NULL)
+ * says it is needed for something else (a comparison the report shows).
+ * EMM_ERR_NOMEM only. */
+emm_status contest_new(emm_runner *r, const size_t *models, const bool *pinned, size_t n,
+                       uint64_t lead, uint64_t unit, size_t finalists, contest **out,
+                       emm_error *err);
+
+/* Runs recs[0..n) through the runner, checking at every check point. */
+void contest_run(contest *c, const emm_trace_record *recs, size_t n);
+
+/* The contenders still in, fastest first over the records run so far (ties
+ * by their order in models[]): up to cap runner indices in idx; returns how
+ * many are in. */
+size_t contest_standing(const contest *c, size_t *idx, size_t cap);
+
+/* The models that entered, and the checks made: at[k] records run when
+ * kept[k] contenders stayed in. */
+size_t contest_entrants(const contest *c);
+/* The window's records past its leading sweep: the checks come at 2, 4,
+ * 8, ... times this, after the sweep's records (contest_lead). */
+uint64_t contest_unit(const contest *c);
+uint64_t contest_lead(const contest *c);
+size_t contest_rounds(const contest *c, const uint64_t **at, const size_t **kept);
+
+/* Whether runner model i was dropped and retired: its results stop where
+ * it was dropped, short of the run. */
+bool contest_retired(const contest *c, size_t i);
+
+void contest_free(contest *c);
+
+#endif
