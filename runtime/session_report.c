@@ -300,6 +300,7 @@ static void report_extra(json_writer *w, void *ctx)
     json_end_object(w);
     write_profile(w, s);
     write_phases(w, s);
+    session_write_stall_lines(w, s);
 }
 
 /* The result of strategy `want` among res[0..n), or NULL. */
