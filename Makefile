@@ -15,8 +15,11 @@ deps:
 configure: deps
 	@cmake -S . -B $(BUILD) $(CMAKE_FLAGS) >/dev/null
 
+# CMake's own makefiles run as sub-makes of this one would announce every
+# directory they enter ("gmake[3]: Entering directory"): they start as a
+# top-level make instead.
 build: configure
-	@cmake --build $(BUILD) -j $(JOBS)
+	@env -u MAKELEVEL -u MAKEFLAGS -u MFLAGS cmake --build $(BUILD) -j $(JOBS)
 
 demo: build
 	@scripts/demo.sh $(BUILD)
@@ -28,7 +31,7 @@ check: build
 # UndefinedBehaviorSanitizer (STYLE.md §10).
 check-asan: deps
 	@CC=clang CXX=clang++ cmake -S . -B build-asan -DEMM_SANITIZE=address,undefined >/dev/null
-	@cmake --build build-asan -j $(JOBS)
+	@env -u MAKELEVEL -u MAKEFLAGS -u MFLAGS cmake --build build-asan -j $(JOBS)
 	@cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS)
 

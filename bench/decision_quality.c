@@ -95,7 +95,9 @@ int main(int argc, char **argv)
     if (!t || emm_table_load_standard(t, user, &err) != EMM_OK)
         die("table", &err);
     const char *path = "decision_quality.emmt";
-    printf("table: %zu samples (%s%s%s)\n", emm_table_count(t), emm_table_default_path(),
+    char def[4096];
+    emm_table_default_path(def, sizeof def);
+    printf("table: %zu samples (%s%s%s)\n", emm_table_count(t), def,
            user ? " + " : "", user ? user : "");
     printf("%-30s %6s %-7s %-24s %-24s %8s %8s %7s %s\n", "case", "window", "how", "chosen",
            "best", "regret", "vs cache", "dist", "nearest");

@@ -4,6 +4,8 @@
  * writer into a temporary directory, then times
  *   (a) each model on records already in memory, batch by batch, and
  *   (b) end-to-end replay streaming from the file (emm_replay),
+ *   (c) each model run costed (emm_model_run_costed, emm annotate's path:
+ *       each record's cycles by bucket), against (a),
  * printing accesses per second, and the peak RSS after a short and after
  * the full run, to show that memory does not grow with the trace. Rates are
  * per second of CPU time of the one thread doing the work.
@@ -104,9 +106,11 @@ static int write_trace(const char *path, uint64_t n, emm_error *err)
 
 /* (a): the model alone, on batches generated ahead of time (one batch of
  * 64 Ki records reused, so the timing is the model's, not the generator's). */
-static double time_model(const emm_machine *m, const char *name, uint64_t n, emm_result *out)
+static double time_model(const emm_machine *m, const char *name, uint64_t n, int costed,
+                         emm_result *out)
 {
     static emm_trace_record b[1 << 16];
+    static emm_record_cost cost[BATCH];
     const emm_trace_info info = {.version = 1, .narrays = 2, .arrays = arrays};
     uint64_t cur[2] = {0, 0};
     emm_strategy s;
@@ -124,7 +128,10 @@ static double time_model(const emm_machine *m, const char *name, uint64_t n, emm
     for (uint64_t done = 0; done < n;) {
         size_t k = n - done < BATCH ? (size_t)(n - done) : BATCH;
         size_t off = (size_t)(done % (sizeof b / sizeof b[0] - BATCH));
-        emm_model_run(model, b + off, k);
+        if (costed)
+            emm_model_run_costed(model, b + off, k, cost);
+        else
+            emm_model_run(model, b + off, k);
         done += k;
     }
     t1 = now_s();
@@ -153,9 +160,13 @@ static void run(const emm_machine *m, const char *dir, uint64_t n)
     printf("trace: %llu accesses written in %.2f s\n", (unsigned long long)n, t1 - t0);
 
     for (size_t i = 0; i < 2; i++) {
-        double rate = time_model(m, models[i], n, &res);
+        double rate = time_model(m, models[i], n, 0, &res);
         printf("  in memory   %-14s %8.1f M accesses/s  (total %llu cycles)\n", models[i],
                rate / 1e6, (unsigned long long)res.total);
+        emm_result cres;
+        double crate = time_model(m, models[i], n, 1, &cres);
+        printf("  costed      %-14s %8.1f M accesses/s  (%.2fx the plain run's time; same total: %s)\n",
+               models[i], crate / 1e6, rate / crate, cres.total == res.total ? "yes" : "NO");
     }
     for (size_t f = 0; f < 3; f++) {
         emm_machine *c;
@@ -163,7 +174,7 @@ static void run(const emm_machine *m, const char *dir, uint64_t n)
         emm_machine_clone(m, &c, &err);
         snprintf(kv, sizeof kv, "cache.fetch=%s", fetch[f]);
         emm_machine_set(c, kv, &err);
-        double rate = time_model(c, "cache", n, &res);
+        double rate = time_model(c, "cache", n, 0, &res);
         char name[32];
         snprintf(name, sizeof name, "cache(%s)", fetch[f]);
         printf("  in memory   %-14s %8.1f M accesses/s  (demand miss rate %.1f%%)\n", name,

@@ -30,7 +30,7 @@ done
 mkdir -p "$B/bench" || exit 1
 MESH=$B/bench/mesh1m.off
 if [ ! -s "$MESH" ]; then
-  "$EMM" mesh gen --faces 1000000 -o "$MESH.tmp" >/dev/null && mv "$MESH.tmp" "$MESH" || exit 1
+  "$EMM" mesh gen --faces 1000000 -o "$MESH.tmp.off" >/dev/null && mv "$MESH.tmp.off" "$MESH" || exit 1
 fi
 TMP=$(mktemp -d) || exit 1
 trap 'rm -rf "$TMP"' EXIT

@@ -2,31 +2,42 @@
 #                       [INCLUDE_DIRECTORIES dir...] [COMPILE_DEFINITIONS def...]
 #                       [COMPILE_OPTIONS opt...] [LINK_LIBRARIES lib...])
 #
-# Builds a program for EMM_CAPTURE=sancov (DESIGN.md "The shim"): its sources
-# are compiled by clang with sanitizer-coverage callbacks on every load,
-# store and edge, and vectorisation off (wider-than-16-byte vector accesses
-# are not reported). The flags go on the compile step only: on the link line
-# they would pull in a static runtime whose callbacks the preloaded shim
-# cannot override. The program links libemmhooks.so (no-op callbacks), so it
-# runs with or without the shim.
+# Builds a program for EMM_CAPTURE=sancov (docs/design.md "The shim"): its
+# sources are compiled by clang with sanitizer-coverage callbacks on every
+# load, store and edge, and vectorisation off (wider-than-16-byte vector
+# accesses are not reported). The flags go on the compile step only. The
+# program links the hooks library emm::hooks (libemmhooks.so: no-op
+# callbacks), so it runs with or without emm; under `emm run` the preloaded
+# shim's callbacks win.
+#
+# The same file serves emm's own build and, installed, any project that says
+# find_package(emm): there emm::hooks is the installed library.
 #
 # clang 14's `edge` alone emits no callback: trace-pc-guard is edge coverage
 # with one, which the shim counts as work between accesses.
 #
 # When the project's C compiler is not clang, the sources are compiled by a
-# clang found on the PATH (include directories, definitions and options must
-# then be given here); without clang the target is skipped with a message.
+# clang found on the PATH, with the include directories of the LINK_LIBRARIES
+# targets (emm::emm's headers, say) and those given here; without clang the
+# target is skipped with a message.
+
+# emm_sancov_flags(VAR): the compile flags, for a build that is not CMake's
+# (emm-sancov.pc has the same).
+function(emm_sancov_flags var)
+  set(${var} -fsanitize-coverage=trace-pc-guard,trace-loads,trace-stores
+      -fno-vectorize -fno-slp-vectorize PARENT_SCOPE)
+endfunction()
+
 function(emm_sancov_executable)
-  # Set here, not at file scope: the function is called from other directories.
-  set(EMM_SANCOV_FLAGS -fsanitize-coverage=trace-pc-guard,trace-loads,trace-stores
-      -fno-vectorize -fno-slp-vectorize)
+  emm_sancov_flags(EMM_SANCOV_FLAGS)
   cmake_parse_arguments(S "" "TARGET;OUTPUT_NAME"
     "SOURCES;INCLUDE_DIRECTORIES;COMPILE_DEFINITIONS;COMPILE_OPTIONS;LINK_LIBRARIES" ${ARGN})
   if(NOT S_TARGET OR NOT S_SOURCES)
     message(FATAL_ERROR "emm_sancov_executable: TARGET and SOURCES are required")
   endif()
-  if(NOT TARGET emmhooks)
-    message(STATUS "emm: ${S_TARGET} not built (no libemmhooks in this configuration)")
+  if(NOT TARGET emm::hooks)
+    message(STATUS "emm: ${S_TARGET} not built (no emm::hooks: emm's sanitizer build leaves "
+                   "the hooks out; elsewhere find_package(emm) first)")
     return()
   endif()
   if(CMAKE_C_COMPILER_ID MATCHES "Clang")
@@ -44,6 +55,13 @@ function(emm_sancov_executable)
     foreach(d ${S_INCLUDE_DIRECTORIES})
       list(APPEND flags -I${d})
     endforeach()
+    # The headers of the targets linked, as CMake would give a compiler it runs.
+    foreach(lib ${S_LINK_LIBRARIES})
+      if(TARGET ${lib})
+        set(inc "$<TARGET_PROPERTY:${lib},INTERFACE_INCLUDE_DIRECTORIES>")
+        list(APPEND flags "$<$<BOOL:${inc}>:-I$<JOIN:${inc},$<SEMICOLON>-I>>")
+      endif()
+    endforeach()
     foreach(d ${S_COMPILE_DEFINITIONS})
       list(APPEND flags -D${d})
     endforeach()
@@ -57,13 +75,14 @@ function(emm_sancov_executable)
         COMMAND ${EMM_CLANG} ${flags} ${EMM_SANCOV_FLAGS} ${S_COMPILE_OPTIONS}
                 -MD -MF ${obj}.d -c ${abs} -o ${obj}
         DEPENDS ${abs} DEPFILE ${obj}.d
-        COMMENT "Compiling ${src} with sanitizer coverage (${S_TARGET})" VERBATIM)
+        COMMENT "Compiling ${src} with sanitizer coverage (${S_TARGET})"
+        VERBATIM COMMAND_EXPAND_LISTS)
       list(APPEND objects ${obj})
     endforeach()
     add_executable(${S_TARGET} ${objects})
     set_target_properties(${S_TARGET} PROPERTIES LINKER_LANGUAGE C)
   endif()
-  target_link_libraries(${S_TARGET} PRIVATE emmhooks ${S_LINK_LIBRARIES})
+  target_link_libraries(${S_TARGET} PRIVATE emm::hooks ${S_LINK_LIBRARIES})
   if(S_OUTPUT_NAME)
     set_target_properties(${S_TARGET} PROPERTIES OUTPUT_NAME ${S_OUTPUT_NAME})
   endif()

@@ -241,6 +241,11 @@ static bool parse_trace(emm_config *c, const char *v, long pid, char *why, size_
     return output_path(v, pid, c->trace, why, cap);
 }
 
+static bool parse_timeline(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    return output_path(v, pid, c->timeline, why, cap);
+}
+
 static bool parse_log(emm_config *c, const char *v, long pid, char *why, size_t cap)
 {
     (void)pid; (void)why; (void)cap;
@@ -304,6 +309,12 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
     [EMM_CONFIG_TRACE] = {{"EMM_TRACE", "--trace", "FILE",
         "a file path in a writable directory (%p: pid)", "(none)",
         "write the access trace, for emm replay", {{0}}}, parse_trace},
+    [EMM_CONFIG_TIMELINE] = {{"EMM_TIMELINE", "--timeline", "FILE",
+        "a file path in a writable directory (%p: pid)", "(none)",
+        "write the chosen strategy's simulated run as a Chrome/Perfetto trace-event JSON:\n"
+        "a track per DMA channel, the core's stalls, cell entries, the window and phases;\n"
+        "at most " EMM_TIMELINE_MAX_EVENTS_TEXT " events (the file says when the cap was hit)",
+        {{0}}}, parse_timeline},
     [EMM_CONFIG_LOG] = {{"EMM_LOG", "--log", "LEVEL", "0, 1, 2, quiet, summary or verbose", "1",
         "0: nothing on stderr; 1: the summary at exit; 2: also what the shim does",
         {{"--quiet", "0", "no summary"}, {"-q", "0", "the same as --quiet"},
@@ -460,5 +471,6 @@ void emm_config_dump(const emm_config *c, FILE *out)
     fprintf(out, "emm:   EMM_REPORT=%s\n", c->report);
     fprintf(out, "emm:   EMM_PROFILE_DUMP=%s\n", c->profile_dump);
     fprintf(out, "emm:   EMM_TRACE=%s\n", c->trace);
+    fprintf(out, "emm:   EMM_TIMELINE=%s\n", c->timeline);
     fprintf(out, "emm:   EMM_LOG=%d\n", c->log);
 }

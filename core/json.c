@@ -118,6 +118,15 @@ void json_double(json_writer *w, double v)
         fputs("null", w->out);
 }
 
+void json_fixed(json_writer *w, double v, int decimals)
+{
+    before_value(w);
+    if (isfinite(v))
+        fprintf(w->out, "%.*f", decimals, v);
+    else
+        fputs("null", w->out);
+}
+
 void json_bool(json_writer *w, bool v)
 {
     before_value(w);

@@ -30,6 +30,9 @@ void json_end_array(json_writer *w);
 void json_string(json_writer *w, const char *s);
 void json_u64(json_writer *w, uint64_t v);
 void json_double(json_writer *w, double v);
+/* A finite double with `decimals` digits after the point (%.*f): for
+ * numbers whose precision is known, written short. */
+void json_fixed(json_writer *w, double v, int decimals);
 void json_bool(json_writer *w, bool v);
 void json_null(json_writer *w);
 /* Ends the document with a newline. */

@@ -392,19 +392,38 @@ emm_status emm_mesh_open(const char *path, emm_mesh **out, emm_error *err)
 
 /* ---- writing ------------------------------------------------------------ */
 
-emm_status emm_mesh_write_off(const emm_mesh *m, const char *path, emm_error *err)
+/* OFF or OBJ text: the same vertices (%.17g, read back bit for bit) and
+ * faces, with each format's header, prefixes and index base. */
+static emm_status write_text(const emm_mesh *m, const char *path, bool obj, emm_error *err)
 {
     assert(m && path);
     emm_outfile o;
     emm_status st = emm_outfile_open(&o, path, "the mesh", err);
     if (st != EMM_OK)
         return st;
-    fprintf(o.f, "OFF\n%zu %zu %zu\n", m->nv, m->nt, m->edges);
+    const char *v_prefix = obj ? "v " : "", *f_prefix = obj ? "f " : "3 ";
+    const int base = obj ? 1 : 0;
+    if (obj)
+        fprintf(o.f, "# emm mesh: %zu vertices, %zu faces\n", m->nv, m->nt);
+    else
+        fprintf(o.f, "OFF\n%zu %zu %zu\n", m->nv, m->nt, m->edges);
     for (size_t v = 0; v < m->nv; v++)
-        fprintf(o.f, "%.17g %.17g %.17g\n", m->xyz[3 * v], m->xyz[3 * v + 1], m->xyz[3 * v + 2]);
+        fprintf(o.f, "%s%.17g %.17g %.17g\n", v_prefix, m->xyz[3 * v], m->xyz[3 * v + 1],
+                m->xyz[3 * v + 2]);
     for (size_t t = 0; t < m->nt; t++)
-        fprintf(o.f, "3 %d %d %d\n", m->index[3 * t], m->index[3 * t + 1], m->index[3 * t + 2]);
+        fprintf(o.f, "%s%d %d %d\n", f_prefix, m->index[3 * t] + base,
+                m->index[3 * t + 1] + base, m->index[3 * t + 2] + base);
     return emm_outfile_commit(&o, "the mesh", err);
+}
+
+emm_status emm_mesh_write_off(const emm_mesh *m, const char *path, emm_error *err)
+{
+    return write_text(m, path, false, err);
+}
+
+emm_status emm_mesh_write_obj(const emm_mesh *m, const char *path, emm_error *err)
+{
+    return write_text(m, path, true, err);
 }
 
 /* ---- queries ------------------------------------------------------------ */

@@ -108,6 +108,15 @@ static emm_status replay_pass(emm_trace_reader *r, const emm_machine *m, const e
         (st = emm_runner_new(&threads, &run, err)) != EMM_OK ||
         (st = emm_runner_add(run, m, mine, k, info, errs, err)) != EMM_OK)
         goto out;
+    /* The first strategy is the one a timeline shows and whose records
+     * are costed (it is always in the first pass). */
+    if (k > 0 && index[0] == 0 && emm_runner_model(run, 0)) {
+        if (opt->timeline)
+            emm_timeline_watch(opt->timeline, emm_runner_model(run, 0));
+        if (opt->cost_fn &&
+            (st = emm_runner_costs(run, 0, opt->cost_fn, opt->cost_ctx, err)) != EMM_OK)
+            goto out;
+    }
     for (;;) {
         size_t got = 0;
         /* A batch is filled whole (but at the end), so the models always see
@@ -143,6 +152,8 @@ static emm_status replay_pass(emm_trace_reader *r, const emm_machine *m, const e
             goto out;
     }
 out:
+    if (opt->timeline && k > 0 && index[0] == 0 && emm_runner_model(run, 0))
+        emm_model_observe(emm_runner_model(run, 0), NULL, NULL);
     emm_runner_free(run);
     free(index);
     free(mine);
@@ -162,7 +173,7 @@ emm_status emm_replay_ex(const char *path, const emm_machine *m, const emm_strat
                          size_t n, const emm_replay_options *opt, emm_result *results,
                          emm_error *skipped, uint64_t *accesses, emm_error *err)
 {
-    static const emm_replay_options defaults = {0, NULL, NULL, 0, 0};
+    static const emm_replay_options defaults = {0, NULL, NULL, 0, 0, NULL, NULL, NULL};
     emm_trace_reader *r = NULL;
     emm_trace_record *buf = NULL;
     unsigned *pass = NULL;
@@ -210,7 +221,7 @@ emm_status emm_replay(const char *path, const emm_machine *m, const emm_strategy
                       size_t n, emm_result *results, uint64_t *accesses,
                       emm_progress_fn progress, void *progress_ctx, emm_error *err)
 {
-    emm_replay_options opt = {1, progress, progress_ctx, 0, 0};
+    emm_replay_options opt = {1, progress, progress_ctx, 0, 0, NULL, NULL, NULL};
     return emm_replay_ex(path, m, s, n, &opt, results, NULL, accesses, err);
 }
 

@@ -300,6 +300,7 @@ static inline bool convert(emm_session *s, const emm_raw_access *raw, emm_trace_
     r->bytes = bytes;
     r->work = s->pending_work > UINT32_MAX ? UINT32_MAX : (uint32_t)s->pending_work;
     r->write = (raw->bytes_write & EMM_RAW_WRITE) != 0;
+    r->pc = raw->pc;
     s->pending_work = 0;
     return true;
 }
@@ -484,6 +485,7 @@ emm_status emm_session_decide(emm_session *s, emm_error *err)
             *err = s->failure;
         return st;
     }
+    session_window_done(s);
     s->phase = PHASE_SIMULATING;
     return EMM_OK;
 }
@@ -516,6 +518,7 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
     }
     flush_chunk(s);
     session_phases_close(s);
+    session_stall_lines(s);
     /* The contest's finalists, fastest first: the answer and the runner-up. */
     s->answer_model = s->runner_model = SIZE_MAX;
     if (s->contest) {
@@ -567,6 +570,7 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
     }
     if (summary && s->cfg.log >= 1) {
         session_print_summary(s, summary, res, nres);
+        session_print_stall_lines(s, summary);
         fflush(summary);
     }
     if (s->cfg.report[0] && session_write_report(s, all, why, nall, &e) != EMM_OK) {
@@ -576,6 +580,12 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
         first = first == EMM_OK ? e.status : first;
     }
     if (s->cfg.profile_dump[0] && session_write_csv(s, &e) != EMM_OK) {
+        output_failed(s, summary, &e);
+        if (first == EMM_OK && err)
+            *err = e;
+        first = first == EMM_OK ? e.status : first;
+    }
+    if ((s->timeline || s->timeline_failed) && session_timeline_close(s, &e) != EMM_OK) {
         output_failed(s, summary, &e);
         if (first == EMM_OK && err)
             *err = e;
@@ -609,6 +619,7 @@ void emm_session_free(emm_session *s)
     if (!s)
         return;
     contest_free(s->contest);
+    session_lines_free(s);
     emm_runner_free(s->runner);
     emm_model_share_unref(s->layouts);
     if (s->trace)

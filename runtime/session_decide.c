@@ -348,13 +348,7 @@ emm_status session_decide(emm_session *s, emm_error *err)
     }
     if ((st = build_models(s, err)) != EMM_OK)
         return st;
-    if (s->cfg.trace[0]) {
-        if ((st = emm_trace_writer_open(s->cfg.trace, s->tarrays, s->ntarrays, &s->info.geometry,
-                                        0, &s->trace, &s->trace_error)) != EMM_OK) {
-            s->trace_failed = true;
-            s->trace = NULL;
-        }
-    }
+    session_outputs_start(s); /* the trace, the timeline, the stall lines */
     session_simulate(s, s->window, s->wn);
     session_phases_start(s);
     return EMM_OK;

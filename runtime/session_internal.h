@@ -12,14 +12,20 @@
 #include <stdio.h>
 
 #include "emm/profile.h"
+#include "emm/replay.h"
 #include "emm/session.h"
 #include "emm/sim.h"
 #include "emm/table.h"
 #include "contest.h"
+#include "json.h"
 #include "lead_sweep.h"
 #include "runner.h"
 #include "share.h"
 #include "table_internal.h"
+
+/* The source lines of the chosen strategy's stalls the summary and the
+ * report name (when the capture knows program counters). */
+#define SESSION_STALL_LINES 3
 
 /* Arrays the session keeps at once (live or still referenced by the window). */
 #define SESSION_MAX_ARRAYS 16
@@ -154,6 +160,22 @@ struct emm_session {
     uint32_t plast_array;
     uint64_t plast_element;
     uint64_t dropped;    /* records of arrays left out of the trace */
+    /* session_lines.c: the timeline and the chosen strategy's stalls by
+     * program counter */
+    emm_timeline *timeline;
+    emm_error timeline_error;
+    bool timeline_failed;
+    uint64_t window_cycles; /* the chosen model's clock after the window's replay */
+    struct emm_annotation *annotation; /* the chosen model's costs by pc, or NULL */
+    uint64_t stall_total;   /* the chosen strategy's DMA stall cycles */
+    bool stall_lines_done;
+    size_t nstall_lines;
+    struct stall_line {
+        char file[256];
+        int line;
+        char function[128];
+        uint64_t cycles;
+    } stall_lines[SESSION_STALL_LINES];
 };
 
 /* Live, or gone with its fields kept for the decision. */
@@ -211,6 +233,20 @@ void session_phases_close(emm_session *s);
 /* The cycles a switch costs: the mesh's bytes in by DMA and the new layout
  * out (2 x one DMA of the mesh's bytes). */
 uint64_t session_switch_cycles(const emm_session *s);
+
+/* session_lines.c: the trace (with the program counters and the program's
+ * modules when the capture records them), the timeline and the stall
+ * attribution, started at the decision before the window's replay;
+ * session_window_done marks the window's end; session_stall_lines
+ * resolves the top stall lines (at finish, before the summary); the
+ * timeline is closed by session_timeline_close; session_lines_free frees. */
+void session_outputs_start(emm_session *s);
+void session_window_done(emm_session *s);
+void session_stall_lines(emm_session *s);
+void session_print_stall_lines(const emm_session *s, FILE *out);
+void session_write_stall_lines(json_writer *w, const emm_session *s);
+emm_status session_timeline_close(emm_session *s, emm_error *err);
+void session_lines_free(emm_session *s);
 
 /* session.c: runs records through the models and the trace writer. */
 void session_simulate(emm_session *s, const emm_trace_record *recs, size_t n);

@@ -363,6 +363,7 @@ static void report_extra(json_writer *w, void *ctx)
     json_end_object(w);
     write_profile(w, s);
     write_phases(w, s);
+    session_write_stall_lines(w, s);
 }
 
 /* The result of strategy `want` among res[0..n), or NULL. */
@@ -430,7 +431,12 @@ void session_print_summary(const emm_session *s, FILE *out, const emm_result *re
 {
     char name[64], words[320], num[32], num2[32], vs[48];
     if (s->phase == PHASE_FAILED) {
-        fprintf(out, "emm: %s: no simulation: %s\n", s->program, s->failure.message);
+        /* Most failures already start with the program's name: once is enough. */
+        const char *why = s->failure.message;
+        size_t len = strlen(s->program);
+        if (strncmp(why, s->program, len) == 0 && strncmp(why + len, ": ", 2) == 0)
+            why += len + 2;
+        fprintf(out, "emm: %s: no simulation: %s\n", s->program, why);
         return;
     }
     if (s->has_profile && s->decision.novel)

@@ -407,10 +407,10 @@ static size_t visit_records(const emm_mesh *m, uint32_t t, const struct synth_ar
                             uint32_t work, emm_trace_record *out)
 {
     const emm_triangle *tr = emm_mesh_triangle(m, t);
-    out[0] = (emm_trace_record){t, a->tri, a->tri_offset, a->tri_bytes, work, 0};
+    out[0] = (emm_trace_record){t, a->tri, a->tri_offset, a->tri_bytes, work, 0, 0};
     for (int k = 0; k < 3; k++)
         out[1 + k] = (emm_trace_record){(uint64_t)tr->v[k], a->vert, a->vert_offset,
-                                        a->vert_bytes, work, 0};
+                                        a->vert_bytes, work, 0, 0};
     return 4;
 }
 

@@ -8,7 +8,6 @@
 #include <assert.h>
 #include <ctype.h>
 #include <stdbool.h>
-#include <dlfcn.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -16,6 +15,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "datadir.h"
 #include "error.h"
 #include "outfile.h"
 #include "parse.h"
@@ -23,16 +23,6 @@
 #include "share.h"
 #include "synth_internal.h"
 #include "table_internal.h"
-
-#ifndef EMM_SOURCE_DIR
-#define EMM_SOURCE_DIR "."
-#endif
-#ifndef EMM_BINARY_DIR
-#define EMM_BINARY_DIR "./build"
-#endif
-#ifndef EMM_INSTALL_DATADIR
-#define EMM_INSTALL_DATADIR "/usr/local/share"
-#endif
 
 struct emm_table {
     emm_table_sample *s;
@@ -394,32 +384,20 @@ emm_status emm_table_append(const char *path, const emm_table_sample *s, emm_err
     return st;
 }
 
-const char *emm_table_default_path(void)
+int emm_table_default_path(char *out, size_t cap)
 {
-    /* Where the code that runs lives decides: a module under the build tree
-     * uses the source tree's table, anything else the installed one. */
-    Dl_info info;
-    static const char bin[] = EMM_BINARY_DIR "/";
-    if (dladdr((void *)emm_table_default_path, &info) && info.dli_fname) {
-        char real[4096];
-        const char *p = realpath(info.dli_fname, real) ? real : info.dli_fname;
-        if (strncmp(p, bin, sizeof bin - 1) == 0)
-            return EMM_SOURCE_DIR "/data/table.txt";
-    }
-    return EMM_INSTALL_DATADIR "/emm/table.txt";
+    return emm_data_file("table.txt", out, cap, NULL, 0);
 }
 
 emm_status emm_table_load_standard(emm_table *t, const char *user, emm_error *err)
 {
-    const char *def = emm_table_default_path();
-    char tried[1024];
+    char def[4096], tried[2048];
     emm_status st;
-    if (access(def, F_OK) == 0) {
+    if (emm_data_file("table.txt", def, sizeof def, tried, sizeof tried)) {
         st = emm_table_load(t, def, err);
         if (st != EMM_OK)
             return st;
     }
-    snprintf(tried, sizeof tried, "%s", def);
     const char *env = getenv("EMM_TABLE");
     const char *path = user ? user : (env && *env ? env : NULL);
     if (path) {
@@ -430,11 +408,14 @@ emm_status emm_table_load_standard(emm_table *t, const char *user, emm_error *er
     if (t->n == 0) {
         if (path)
             return emm_fail(err, EMM_ERR_IO,
-                            "no strategy table with samples: %s does not exist and %s has none",
+                            "no strategy table with samples: the shipped table is not at %s, "
+                            "and %s has none",
                             tried, path);
         return emm_fail(err, EMM_ERR_IO,
-                        "no strategy table found: tried %s (the default; `emm table build` "
-                        "makes it) and no user table was given (--table FILE or EMM_TABLE)",
+                        "no strategy table found: the shipped table (share/emm/table.txt of "
+                        "an install, data/table.txt of a source tree, where `make table` makes "
+                        "it) is not at %s, and no user table was given (--table FILE or "
+                        "EMM_TABLE; `emm table add` makes one)",
                         tried);
     }
     return EMM_OK;

@@ -10,8 +10,10 @@ packages=(
   libqhull-dev                          # Delaunay triangulation for the mesh generator
   libunwind-dev                         # call-site names for the shim's tag rules
   libzstd-dev                           # optional zstd compression of trace blocks
+  libdw-dev                             # elfutils' DWARF reader: emm annotate's source lines
   gnuplot-nox                           # emm plot
   glmark2-data                          # a real mesh (bunny.obj) for tests and benchmarks
+  python3                               # the timeline tests read the JSON with Python's own parser
 )
 
 missing=()

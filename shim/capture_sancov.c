@@ -9,8 +9,9 @@
  *
  * The hot path: test the address against a small snapshot of the tagged
  * ranges (refreshed under the lock whenever a tag changes), append to the
- * thread's buffer. Edges between two recorded accesses are counted as the
- * record's `work`. (clang 14's `edge` alone emits no callbacks; trace-pc-guard
+ * thread's buffer, with the hook's return address: the program counter of
+ * the access, for emm annotate. Edges between two recorded accesses are
+ * counted as the record's `work`. (clang 14's `edge` alone emits no callbacks; trace-pc-guard
  * is edge coverage with a callback.) */
 #include <dlfcn.h>
 #include <errno.h>
@@ -63,7 +64,7 @@ const struct shim_capture_ops shim_capture_sancov = {
     .fork_child = fork_child,
 };
 
-static inline void hit(const void *p, uint32_t bytes, bool write)
+static inline void hit(const void *p, uint32_t bytes, bool write, const void *pc)
 {
     uint64_t a = (uint64_t)(uintptr_t)p;
     size_t n = __atomic_load_n(&nranges, __ATOMIC_ACQUIRE);
@@ -71,7 +72,7 @@ static inline void hit(const void *p, uint32_t bytes, bool write)
         if (a - __atomic_load_n(&range_lo[i], __ATOMIC_RELAXED)
             < __atomic_load_n(&range_len[i], __ATOMIC_RELAXED)) {
             if (!shim_busy)
-                shim_record(a, bytes, write);
+                shim_record_pc(a, bytes, write, (uint64_t)(uintptr_t)pc);
             return;
         }
     }
@@ -80,8 +81,8 @@ static inline void hit(const void *p, uint32_t bytes, bool write)
 #define HOOKS(N, T)                                                                          \
     SHIM_API void __sanitizer_cov_load##N(T *p);                                              \
     SHIM_API void __sanitizer_cov_store##N(T *p);                                             \
-    void __sanitizer_cov_load##N(T *p) { hit(p, N, false); }                                  \
-    void __sanitizer_cov_store##N(T *p) { hit(p, N, true); }
+    void __sanitizer_cov_load##N(T *p) { hit(p, N, false, __builtin_return_address(0)); }     \
+    void __sanitizer_cov_store##N(T *p) { hit(p, N, true, __builtin_return_address(0)); }
 HOOKS(1, uint8_t)
 HOOKS(2, uint16_t)
 HOOKS(4, uint32_t)

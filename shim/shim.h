@@ -148,8 +148,9 @@ size_t shim_ranges_locked(uint64_t *lo, uint64_t *hi, size_t cap) SHIM_HIDDEN;
 /* The libc sigaction (the fault backend interposes sigaction and signal). */
 int shim_real_sigaction(int sig, const struct sigaction *act, struct sigaction *old) SHIM_HIDDEN;
 
-/* Appends one access to the calling thread's buffer (all backends). */
-static inline void shim_record(uint64_t addr, uint32_t bytes, bool write)
+/* Appends one access to the calling thread's buffer (all backends), with
+ * its program counter where the backend knows it (else 0). */
+static inline void shim_record_pc(uint64_t addr, uint32_t bytes, bool write, uint64_t pc)
 {
     struct shim_tbuf *b = &shim_tbuf;
     if (!b->registered)
@@ -158,9 +159,15 @@ static inline void shim_record(uint64_t addr, uint32_t bytes, bool write)
     r->addr = addr;
     r->bytes_write = bytes | (write ? EMM_RAW_WRITE : 0u);
     r->work = b->work;
+    r->pc = pc;
     b->work = 0;
     if (b->n == SHIM_TBUF_CAP)
         shim_flush_thread();
+}
+
+static inline void shim_record(uint64_t addr, uint32_t bytes, bool write)
+{
+    shim_record_pc(addr, bytes, write, 0);
 }
 
 /* --- rules.c: which allocation an EMM_TAG rule selects ------------------- */

@@ -275,7 +275,8 @@ static void cache_destroy(emm_model *model)
     free(m);
 }
 
-static const struct emm_model_ops cache_ops = {cache_run, cache_reset, cache_result, cache_destroy};
+static const struct emm_model_ops cache_ops = {cache_run, cache_reset, cache_result, cache_destroy,
+                                               NULL, NULL};
 
 emm_status emm_cache_model_new(const emm_machine_params *p, const emm_trace_info *trace,
                                emm_model **out, emm_error *err)

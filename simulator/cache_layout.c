@@ -98,7 +98,8 @@ static void cl_destroy(emm_model *model)
     free(m);
 }
 
-static const struct emm_model_ops cache_layout_ops = {cl_run, cl_reset, cl_result, cl_destroy};
+static const struct emm_model_ops cache_layout_ops = {cl_run, cl_reset, cl_result, cl_destroy,
+                                                      NULL, NULL};
 
 /* Where the image starts: where the program's mesh arrays started, unless
  * that overlaps another array, then past every array (4 KiB aligned, as a

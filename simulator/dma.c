@@ -35,6 +35,8 @@ uint64_t emm_dma_start(emm_dma *d, uint64_t now, uint64_t bytes, uint64_t *core_
     start = d->free_at[best] > issued ? d->free_at[best] : issued;
     done = start + d->latency + emm_dma_transfer_cycles(&d->params, bytes);
     d->free_at[best] = done;
+    d->last_channel = best;
+    d->last_start = start;
     d->transfers++;
     d->bytes += bytes;
     *core_free = issued;

@@ -18,6 +18,8 @@ typedef struct emm_dma {
     emm_machine_params params;
     uint64_t transfers;
     uint64_t bytes;
+    uint32_t last_channel; /* the latest transfer's channel and the time it took it */
+    uint64_t last_start;
 } emm_dma;
 
 /* An idle engine for machine parameters p. */
@@ -27,7 +29,8 @@ void emm_dma_reset(emm_dma *d);
 
 /* The core, at time `now`, issues a transfer of `bytes`. Returns the time the
  * core is free again (now + issue) in *core_free and the time the data has
- * arrived. The caller charges the issue to EMM_BUCKET_DMA_ISSUE. */
+ * arrived; last_channel and last_start say where and from when it ran. The
+ * caller charges the issue to EMM_BUCKET_DMA_ISSUE. */
 uint64_t emm_dma_start(emm_dma *d, uint64_t now, uint64_t bytes, uint64_t *core_free);
 
 /* Cycles the core stalls at time `now` waiting for data that arrives at

@@ -115,6 +115,9 @@ struct fetch_model {
 
     emm_fetch_evict_hook hook;
     void *hook_ctx;
+    bool observed;            /* obs is set (emm_model_observe) */
+    emm_observer obs;
+    void *obs_ctx;
 };
 typedef struct fetch_model fetch_model;
 
@@ -188,17 +191,24 @@ static inline void charge(fetch_model *m, emm_bucket b, uint64_t cycles)
 
 static void stall_until(fetch_model *m, uint64_t t)
 {
-    if (t > m->now)
+    if (t > m->now) {
+        if (m->observed && m->obs.stall)
+            m->obs.stall(m->obs_ctx, m->now, t - m->now);
         charge(m, EMM_BUCKET_DMA_STALL, t - m->now);
+    }
 }
 
-/* The runtime's bookkeeping, then the core programs the engine; returns
- * when the data will have arrived. */
-static uint64_t start_dma(fetch_model *m, uint64_t bytes)
+/* The runtime's bookkeeping, then the core programs the engine for `what`
+ * (a cell, or a page of the tables); returns when the data will have
+ * arrived. */
+static uint64_t start_dma(fetch_model *m, uint64_t bytes, emm_transfer_kind kind, uint64_t what)
 {
     uint64_t core_free, done;
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->issue_instr);
     done = emm_dma_start(&m->dma, m->now, bytes, &core_free);
+    if (m->observed && m->obs.transfer)
+        m->obs.transfer(m->obs_ctx, m->dma.last_channel, m->dma.last_start, done, bytes, kind,
+                        what);
     charge(m, EMM_BUCKET_DMA_ISSUE, core_free - m->now);
     return done;
 }
@@ -253,7 +263,7 @@ static void touch_table(fetch_model *m, uint64_t off)
     g->frame_page[f] = p;
     g->page_frame[p] = f;
     frame_push_front(g, f);
-    stall_until(m, start_dma(m, g->page));
+    stall_until(m, start_dma(m, g->page, EMM_TRANSFER_TABLE_PAGE, p));
     g->fetches++;
     g->bytes += g->page;
 }
@@ -277,10 +287,10 @@ static void lookup(fetch_model *m, int kind, uint64_t e, uint32_t c)
 
 /* The core programs the engine for cell c, which is present (in flight)
  * from now on and most recently used. */
-static void issue(fetch_model *m, uint32_t c)
+static void issue(fetch_model *m, uint32_t c, emm_transfer_kind kind)
 {
     uint64_t bytes = m->cells[c].bytes;
-    m->ready[c] = start_dma(m, bytes);
+    m->ready[c] = start_dma(m, bytes, kind, c);
     m->cell_dma[c] += bytes;
     m->used += bytes;
     lru_push_front(m, c);
@@ -300,7 +310,7 @@ static void demand_fetch(fetch_model *m, uint32_t c)
         assert(first != UINT64_MAX);
         stall_until(m, first);
     }
-    issue(m, c);
+    issue(m, c, EMM_TRANSFER_DEMAND);
     m->flags[c] = CELL_PRESENT;
     m->demand_fetches++;
     m->demand_bytes += m->cells[c].bytes;
@@ -333,7 +343,7 @@ void emm_fetcher_prefetch(fetch_model *m, uint32_t c, uint32_t entered)
         m->dropped_prefetches++;
         return;
     }
-    issue(m, c);
+    issue(m, c, EMM_TRANSFER_PREFETCH);
     m->flags[c] = CELL_PRESENT | CELL_PREFETCHED;
     m->prefetches++;
     m->prefetch_bytes += m->cells[c].bytes;
@@ -426,6 +436,8 @@ static void access_one(fetch_model *m, const emm_trace_record *r)
         uint32_t from = m->cur;
         m->cell_changes++;
         m->cur = c;
+        if (m->observed && m->obs.enter)
+            m->obs.enter(m->obs_ctx, m->now, c);
         if (!(m->flags[c] & CELL_PRESENT))
             demand_fetch(m, c);
         else if (m->flags[c] & CELL_PREFETCHED) {
@@ -522,6 +534,22 @@ static void fetch_result(const emm_model *model, emm_result *out)
     out->emm.lookup_page_bytes = m->paged ? m->pg.bytes : 0;
 }
 
+static void fetch_costs(const emm_model *model, emm_record_cost *out)
+{
+    const fetch_model *m = (const fetch_model *)model;
+    memcpy(out->cycles, m->cycles, sizeof out->cycles);
+    out->lookups = m->lookups;
+}
+
+static void fetch_observe(emm_model *model, const emm_observer *obs, void *ctx)
+{
+    fetch_model *m = (fetch_model *)model;
+    m->observed = obs != NULL;
+    if (obs)
+        m->obs = *obs;
+    m->obs_ctx = ctx;
+}
+
 static void fetch_destroy(emm_model *model)
 {
     fetch_model *m = (fetch_model *)model;
@@ -543,7 +571,8 @@ static void fetch_destroy(emm_model *model)
     free(m);
 }
 
-static const struct emm_model_ops fetch_ops = {fetch_run, fetch_reset, fetch_result, fetch_destroy};
+static const struct emm_model_ops fetch_ops = {fetch_run,     fetch_reset, fetch_result,
+                                               fetch_destroy, fetch_costs, fetch_observe};
 
 /* ---- construction ------------------------------------------------------------ */
 

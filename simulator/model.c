@@ -75,6 +75,44 @@ void emm_model_run(emm_model *model, const emm_trace_record *recs, size_t n)
     model->ops->run(model, recs, n);
 }
 
+/* The model's counters so far. */
+static void costs_so_far(const emm_model *model, emm_record_cost *c)
+{
+    if (model->ops->costs) {
+        model->ops->costs(model, c);
+        return;
+    }
+    emm_result r;
+    emm_model_result(model, &r);
+    memcpy(c->cycles, r.cycles, sizeof c->cycles);
+    c->lookups = r.emm.lookups;
+}
+
+/* One record at a time, each followed by a look at the counters: the
+ * models have no batch-wide state, so the run is the same as in batches. */
+void emm_model_run_costed(emm_model *model, const emm_trace_record *recs, size_t n,
+                          emm_record_cost *cost)
+{
+    emm_record_cost prev, now;
+    costs_so_far(model, &prev);
+    for (size_t i = 0; i < n; i++) {
+        model->ops->run(model, &recs[i], 1);
+        costs_so_far(model, &now);
+        for (int b = 0; b < EMM_BUCKET_COUNT; b++)
+            cost[i].cycles[b] = now.cycles[b] - prev.cycles[b];
+        cost[i].lookups = now.lookups - prev.lookups;
+        prev = now;
+    }
+}
+
+int emm_model_observe(emm_model *model, const emm_observer *obs, void *ctx)
+{
+    if (!model->ops->observe)
+        return 0;
+    model->ops->observe(model, obs, ctx);
+    return 1;
+}
+
 void emm_model_reset(emm_model *model)
 {
     model->ops->reset(model);

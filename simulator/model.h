@@ -16,6 +16,12 @@ struct emm_model_ops {
     void (*reset)(emm_model *m);
     void (*result)(const emm_model *m, emm_result *out);
     void (*destroy)(emm_model *m);
+    /* Optional. The live counters of what the records cost so far, read
+     * after each record by emm_model_run_costed (without it, the result). */
+    void (*costs)(const emm_model *m, emm_record_cost *out);
+    /* Optional. Sets (or, with NULL, clears) the observer; a model without
+     * it has no events to report. */
+    void (*observe)(emm_model *m, const emm_observer *obs, void *ctx);
 };
 
 struct emm_model {

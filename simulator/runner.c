@@ -16,7 +16,14 @@ struct emm_runner {
     emm_model **models; /* NULL entries: strategies that could not be built */
     emm_model **live;   /* the built ones, for the run */
     size_t n, nlive, cap;
+    emm_model *costed;  /* the model that runs costed (emm_runner_costs), or NULL */
+    emm_cost_fn cost_fn;
+    void *cost_ctx;
+    emm_record_cost *cost; /* RUNNER_COST_BATCH */
 };
+
+/* Records costed per call of the cost callback. */
+#define RUNNER_COST_BATCH 4096u
 
 emm_status emm_runner_new(const emm_threads *t, emm_runner **out, emm_error *err)
 {
@@ -126,8 +133,18 @@ void emm_runner_retire(emm_runner *r, size_t i)
         }
 }
 
+emm_status emm_runner_costs(emm_runner *r, size_t i, emm_cost_fn fn, void *ctx, emm_error *err)
+{
+    if (fn && !r->cost && !(r->cost = malloc(RUNNER_COST_BATCH * sizeof *r->cost)))
+        return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the records' costs");
+    r->costed = fn ? emm_runner_model(r, i) : NULL;
+    r->cost_fn = fn;
+    r->cost_ctx = ctx;
+    return EMM_OK;
+}
+
 struct run_job {
-    emm_model **models;
+    const emm_runner *r;
     const emm_trace_record *recs;
     size_t n;
 };
@@ -135,14 +152,24 @@ struct run_job {
 static void run_one(void *ctx, size_t i)
 {
     const struct run_job *j = ctx;
-    emm_model_run(j->models[i], j->recs, j->n);
+    const emm_runner *r = j->r;
+    emm_model *m = r->live[i];
+    if (m != r->costed) {
+        emm_model_run(m, j->recs, j->n);
+        return;
+    }
+    for (size_t k = 0; k < j->n; k += RUNNER_COST_BATCH) {
+        size_t n = j->n - k < RUNNER_COST_BATCH ? j->n - k : RUNNER_COST_BATCH;
+        emm_model_run_costed(m, j->recs + k, n, r->cost);
+        r->cost_fn(r->cost_ctx, j->recs + k, r->cost, n);
+    }
 }
 
 void emm_runner_run(emm_runner *r, const emm_trace_record *recs, size_t n)
 {
     if (n == 0 || r->nlive == 0)
         return;
-    struct run_job job = {r->live, recs, n};
+    struct run_job job = {r, recs, n};
     emm_pool_for(r->pool, r->nlive, run_one, &job);
 }
 
@@ -154,6 +181,7 @@ void emm_runner_free(emm_runner *r)
     for (size_t i = 0; i < r->n; i++)
         emm_model_free(r->models[i]);
     emm_model_share_unref(r->share);
+    free(r->cost);
     free(r->models);
     free(r->live);
     free(r);

@@ -38,6 +38,17 @@ emm_status emm_runner_add(emm_runner *r, const emm_machine *m, const emm_strateg
 size_t emm_runner_count(const emm_runner *r);
 emm_model *emm_runner_model(const emm_runner *r, size_t i);
 
+/* What model i's records cost, batch by batch (emm_model_run_costed):
+ * called after each batch's run with the batch and cost[k] for recs[k],
+ * on the thread that ran the model, one batch at a time, in order. */
+typedef void (*emm_cost_fn)(void *ctx, const emm_trace_record *recs,
+                            const emm_record_cost *cost, size_t n);
+
+/* From now on model i (built) runs costed and reports to fn (NULL: back to
+ * the plain run). The other models run as before. EMM_ERR_NOMEM when the
+ * cost buffer cannot be had. */
+emm_status emm_runner_costs(emm_runner *r, size_t i, emm_cost_fn fn, void *ctx, emm_error *err);
+
 /* Stops running model i: later batches skip it, and its results stay as
  * they were (readable until the runner is freed). Retiring a model twice,
  * or one that could not be built, does nothing. */

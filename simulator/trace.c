@@ -9,7 +9,12 @@
  * deltas within one array are small and a typical record takes 3 to 5 bytes;
  * decoding is a few shifts and masks per field with no data-dependent
  * branches. The writer and the reader hold one block at a time, never the
- * whole trace. */
+ * whole trace.
+ *
+ * Version 2 adds an optional seventh column, the program counter of each
+ * access (EMM_TRACE_FLAG_PC), and the table of the traced program's
+ * objects that resolves them; version 1 files are still read (their
+ * records have pc 0). */
 #include "emm/trace.h"
 
 #include <assert.h>
@@ -187,18 +192,19 @@ struct emm_trace_writer {
     uint64_t nv, nt;
     uint64_t records, writes, blocks;
     emm_status failed; /* sticky: after an error only close/abort make sense */
+    unsigned ncols;    /* EMM_TRACE_COLUMNS, or EMM_TRACE_MAX_COLUMNS with the pc */
     /* The block being filled, one column per field. */
     uint32_t n;
-    uint64_t *col[EMM_TRACE_COLUMNS];
+    uint64_t *col[EMM_TRACE_MAX_COLUMNS];
     uint8_t *raw;    /* encoded payload, + 8 bytes of slack */
     uint8_t *stored; /* compressed payload */
     size_t stored_cap;
     ZSTD_CCtx *cctx;
 };
 
-static size_t max_raw_size(uint32_t nrec)
+static size_t max_raw_size(uint32_t nrec, unsigned ncols)
 {
-    return EMM_TRACE_COLUMN_TABLE + (size_t)EMM_TRACE_COLUMNS * 8 * nrec;
+    return emm_trace_column_table(ncols) + (size_t)ncols * 8 * nrec;
 }
 
 static emm_status writer_io_error(emm_trace_writer *w, emm_error *err, const char *what)
@@ -216,7 +222,7 @@ static emm_status write_bytes(emm_trace_writer *w, const void *p, size_t n, emm_
 
 static void writer_free(emm_trace_writer *w)
 {
-    for (int c = 0; c < EMM_TRACE_COLUMNS; c++)
+    for (int c = 0; c < EMM_TRACE_MAX_COLUMNS; c++)
         free(w->col[c]);
     free(w->raw);
     free(w->stored);
@@ -275,9 +281,9 @@ static emm_status flush_block(emm_trace_writer *w, emm_error *err)
     if (n == 0)
         return EMM_OK;
     uint8_t *raw = w->raw;
-    memset(raw, 0, EMM_TRACE_COLUMN_TABLE);
-    size_t pos = EMM_TRACE_COLUMN_TABLE;
-    for (int c = 0; c < EMM_TRACE_COLUMNS; c++) {
+    memset(raw, 0, emm_trace_column_table(w->ncols));
+    size_t pos = emm_trace_column_table(w->ncols);
+    for (int c = 0; c < (int)w->ncols; c++) {
         const uint64_t *v = w->col[c];
         uint64_t min, max;
         if (c == EMM_COL_DELTA) { /* signed: the frame starts at the most negative delta */
@@ -335,7 +341,8 @@ static void put_header(const emm_trace_writer *w, uint8_t *h)
     memset(h, 0, EMM_TRACE_HEADER_SIZE);
     memcpy(h + EMM_TH_MAGIC, EMM_TRACE_MAGIC, 8);
     emm_put_le32(h + EMM_TH_VERSION, EMM_TRACE_VERSION);
-    emm_put_le32(h + EMM_TH_FLAGS, w->compress ? EMM_TRACE_FLAG_ZSTD : 0);
+    emm_put_le32(h + EMM_TH_FLAGS, (w->compress ? EMM_TRACE_FLAG_ZSTD : 0) |
+                                       (w->ncols > EMM_TRACE_COLUMNS ? EMM_TRACE_FLAG_PC : 0));
     emm_put_le32(h + EMM_TH_NARRAYS, w->narrays);
     emm_put_le64(h + EMM_TH_RECORDS, w->records);
     emm_put_le64(h + EMM_TH_WRITES, w->writes);
@@ -349,8 +356,57 @@ emm_status emm_trace_writer_open(const char *path, const emm_trace_array *arrays
                                  const emm_trace_geometry *geometry, int compress,
                                  emm_trace_writer **out, emm_error *err)
 {
+    emm_trace_options o = {compress, 0, NULL, 0};
+    return emm_trace_writer_open_ex(path, arrays, narrays, geometry, &o, out, err);
+}
+
+/* The module table's bytes (trace_format.h), into *out (malloc'ed). */
+static emm_status encode_modules(const char *path, const emm_trace_module *m, uint32_t n,
+                                 uint8_t **out, size_t *len, emm_error *err)
+{
+    size_t paths = 0;
+    if (n > EMM_TRACE_MAX_MODULES)
+        return emm_fail(err, EMM_ERR_INVALID, "%s: %u modules (at most %u)", path, n,
+                        EMM_TRACE_MAX_MODULES);
+    for (uint32_t i = 0; i < n; i++)
+        paths += strlen(m[i].path ? m[i].path : "");
+    if (paths > EMM_TRACE_MAX_MODULE_PATHS)
+        return emm_fail(err, EMM_ERR_INVALID, "%s: the modules' paths take %zu bytes (at most %u)",
+                        path, paths, EMM_TRACE_MAX_MODULE_PATHS);
+    *len = EMM_TRACE_MODULES_HEADER + (size_t)n * EMM_TRACE_MODULE_SIZE + paths;
+    uint8_t *b = malloc(*len + 8);
+    if (!b)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
+    emm_put_le32(b, n);
+    emm_put_le32(b + 4, (uint32_t)paths);
+    uint8_t *e = b + EMM_TRACE_MODULES_HEADER, *text = e + (size_t)n * EMM_TRACE_MODULE_SIZE;
+    uint32_t at = 0;
+    for (uint32_t i = 0; i < n; i++, e += EMM_TRACE_MODULE_SIZE) {
+        size_t l = strlen(m[i].path ? m[i].path : "");
+        emm_put_le64(e, m[i].bias);
+        emm_put_le64(e + 8, m[i].lo);
+        emm_put_le64(e + 16, m[i].hi);
+        emm_put_le32(e + 24, at);
+        emm_put_le32(e + 28, (uint32_t)l);
+        memcpy(text + at, m[i].path ? m[i].path : "", l);
+        at += (uint32_t)l;
+    }
+    emm_put_le64(b + *len, emm_trace_hash(b, *len, 0));
+    *out = b;
+    return EMM_OK;
+}
+
+emm_status emm_trace_writer_open_ex(const char *path, const emm_trace_array *arrays,
+                                    uint32_t narrays, const emm_trace_geometry *geometry,
+                                    const emm_trace_options *opt, emm_trace_writer **out,
+                                    emm_error *err)
+{
+    static const emm_trace_options none_opt = {0, 0, NULL, 0};
     assert(path && out && (arrays || narrays == 0));
     *out = NULL;
+    if (!opt)
+        opt = &none_opt;
+    const int compress = opt->compress;
     emm_trace_geometry none = {0, 0, NULL, NULL};
     const emm_trace_geometry *g = geometry ? geometry : &none;
     char what[600];
@@ -368,18 +424,19 @@ emm_status emm_trace_writer_open(const char *path, const emm_trace_array *arrays
     if (!w)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
     w->compress = compress != 0;
+    w->ncols = opt->pcs ? EMM_TRACE_MAX_COLUMNS : EMM_TRACE_COLUMNS;
     w->narrays = narrays;
     size_t plen = strlen(path);
     w->path = malloc(plen + 1);
     w->arrays = malloc((narrays ? narrays : 1) * sizeof *w->arrays);
     w->limit = malloc((narrays ? narrays : 1) * sizeof *w->limit);
     w->prev = calloc(narrays ? narrays : 1, sizeof *w->prev);
-    w->raw = malloc(max_raw_size(EMM_TRACE_BLOCK_RECORDS) + 8);
+    w->raw = malloc(max_raw_size(EMM_TRACE_BLOCK_RECORDS, w->ncols) + 8);
     int ok = w->path && w->arrays && w->limit && w->prev && w->raw;
-    for (int c = 0; c < EMM_TRACE_COLUMNS; c++)
+    for (int c = 0; c < (int)w->ncols; c++)
         ok = ok && (w->col[c] = malloc(EMM_TRACE_BLOCK_RECORDS * sizeof(uint64_t))) != NULL;
     if (ok && w->compress) {
-        w->stored_cap = ZSTD_compressBound(max_raw_size(EMM_TRACE_BLOCK_RECORDS));
+        w->stored_cap = ZSTD_compressBound(max_raw_size(EMM_TRACE_BLOCK_RECORDS, w->ncols));
         w->stored = malloc(w->stored_cap);
         w->cctx = ZSTD_createCCtx();
         ok = w->stored && w->cctx;
@@ -428,6 +485,12 @@ emm_status emm_trace_writer_open(const char *path, const emm_trace_array *arrays
         emm_put_le64(geo + geo_len, emm_trace_hash(geo, geo_len, 0));
         s = write_bytes(w, geo, geo_len + 8, err);
     }
+    uint8_t *mods = NULL;
+    size_t mods_len = 0;
+    if (s == EMM_OK &&
+        (s = encode_modules(path, opt->modules, opt->nmodules, &mods, &mods_len, err)) == EMM_OK)
+        s = write_bytes(w, mods, mods_len + 8, err);
+    free(mods);
     free(table);
     free(geo);
     if (s != EMM_OK) {
@@ -474,6 +537,8 @@ emm_status emm_trace_write(emm_trace_writer *w, const emm_trace_record *recs, si
         w->col[EMM_COL_BYTES][k] = r->bytes;
         w->col[EMM_COL_WORK][k] = r->work;
         w->col[EMM_COL_WRITE][k] = r->write;
+        if (w->ncols > EMM_COL_PC)
+            w->col[EMM_COL_PC][k] = r->pc;
         w->records++;
         w->writes += r->write;
         if (++w->n == EMM_TRACE_BLOCK_RECORDS) {
@@ -518,7 +583,10 @@ struct emm_trace_reader {
     uint64_t pos;        /* file offset of the next unread byte */
     uint64_t data_start; /* offset of the first block */
     emm_trace_info info;
+    unsigned ncols;      /* columns per block */
     emm_trace_array *arrays;
+    emm_trace_module *modules;
+    char *module_paths;  /* the modules' paths, each NUL-terminated */
     double *xyz;
     int32_t *tri;
     uint64_t *limit; /* elements allowed per array; UINT64_MAX = any (raw) */
@@ -538,7 +606,7 @@ struct emm_trace_reader {
     emm_trace_record *recs; /* a decoded block, when the caller's buffer is too small */
     uint32_t nrecs, next;
     ZSTD_DCtx *dctx;
-    uint64_t tmp[EMM_TRACE_COLUMNS][CHUNK];
+    uint64_t tmp[EMM_TRACE_MAX_COLUMNS][CHUNK];
 };
 
 /* Reads exactly n bytes at r->pos, or reports how many were left. */
@@ -565,6 +633,8 @@ static void reader_free(emm_trace_reader *r)
         fclose(r->f);
     free(r->path);
     free(r->arrays);
+    free(r->modules);
+    free(r->module_paths);
     free(r->xyz);
     free(r->tri);
     free(r->limit);
@@ -611,7 +681,8 @@ static emm_status reader_header(emm_trace_reader *r, emm_error *err)
         return emm_fail(err, EMM_ERR_FORMAT, "%s: byte %d: invalid trace version 0", p,
                         EMM_TH_VERSION);
     uint32_t flags = emm_le32(h + EMM_TH_FLAGS);
-    if (flags & ~EMM_TRACE_FLAG_ZSTD)
+    uint32_t known = EMM_TRACE_FLAG_ZSTD | (version >= 2 ? EMM_TRACE_FLAG_PC : 0);
+    if (flags & ~known)
         return emm_fail(err, EMM_ERR_FORMAT, "%s: byte %d: unknown flags 0x%x", p, EMM_TH_FLAGS,
                         flags);
     if (emm_le32(h + EMM_TH_RESERVED) != 0)
@@ -645,9 +716,63 @@ static emm_status reader_header(emm_trace_reader *r, emm_error *err)
     r->info.writes = writes;
     r->info.blocks = blocks;
     r->info.compressed = (flags & EMM_TRACE_FLAG_ZSTD) != 0;
+    r->info.has_pc = (flags & EMM_TRACE_FLAG_PC) != 0;
+    r->ncols = r->info.has_pc ? EMM_TRACE_MAX_COLUMNS : EMM_TRACE_COLUMNS;
     r->info.geometry.nv = nv;
     r->info.geometry.nt = nt;
     return EMM_OK;
+}
+
+/* Version 2's module table (trace_format.h). */
+static emm_status reader_modules(emm_trace_reader *r, emm_error *err)
+{
+    const char *p = r->path;
+    uint64_t at = r->pos;
+    uint8_t h[EMM_TRACE_MODULES_HEADER];
+    emm_status s = read_exact(r, h, sizeof h, "module table", err);
+    if (s != EMM_OK)
+        return s;
+    uint32_t n = emm_le32(h), paths = emm_le32(h + 4);
+    if (n > EMM_TRACE_MAX_MODULES || paths > EMM_TRACE_MAX_MODULE_PATHS)
+        return emm_fail(err, EMM_ERR_FORMAT, "%s: byte %llu: %u modules with %u bytes of paths "
+                        "(at most %u and %u)", p, (unsigned long long)at, n, paths,
+                        EMM_TRACE_MAX_MODULES, EMM_TRACE_MAX_MODULE_PATHS);
+    size_t len = EMM_TRACE_MODULES_HEADER + (size_t)n * EMM_TRACE_MODULE_SIZE + paths;
+    uint8_t *b = malloc(len + 8);
+    r->modules = malloc((n ? n : 1) * sizeof *r->modules);
+    r->module_paths = malloc((size_t)paths + n + 1);
+    if (!b || !r->modules || !r->module_paths) {
+        free(b);
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the module table", p);
+    }
+    memcpy(b, h, sizeof h);
+    s = read_exact(r, b + sizeof h, len + 8 - sizeof h, "module table", err);
+    if (s == EMM_OK && emm_le64(b + len) != emm_trace_hash(b, len, 0))
+        s = emm_fail(err, EMM_ERR_CORRUPT, "%s: byte %llu: module table checksum mismatch", p,
+                     (unsigned long long)at);
+    const uint8_t *e = b + EMM_TRACE_MODULES_HEADER, *text = e + (size_t)n * EMM_TRACE_MODULE_SIZE;
+    char *out = r->module_paths;
+    for (uint32_t i = 0; s == EMM_OK && i < n; i++, e += EMM_TRACE_MODULE_SIZE) {
+        uint32_t off = emm_le32(e + 24), l = emm_le32(e + 28);
+        if (off > paths || l > paths - off) {
+            s = emm_fail(err, EMM_ERR_FORMAT, "%s: byte %llu: module %u's path lies outside "
+                         "the table", p, (unsigned long long)at, i);
+            break;
+        }
+        r->modules[i].bias = emm_le64(e);
+        r->modules[i].lo = emm_le64(e + 8);
+        r->modules[i].hi = emm_le64(e + 16);
+        memcpy(out, text + off, l);
+        out[l] = '\0';
+        r->modules[i].path = out;
+        out += l + 1;
+    }
+    free(b);
+    if (s == EMM_OK) {
+        r->info.nmodules = n;
+        r->info.modules = r->modules;
+    }
+    return s;
 }
 
 static emm_status reader_tables(emm_trace_reader *r, emm_error *err)
@@ -712,6 +837,8 @@ static emm_status reader_tables(emm_trace_reader *r, emm_error *err)
         s = check_geometry(&r->info.geometry, what, EMM_ERR_FORMAT, err);
     }
     free(buf);
+    if (s == EMM_OK && r->info.version >= 2)
+        s = reader_modules(r, err);
     r->data_start = r->pos;
     return s;
 }
@@ -885,7 +1012,8 @@ static emm_status next_block(emm_trace_reader *r, emm_trace_record *dst, size_t 
                         "%s: byte %llu: block %llu has more records than the header's %llu", p,
                         (unsigned long long)at, (unsigned long long)b,
                         (unsigned long long)r->info.accesses);
-    if (raw_size < EMM_TRACE_COLUMN_TABLE || raw_size > max_raw_size(n) ||
+    const unsigned ncols = r->ncols;
+    if (raw_size < emm_trace_column_table(ncols) || raw_size > max_raw_size(n, ncols) ||
         (r->info.compressed ? stored > ZSTD_compressBound(raw_size) || stored == 0
                             : stored != raw_size))
         return emm_fail(err, EMM_ERR_FORMAT, "%s: byte %llu: block %llu has invalid sizes (raw %u, stored %u)",
@@ -932,11 +1060,14 @@ static emm_status next_block(emm_trace_reader *r, emm_trace_record *dst, size_t 
     memset(raw + raw_size, 0, 8);
 
     /* Column table. */
-    unsigned bits[EMM_TRACE_COLUMNS];
-    uint64_t min[EMM_TRACE_COLUMNS];
-    const uint8_t *col[EMM_TRACE_COLUMNS];
-    size_t off = EMM_TRACE_COLUMN_TABLE;
-    for (int c = 0; c < EMM_TRACE_COLUMNS; c++) {
+    unsigned bits[EMM_TRACE_MAX_COLUMNS];
+    uint64_t min[EMM_TRACE_MAX_COLUMNS];
+    const uint8_t *col[EMM_TRACE_MAX_COLUMNS];
+    size_t off = emm_trace_column_table(ncols);
+    int unused_widths = 0; /* the width bytes past the last column must be 0 */
+    for (unsigned c = ncols; c < 8; c++)
+        unused_widths |= raw[c];
+    for (int c = 0; c < (int)ncols; c++) {
         bits[c] = raw[c];
         min[c] = emm_le64(raw + 8 + 8 * c);
         if (bits[c] > EMM_TRACE_MAX_PACKED_BITS && bits[c] != 64)
@@ -945,7 +1076,7 @@ static emm_status next_block(emm_trace_reader *r, emm_trace_record *dst, size_t 
         col[c] = raw + off;
         off += stream_bytes(n, bits[c]);
     }
-    if (raw[6] != 0 || raw[7] != 0 || off != raw_size)
+    if (unused_widths != 0 || off != raw_size)
         return emm_fail(err, EMM_ERR_FORMAT,
                         "%s: byte %llu: block %llu: column sizes add up to %zu bytes, payload has %u",
                         p, (unsigned long long)pat, (unsigned long long)b, off, raw_size);
@@ -973,12 +1104,12 @@ static emm_status next_block(emm_trace_reader *r, emm_trace_record *dst, size_t 
      * frame (minimum + largest packed value) lies within the bounds needs no
      * per-value check, which is always so for files emm wrote unless a field
      * spans its whole 32-bit range. */
-    static const uint64_t lo[EMM_TRACE_COLUMNS] = {0, 0, 0, 1, 0, 0};
-    uint64_t hi[EMM_TRACE_COLUMNS] = {0, 0, 0, UINT32_MAX, UINT32_MAX, 1};
+    static const uint64_t lo[EMM_TRACE_MAX_COLUMNS] = {0, 0, 0, 1, 0, 0, 0};
+    uint64_t hi[EMM_TRACE_MAX_COLUMNS] = {0, 0, 0, UINT32_MAX, UINT32_MAX, 1, UINT64_MAX};
     hi[EMM_COL_ARRAY] = na - 1;
-    int scan[EMM_TRACE_COLUMNS] = {0};
-    for (int c = 0; c < EMM_TRACE_COLUMNS; c++) {
-        if (c == EMM_COL_DELTA || c == EMM_COL_OFFSET)
+    int scan[EMM_TRACE_MAX_COLUMNS] = {0};
+    for (int c = 0; c < (int)ncols; c++) {
+        if (c == EMM_COL_DELTA || c == EMM_COL_OFFSET || c == EMM_COL_PC)
             continue;
         uint64_t span = bits[c] == 64 ? UINT64_MAX : (UINT64_C(1) << bits[c]) - 1;
         scan[c] = min[c] < lo[c] || min[c] > hi[c] || span > hi[c] - min[c];
@@ -986,9 +1117,9 @@ static emm_status next_block(emm_trace_reader *r, emm_trace_record *dst, size_t 
     uint64_t writes = 0;
     for (uint32_t i0 = 0; i0 < n; i0 += CHUNK) {
         uint32_t m = n - i0 < CHUNK ? n - i0 : CHUNK;
-        for (int c = 0; c < EMM_TRACE_COLUMNS; c++)
+        for (int c = 0; c < (int)ncols; c++)
             unpack_column(col[c], bits[c], min[c], i0, m, r->tmp[c]);
-        for (int c = 0; c < EMM_TRACE_COLUMNS; c++)
+        for (int c = 0; c < (int)ncols; c++)
             if (__builtin_expect(scan[c], 0))
                 for (uint32_t i = 0; i < m; i++)
                     if (r->tmp[c][i] < lo[c] || r->tmp[c][i] > hi[c]) {
@@ -1017,6 +1148,12 @@ static emm_status next_block(emm_trace_reader *r, emm_trace_record *dst, size_t 
             o[i].write = (uint8_t)cx[i];
             writes += cx[i];
         }
+        if (ncols > EMM_COL_PC)
+            for (uint32_t i = 0; i < m; i++)
+                o[i].pc = r->tmp[EMM_COL_PC][i];
+        else
+            for (uint32_t i = 0; i < m; i++)
+                o[i].pc = 0;
         if (__builtin_expect(bad != 0, 0))
             for (uint32_t i = 0; i < m; i++)
                 if (o[i].element > maxe[o[i].array] || co[i] >= rsize[o[i].array])

@@ -1,4 +1,4 @@
-/* Internal: the byte layout of trace files, version 1 (docs/trace-format.md
+/* Internal: the byte layout of trace files, version 2 (docs/trace-format.md
  * is the reference; keep the two in step), the checksum, and little-endian
  * helpers. Shared by simulator/trace.c and the trace tests, which use it to
  * build damaged files whose checksums are still right. */
@@ -10,8 +10,9 @@
 #include <string.h>
 
 #define EMM_TRACE_MAGIC "EMMTRACE"
-#define EMM_TRACE_VERSION 1u
+#define EMM_TRACE_VERSION 2u
 #define EMM_TRACE_FLAG_ZSTD 1u
+#define EMM_TRACE_FLAG_PC 2u /* version 2: the blocks carry the pc column */
 
 /* File header: 72 bytes. */
 enum {
@@ -57,9 +58,24 @@ enum {
     EMM_COL_BYTES,
     EMM_COL_WORK,
     EMM_COL_WRITE,
-    EMM_TRACE_COLUMNS
+    EMM_TRACE_COLUMNS, /* the six columns of every block */
+    EMM_COL_PC = EMM_TRACE_COLUMNS, /* with EMM_TRACE_FLAG_PC */
+    EMM_TRACE_MAX_COLUMNS
 };
-enum { EMM_TRACE_COLUMN_TABLE = 8 + 8 * EMM_TRACE_COLUMNS };
+/* The column table of a block of `ncols` columns: 8 width bytes (the unused
+ * ones 0), then one u64 minimum per column. */
+static inline size_t emm_trace_column_table(unsigned ncols)
+{
+    return 8 + 8 * (size_t)ncols;
+}
+
+/* Version 2's module table, after the geometry: a header (u32 modules, u32
+ * bytes of paths), one entry per module (u64 bias, u64 lo, u64 hi, u32
+ * offset of its path in the paths, u32 its length), the paths, then a u64
+ * checksum of the whole region. */
+enum { EMM_TRACE_MODULES_HEADER = 8, EMM_TRACE_MODULE_SIZE = 32 };
+#define EMM_TRACE_MAX_MODULES 4096u
+#define EMM_TRACE_MAX_MODULE_PATHS (1u << 20)
 /* Widths 57..63 are never written: a column that needs more than 56 bits is
  * stored at 64 (plain u64 words), so a 64-bit load always holds one value. */
 #define EMM_TRACE_MAX_PACKED_BITS 56u

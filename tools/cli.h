@@ -20,6 +20,7 @@ int emm_cmd_profile(int argc, char **argv);
 int emm_cmd_table(int argc, char **argv);
 int emm_cmd_run(int argc, char **argv);
 int emm_cmd_plot(int argc, char **argv);
+int emm_cmd_annotate(int argc, char **argv);
 
 /* Exit statuses. */
 enum { EMM_EXIT_OK = 0, EMM_EXIT_FAIL = 1, EMM_EXIT_USAGE = 2 };

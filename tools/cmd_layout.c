@@ -218,7 +218,13 @@ static int write_svg(const char *out, const emm_layout *l, const double *xyz, co
         st = emm_outfile_commit(&o, "the SVG", &err);
     }
     free(col);
-    return st == EMM_OK ? EMM_EXIT_OK : cli_fail(&err);
+    if (st != EMM_OK)
+        return cli_fail(&err);
+    char name[64];
+    emm_strategy_format(s, name, sizeof name);
+    printf("wrote %s: %s's %u cells over %zu triangles\n", out, name, emm_layout_cell_count(l),
+           emm_layout_triangle_count(l));
+    return EMM_EXIT_OK;
 }
 
 int emm_cmd_layout(int argc, char **argv)

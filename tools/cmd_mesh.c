@@ -2,6 +2,7 @@
  * 2D mesh, §6.1) and describe mesh files. */
 #include <stdio.h>
 #include <string.h>
+#include <strings.h>
 
 #include "cli.h"
 #include "parse.h"
@@ -32,9 +33,11 @@ static void usage_gen(FILE *out)
             "                   [--order made|random|hilbert] -o FILE\n"
             "\n"
             "Writes a planar (z = 0) Delaunay triangulation (libqhull) of points drawn in\n"
-            "the unit square, as an ASCII OFF file. The face count is N exactly (within 1%%\n"
-            "at worst); the convex hull is the square (4 boundary edges), or the square with\n"
-            "one corner cut off (5) when N is odd. The same options give the same file, byte\n"
+            "the unit square, as an ASCII OFF file, or OBJ when FILE ends in .obj. The face\n"
+            "count is N exactly (within 1%% at worst). The convex hull is about sqrt(2N)\n"
+            "points spread around the square's border, pushed out onto a squircle so that\n"
+            "it is strictly convex: as many boundary edges (200 for 20,000 faces), each\n"
+            "about as long as the edges inside. The same options give the same file, byte\n"
             "for byte.\n"
             "\n"
             "  --faces N        triangles to make, 8 or more (default %u)\n"
@@ -47,7 +50,8 @@ static void usage_gen(FILE *out)
             "                   is the same); random: both in a random order from the seed,\n"
             "                   unorganised like the thesis' original mesh; hilbert: both\n"
             "                   numbered along a Hilbert curve, for locality\n"
-            "  -o, --output F   the OFF file to write (required); written whole or not at all\n",
+            "  -o, --output F   the file to write (required): .off for OFF, .obj for OBJ\n"
+            "                   (another extension is refused); written whole or not at all\n",
             EMM_DEFAULT_FACES, EMM_DEFAULT_SEED);
 }
 
@@ -120,12 +124,18 @@ static int cmd_gen(int argc, char **argv)
     }
     if (!output)
         return cli_usage_error(cmd, "-o FILE is required");
+    /* The format the name promises; no OFF text in a file called .obj. */
+    const char *dot = strrchr(output, '.');
+    int obj = dot && strcasecmp(dot, ".obj") == 0;
+    if (!dot || strchr(dot, '/') || (!obj && strcasecmp(dot, ".off") != 0))
+        return cli_usage_error(cmd, "-o %s: the file must end in .off (OFF) or .obj (OBJ)",
+                               output);
 
     emm_error err;
     emm_mesh *m;
     if (emm_mesh_generate(&opt, &m, &err) != EMM_OK)
         return cli_fail(&err);
-    emm_status st = emm_mesh_write_off(m, output, &err);
+    emm_status st = obj ? emm_mesh_write_obj(m, output, &err) : emm_mesh_write_off(m, output, &err);
     if (st == EMM_OK)
         printf("wrote %s: %zu vertices, %zu faces\n", output, emm_mesh_vertex_count(m),
                emm_mesh_triangle_count(m));
@@ -200,10 +210,8 @@ static int cmd_info(int argc, char **argv)
         printf("polygons split: %zu\n", emm_mesh_polygons_split(m));
         printf("bbox: [%g, %g, %g] - [%g, %g, %g]\n", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
         printf("mean edge length: %.6g\n", emm_mesh_mean_edge_length(m));
-        printf("thesis bytes: %llu\n", bytes);
-        printf("thesis structs (Vertex %u B, Triangle %u B): %s bytes (%.2f MB)\n",
-               EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES, emm_grouped(bytes, buf),
-               (double)bytes / 1e6);
+        printf("thesis bytes: %s (Vertex %u B, Triangle %u B; %.2f MB)\n", emm_grouped(bytes, buf),
+               EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES, (double)bytes / 1e6);
     }
     emm_mesh_free(m);
     return EMM_EXIT_OK;

@@ -158,6 +158,29 @@ static emm_status check_profile(const plot_report *rep, const jr_value *p, emm_e
     return EMM_OK;
 }
 
+/* What a file that is not a report is, from its first bytes, so that the
+ * user hears "a trace" rather than a JSON syntax error: EMM_OK when it may
+ * be JSON (it starts with '{' or '['). */
+static emm_status sniff_input(const char *path, emm_error *err)
+{
+    unsigned char head[8] = {0};
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return EMM_OK; /* the parser says why it cannot be read */
+    size_t n = fread(head, 1, sizeof head, f);
+    int c = 0;
+    rewind(f);
+    while ((c = fgetc(f)) != EOF && (c == ' ' || c == '\t' || c == '\n' || c == '\r'))
+        ;
+    fclose(f);
+    if (n == sizeof head && memcmp(head, "EMMTRACE", 8) == 0)
+        return bad(err, path, "an emm trace, not a report: simulate it first (emm replay %s "
+                   "--all --json REPORT.json), then emm plot REPORT.json", path);
+    if (c != '{' && c != '[')
+        return bad(err, path, "not a JSON report (emm run --report, emm replay --json make one)");
+    return EMM_OK;
+}
+
 /* Reads the report and checks every part a figure reads, so that a bad
  * report fails before anything is drawn. */
 static emm_status load_report(const char *path, plot_report *rep, emm_error *err)
@@ -166,8 +189,13 @@ static emm_status load_report(const char *path, plot_report *rep, emm_error *err
     emm_status st;
     memset(rep, 0, sizeof *rep);
     rep->path = path;
+    if ((st = sniff_input(path, err)) != EMM_OK)
+        return st;
     if ((st = jr_parse_file(path, &rep->root, err)) != EMM_OK)
         return st;
+    if (jr_is(rep->root, JR_OBJECT) && jr_get(rep->root, "traceEvents"))
+        return bad(err, path, "a timeline, not a report: open it in Perfetto's UI "
+                   "(ui.perfetto.dev) or chrome://tracing");
     if (!jr_is(rep->root, JR_OBJECT) || !jr_is(jr_get(rep->root, "emm_report"), JR_NUMBER))
         return bad(err, path, "not an emm report (no \"emm_report\" key)");
     if (jr_number(jr_get(rep->root, "emm_report")) != 1)

@@ -20,6 +20,8 @@ static const char *const CMD = "profile";
 
 static void usage(FILE *out)
 {
+    char def[4096];
+    emm_table_default_path(def, sizeof def);
     fprintf(out,
             "usage: emm profile TRACE [--window N] [--table FILE] [--threshold X]\n"
             "                         [--simulate] [--learn NAME [--pattern CLASS]]\n"
@@ -56,7 +58,7 @@ static void usage(FILE *out)
             "\n"
             "The default table is %s.\n",
             EMM_PROFILE_DEFAULT_WINDOW, EMM_PROFILE_EXACT_MAX, EMM_NOVELTY_THRESHOLD,
-            EMM_CONFIG_DEFAULT_FINALISTS, emm_table_default_path());
+            EMM_CONFIG_DEFAULT_FINALISTS, def);
 }
 
 /* Commits an output file; the exit status. */
@@ -278,8 +280,8 @@ int emm_cmd_profile(int argc, char **argv)
     if (learn && access(user, F_OK) != 0) {
         /* The table to learn into does not exist yet: the default table
          * alone, or none (then the sweep decides). */
-        const char *def = emm_table_default_path();
-        if (access(def, F_OK) == 0 && emm_table_load(t, def, &err) != EMM_OK) {
+        char def[4096];
+        if (emm_table_default_path(def, sizeof def) && emm_table_load(t, def, &err) != EMM_OK) {
             rc = cli_fail(&err);
             goto done;
         }

@@ -19,8 +19,9 @@ static void usage(FILE *out)
     char sweep[256];
     emm_strategy_sweep_describe(sweep, sizeof sweep);
     fprintf(out,
-            "usage: emm replay TRACE [--strategy S]... [--json FILE] [--machine FILE]\n"
-            "                  [--set KEY=VALUE]... [--jobs N] [--memory BYTES] [--quiet]\n"
+            "usage: emm replay TRACE [--strategy S]... [--json FILE] [--timeline FILE]\n"
+            "                  [--machine FILE] [--set KEY=VALUE]... [--jobs N]\n"
+            "                  [--memory BYTES] [--quiet]\n"
             "       emm replay TRACE --all [--json FILE] [--jobs N] ...\n"
             "\n"
             "Simulates the accesses recorded in TRACE on the machine model, once per\n"
@@ -46,6 +47,12 @@ static void usage(FILE *out)
             "  --jobs N         threads simulating strategies (default: the online CPUs,\n"
             "                   at most one per strategy); results do not depend on N\n"
             "  --json FILE      also write the JSON report (docs/report.md), whole or not at all\n"
+            "  --timeline FILE  write the first strategy's simulated run as Chrome/Perfetto\n"
+            "                   trace-event JSON (open it in ui.perfetto.dev or\n"
+            "                   chrome://tracing): a track per DMA channel with every\n"
+            "                   transfer, the core's DMA stalls and cell entries; at most\n"
+            "                   " EMM_TIMELINE_MAX_EVENTS_TEXT " events, and its \"otherData\" says when the cap\n"
+            "                   was hit (docs/report.md \"Timelines\")\n"
             "  --memory BYTES   memory the models may take together (K/M/G; default half the\n"
             "                   physical memory, at most 4G): a sweep that needs more runs\n"
             "                   in passes over the trace, with the same results\n"
@@ -237,7 +244,7 @@ static int replay_main(int argc, char **argv, emm_strategy *strategies, emm_resu
 {
     machine_cli mc = {0};
     size_t nstrategies = 0;
-    const char *trace = NULL, *json = NULL;
+    const char *trace = NULL, *json = NULL, *timeline = NULL;
     int quiet = 0, all = 0, rc;
     uint64_t jobs = 0, memory = 0;
     emm_machine *m = NULL;
@@ -281,6 +288,9 @@ static int replay_main(int argc, char **argv, emm_strategy *strategies, emm_resu
         } else if (strcmp(argv[i], "--json") == 0) {
             if (!(json = cli_value("replay", argc, argv, &i)))
                 return EMM_EXIT_USAGE;
+        } else if (strcmp(argv[i], "--timeline") == 0) {
+            if (!(timeline = cli_value("replay", argc, argv, &i)))
+                return EMM_EXIT_USAGE;
         } else if (strcmp(argv[i], "--quiet") == 0 || strcmp(argv[i], "-q") == 0) {
             quiet = 1;
         } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
@@ -305,16 +315,37 @@ static int replay_main(int argc, char **argv, emm_strategy *strategies, emm_resu
         return rc;
 
     pctx.on = !quiet && isatty(STDERR_FILENO);
-    emm_replay_options ropt = {(unsigned)jobs, progress, &pctx, json != NULL, memory};
+    emm_replay_options ropt = {(unsigned)jobs, progress, &pctx, json != NULL, memory,
+                               NULL, NULL, NULL};
+    if (timeline && emm_timeline_open(timeline, m, &strategies[0], 0, &ropt.timeline, &err) !=
+                        EMM_OK) {
+        emm_machine_free(m);
+        return cli_fail(&err);
+    }
     if (emm_replay_ex(trace, m, strategies, nstrategies, &ropt, results, all ? skipped : NULL,
                       &accesses, &err) != EMM_OK) {
         if (pctx.on)
             fputc('\n', stderr);
+        emm_timeline_abort(ropt.timeline, NULL);
         emm_machine_free(m);
         return cli_fail(&err);
     }
     if (pctx.on)
         fprintf(stderr, "\r\033[K");
+    if (ropt.timeline) {
+        emm_status ts = emm_timeline_close(ropt.timeline, NULL, results[0].total, &err);
+        if (ts == EMM_OK && !quiet) {
+            char name[64];
+            emm_strategy_format(&strategies[0], name, sizeof name);
+            fprintf(stderr, "emm replay: wrote %s's timeline to %s\n", name, timeline);
+        }
+        if (ts != EMM_OK) {
+            for (size_t i = 0; i < nstrategies; i++)
+                emm_result_release(&results[i]);
+            emm_machine_free(m);
+            return cli_fail(&err);
+        }
+    }
     if (json && emm_report_write_ex(json, trace, m, accesses, results, all ? skipped : NULL,
                                     nstrategies, &err) != EMM_OK) {
         for (size_t i = 0; i < nstrategies; i++)

@@ -19,6 +19,8 @@
 
 static void usage(FILE *out)
 {
+    char def[4096];
+    emm_table_default_path(def, sizeof def);
     fprintf(out,
             "usage: emm table list [--table FILE]\n"
             "       emm table add PROFILE --name NAME [--strategy S] [--pattern CLASS]\n"
@@ -49,7 +51,7 @@ static void usage(FILE *out)
             "         as the canonical ones (scripts/table.sh makes the shipped table so,\n"
             "         from the example workloads' traces on meshes the tests do not use)\n"
             MACHINE_CLI_HELP,
-            emm_table_default_path(), EMM_PROFILE_DEFAULT_WINDOW);
+            def, EMM_PROFILE_DEFAULT_WINDOW);
 }
 
 static int table_list(int argc, char **argv)
@@ -398,8 +400,11 @@ static int table_build(int argc, char **argv)
             return cli_usage_error(cmd, "unexpected argument '%s'", a);
         }
     }
-    if (!out)
-        out = emm_table_default_path();
+    char def[4096];
+    if (!out) {
+        emm_table_default_path(def, sizeof def);
+        out = def;
+    }
     emm_machine *m = NULL;
     int rc = machine_cli_build(&mc, cmd, &m);
     if (rc != 0)

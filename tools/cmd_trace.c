@@ -118,6 +118,14 @@ static int trace_info(int argc, char **argv)
     printf("accesses:    %" PRIu64 " (%" PRIu64 " reads, %" PRIu64 " writes)\n", info->accesses,
            info->accesses - info->writes, info->writes);
     printf("blocks:      %" PRIu64 "\n", info->blocks);
+    if (info->has_pc) {
+        printf("pcs:         yes (emm annotate resolves them), %u modules\n", info->nmodules);
+        for (uint32_t i = 0; i < info->nmodules; i++)
+            printf("  0x%" PRIx64 "-0x%" PRIx64 "  %s\n", info->modules[i].lo, info->modules[i].hi,
+                   info->modules[i].path);
+    } else {
+        printf("pcs:         no\n");
+    }
     if (info->accesses > 0)
         printf("file:        %" PRIu64 " bytes, %.2f bytes per access\n", size,
                (double)size / (double)info->accesses);

@@ -16,6 +16,7 @@ static const struct command commands[] = {
     {"machine", emm_cmd_machine, "show the simulated machine and DMA costs"},
     {"trace", emm_cmd_trace, "describe, export and import access traces"},
     {"replay", emm_cmd_replay, "simulate a trace under a strategy"},
+    {"annotate", emm_cmd_annotate, "a strategy's cycles by source line and function"},
     {"layout", emm_cmd_layout, "build a layout and draw or describe its cells"},
     {"profile", emm_cmd_profile, "distance profile of a trace and the strategy it picks"},
     {"table", emm_cmd_table, "list the strategy table or add a sample to it"},
@@ -34,7 +35,7 @@ static void usage(FILE *out)
             "\n"
             "commands:\n");
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        fprintf(out, "  %-9s %s\n", commands[i].name, commands[i].summary);
+        fprintf(out, "  %-10s %s\n", commands[i].name, commands[i].summary);
     fprintf(out,
             "\n"
             "'emm COMMAND --help' explains each command. 'emm --version' prints the version.\n");

@@ -102,6 +102,7 @@ typedef enum emm_config_key {
     EMM_CONFIG_REPORT,
     EMM_CONFIG_PROFILE_DUMP,
     EMM_CONFIG_TRACE,
+    EMM_CONFIG_TIMELINE,
     EMM_CONFIG_LOG,
     EMM_CONFIG_COUNT
 } emm_config_key;
@@ -110,6 +111,10 @@ typedef enum emm_config_key {
 /* Candidates that run to the end of the run to confirm the window's
  * prediction when EMM_FINALISTS is unset (docs/profile.md "The contest"). */
 #define EMM_CONFIG_DEFAULT_FINALISTS 4u
+/* The most events a timeline holds (EMM_TIMELINE, emm replay --timeline):
+ * about 50 MB of JSON, what Perfetto's UI and chrome://tracing open. */
+#define EMM_TIMELINE_MAX_EVENTS 500000u
+#define EMM_TIMELINE_MAX_EVENTS_TEXT "500,000"
 /* The profile window when EMM_PROFILE is unset, in element accesses. */
 #define EMM_CONFIG_DEFAULT_WINDOW 16384u
 
@@ -130,6 +135,7 @@ typedef struct emm_config {
     char report[EMM_CONFIG_PATH_MAX];       /* EMM_REPORT */
     char profile_dump[EMM_CONFIG_PATH_MAX]; /* EMM_PROFILE_DUMP */
     char trace[EMM_CONFIG_PATH_MAX];        /* EMM_TRACE */
+    char timeline[EMM_CONFIG_PATH_MAX];     /* EMM_TIMELINE */
     int log;                      /* EMM_LOG: 0 quiet, 1 summary, 2 verbose */
     /* Where each value came from — the variable or the option that set it
      * (static strings of the table), NULL for a default — so that every

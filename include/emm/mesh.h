@@ -53,6 +53,9 @@ EMM_API void emm_mesh_free(emm_mesh *m);
 /* Writes the mesh as an ASCII OFF file, whole or not at all (a temporary
  * file renamed into place). */
 EMM_API emm_status emm_mesh_write_off(const emm_mesh *m, const char *path, emm_error *err);
+/* The same as a Wavefront OBJ file ("v x y z" lines, then "f a b c" with
+ * 1-based indices). */
+EMM_API emm_status emm_mesh_write_obj(const emm_mesh *m, const char *path, emm_error *err);
 
 EMM_API size_t emm_mesh_vertex_count(const emm_mesh *m);
 EMM_API size_t emm_mesh_triangle_count(const emm_mesh *m);

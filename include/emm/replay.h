@@ -7,12 +7,43 @@
 #define EMM_REPLAY_H
 
 #include "emm/common.h"
+#include "emm/config.h"
 #include "emm/sim.h"
 #include "emm/strategy.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* ---- timelines -------------------------------------------------------------- */
+
+/* A strategy's simulated run as Chrome/Perfetto trace-event JSON
+ * (docs/report.md "Timelines"): one process, a track (thread) for the core
+ * — its DMA stalls and its entries into layout cells — one per DMA channel
+ * with every transfer as a complete event, and one for phases. At most
+ * `max_events` events are written (EMM_TIMELINE_MAX_EVENTS by default); the
+ * file's metadata ("otherData") says how many were left out. The file is
+ * written whole or not at all, streamed (memory does not grow with it). */
+typedef struct emm_timeline emm_timeline;
+
+/* Starts a timeline of strategy s on machine m at `path`; max_events 0 is
+ * EMM_TIMELINE_MAX_EVENTS. */
+EMM_API emm_status emm_timeline_open(const char *path, const emm_machine *m,
+                                     const emm_strategy *s, uint64_t max_events,
+                                     emm_timeline **out, emm_error *err);
+/* Records what `model` (of the timeline's strategy) does from now on, until
+ * the timeline is closed. Returns 0 for a model with nothing to show
+ * (direct reads, the cache: no DMA engine), which the file then says. */
+EMM_API int emm_timeline_watch(emm_timeline *t, emm_model *model);
+/* A phase of the run: `name` from cycle `start` to `end`. */
+EMM_API void emm_timeline_phase(emm_timeline *t, const char *name, uint64_t start, uint64_t end);
+/* Ends the run at cycle `end`, writes the metadata, and renames the file
+ * into place; frees t, and stops the watched model's reports, whatever the
+ * outcome. */
+EMM_API emm_status emm_timeline_close(emm_timeline *t, emm_model *watched, uint64_t end,
+                                      emm_error *err);
+/* Drops an unfinished timeline (no file is left); NULL is allowed. */
+EMM_API void emm_timeline_abort(emm_timeline *t, emm_model *watched);
 
 /* ---- replay ---------------------------------------------------------------- */
 
@@ -44,6 +75,14 @@ typedef struct emm_replay_options {
      * trace, those of one layout and cell size in the same pass; the results
      * do not depend on it. */
     uint64_t memory;
+    /* When not NULL: the timeline records the first strategy's model. */
+    emm_timeline *timeline;
+    /* When not NULL: the first strategy's model runs costed
+     * (emm_model_run_costed) and reports each batch's records and their
+     * costs to cost_fn, in order, from the thread that ran it. */
+    void (*cost_fn)(void *ctx, const emm_trace_record *recs, const emm_record_cost *cost,
+                    size_t n);
+    void *cost_ctx;
 } emm_replay_options;
 
 /* Half the physical memory, at most 4 GiB. */

@@ -46,12 +46,16 @@ typedef struct emm_session_config {
 } emm_session_config;
 
 /* One captured access, as the capture backends record it: the address, the
- * bytes (low 31 bits) and write flag (bit 31), and the work since the
- * previous access (instrumented basic blocks, or 0). */
+ * bytes (low 31 bits) and write flag (bit 31), the work since the previous
+ * access (instrumented basic blocks, or 0), and the program counter of the
+ * access where the backend knows it (sancov: its hook's return address), or
+ * 0. A session that is given program counters writes them, and the
+ * program's mapped objects, into its trace (emm annotate reads them). */
 typedef struct emm_raw_access {
     uint64_t addr;
     uint32_t bytes_write;
     uint32_t work;
+    uint64_t pc;
 } emm_raw_access;
 
 #define EMM_RAW_WRITE 0x80000000u

@@ -211,6 +211,52 @@ EMM_API emm_status emm_model_cells(const emm_model *model, emm_result *out, emm_
 EMM_API void emm_result_release(emm_result *r);
 EMM_API void emm_model_free(emm_model *model);
 
+/* ---- what each record cost, and what the machine did when ------------------ */
+
+/* The cycles one record cost, bucket by bucket, and the EMM runtime's
+ * look-ups it made (emm.lookups). */
+typedef struct emm_record_cost {
+    uint64_t cycles[EMM_BUCKET_COUNT];
+    uint64_t lookups;
+} emm_record_cost;
+
+/* Simulates n records as emm_model_run does — the same state and results
+ * after — and sets cost[i] to what record i cost: the change of the
+ * model's buckets and look-ups across it, so the costs add up to the
+ * result's. A cell's DMA stall lands on the record that waited for it.
+ * Slower than emm_model_run (the counters are read after each record), and
+ * the plain path does not pay for it: only callers that attribute cycles
+ * (emm annotate) use it. */
+EMM_API void emm_model_run_costed(emm_model *model, const emm_trace_record *recs, size_t n,
+                                  emm_record_cost *cost);
+
+/* What a DMA transfer moved. */
+typedef enum emm_transfer_kind {
+    EMM_TRANSFER_DEMAND = 0, /* a cell the program needed */
+    EMM_TRANSFER_PREFETCH,   /* a cell the fetch scheme expects it to need */
+    EMM_TRANSFER_TABLE_PAGE  /* a page of the paged look-up tables */
+} emm_transfer_kind;
+
+/* Callbacks a model makes as the simulated machine works, in the order of
+ * the model's clock (cycles since its reset), for timelines. Any may be
+ * NULL. They run on the thread that runs the model. */
+typedef struct emm_observer {
+    /* A DMA transfer: on `channel`, from `start` (the channel takes it) to
+     * `end` (the data has arrived); `cell` is the layout cell (a page index
+     * for a table page). */
+    void (*transfer)(void *ctx, uint32_t channel, uint64_t start, uint64_t end, uint64_t bytes,
+                     emm_transfer_kind kind, uint64_t cell);
+    /* The core waits from `start` for `cycles` (EMM_BUCKET_DMA_STALL). */
+    void (*stall)(void *ctx, uint64_t start, uint64_t cycles);
+    /* The program enters layout cell `cell` at `time`. */
+    void (*enter)(void *ctx, uint64_t time, uint64_t cell);
+} emm_observer;
+
+/* Makes `model` report to obs (copied; NULL stops it). Returns nonzero
+ * when the model has events to report: the EMM strategies (their DMA
+ * engine, stalls and cells); direct reads and the cache have none. */
+EMM_API int emm_model_observe(emm_model *model, const emm_observer *obs, void *ctx);
+
 #ifdef __cplusplus
 }
 #endif

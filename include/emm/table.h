@@ -80,9 +80,12 @@ EMM_API emm_status emm_table_write(const emm_table *t, const char *path, const c
 EMM_API emm_status emm_table_append(const char *path, const emm_table_sample *s, emm_error *err);
 
 /* The shipped default table: the source tree's data/table.txt when this
- * library runs from its build tree, ${datadir}/emm/table.txt once
- * installed. Static string. */
-EMM_API const char *emm_table_default_path(void);
+ * code runs from its build tree; else share/emm/table.txt beside the
+ * installed program or library (found from its own location, so a moved
+ * install finds its own), then the configured ${datadir}/emm/table.txt.
+ * Writes the first that exists (or the last looked at) to out, cap bytes;
+ * returns nonzero when it exists. */
+EMM_API int emm_table_default_path(char *out, size_t cap);
 
 /* Loads the default table (when its file exists) and the user's: `user`
  * when not NULL, else $EMM_TABLE when set. A user table named explicitly

@@ -34,7 +34,19 @@ typedef struct emm_trace_record {
     uint32_t bytes;   /* bytes accessed, >= 1 */
     uint32_t work;
     uint8_t write;    /* 0 read, 1 write */
+    uint64_t pc;      /* the program counter of the access (the return address of
+                         the capture's hook), or 0 when the capture does not know it;
+                         emm_trace_module says which object it falls in */
 } emm_trace_record;
+
+/* An object mapped in the traced program (its executable, a shared
+ * library), for resolving the records' program counters offline: a pc in
+ * [lo, hi) lies in the file at `path`, at file address pc - bias. */
+typedef struct emm_trace_module {
+    uint64_t bias; /* the load bias: run-time address minus file address */
+    uint64_t lo, hi;
+    const char *path;
+} emm_trace_module;
 
 /* The geometry snapshot: may be empty (nv == nt == 0) for an address-only
  * trace, in which case only the `direct` and `cache` strategies apply. */
@@ -54,6 +66,9 @@ typedef struct emm_trace_info {
     int compressed;      /* blocks are zstd-compressed */
     uint64_t writes;     /* records with write = 1 (known once the writer closed) */
     uint64_t blocks;     /* record blocks in the file */
+    int has_pc;          /* the records carry program counters (version 2 and later) */
+    uint32_t nmodules;   /* the traced program's objects, for those pcs */
+    const emm_trace_module *modules;
 } emm_trace_info;
 
 typedef struct emm_trace_writer emm_trace_writer;
@@ -65,6 +80,19 @@ typedef struct emm_trace_reader emm_trace_reader;
 EMM_API emm_status emm_trace_writer_open(const char *path, const emm_trace_array *arrays,
                                          uint32_t narrays, const emm_trace_geometry *geometry,
                                          int compress, emm_trace_writer **out, emm_error *err);
+/* What a trace holds besides its arrays and geometry; zero-initialise. */
+typedef struct emm_trace_options {
+    int compress;                        /* zstd blocks */
+    int pcs;                             /* store the records' pc column */
+    const emm_trace_module *modules;     /* copied; may be NULL when nmodules is 0 */
+    uint32_t nmodules;
+} emm_trace_options;
+
+/* emm_trace_writer_open with options (NULL: none). */
+EMM_API emm_status emm_trace_writer_open_ex(const char *path, const emm_trace_array *arrays,
+                                            uint32_t narrays, const emm_trace_geometry *geometry,
+                                            const emm_trace_options *opt, emm_trace_writer **out,
+                                            emm_error *err);
 /* Appends n records. */
 EMM_API emm_status emm_trace_write(emm_trace_writer *w, const emm_trace_record *recs,
                                    size_t n, emm_error *err);

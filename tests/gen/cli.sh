@@ -76,12 +76,27 @@ faces)
     faces=$(field "$dir/m.off" faces)
     verts=$(field "$dir/m.off" vertices)
     [ "$faces" -ge 19800 ] && [ "$faces" -le 20200 ] || fail "acceptance: $faces faces"
-    [ "$(field "$dir/m.off" "thesis bytes")" = $((verts * 80 + faces * 28)) ] || fail "thesis bytes"
+    [ "$(field "$dir/m.off" "thesis bytes" | sed 's/ .*//; s/,//g')" = $((verts * 80 + faces * 28)) ] ||
+        fail "thesis bytes"
+    [ "$(grep -c 'thesis' "$dir/info")" = 1 ] || fail "the thesis' bytes are printed more than once"
     grep -q '^bbox: \[0, 0, 0\] - \[1, 1, 0\]$' "$dir/info" || fail "bbox"
     grep -q '^polygons split: 0$' "$dir/info" || fail "polygons split"
     grep -q '^mean edge length: 0\.0' "$dir/info" || fail "mean edge length"
-    grep -q '^thesis structs (Vertex 80 B, Triangle 28 B): 1,3[0-9][0-9],[0-9][0-9][0-9] bytes (1\.[34][0-9] MB)$' \
-        "$dir/info" || fail "thesis structs line"
+    grep -q '^thesis bytes: 1,3[0-9][0-9],[0-9][0-9][0-9] (Vertex 80 B, Triangle 28 B; 1\.[34][0-9] MB)$' \
+        "$dir/info" || fail "thesis bytes line"
+    # The hull: about sqrt(2 * 20000) boundary edges, not a square's 4.
+    [ "$(field "$dir/m.off" "boundary edges")" = 200 ] || fail "boundary edges"
+    # OBJ when the name says so, the same mesh; an unknown extension is refused.
+    "$emm" mesh gen --faces 500 --seed 2 -o "$dir/m.obj" >/dev/null || fail "gen .obj"
+    "$emm" mesh gen --faces 500 --seed 2 -o "$dir/m2.off" >/dev/null || fail "gen .off"
+    head -n 1 "$dir/m.obj" | grep -q '^# emm mesh' && grep -q '^v ' "$dir/m.obj" &&
+        grep -q '^f [1-9]' "$dir/m.obj" || fail "the .obj file is not OBJ"
+    "$emm" mesh info "$dir/m.obj" | sed 1d >"$dir/obj.info"
+    "$emm" mesh info "$dir/m2.off" | sed 1d >"$dir/off.info"
+    cmp -s "$dir/obj.info" "$dir/off.info" || fail "OBJ and OFF describe different meshes"
+    "$emm" mesh gen --faces 500 -o "$dir/m.stl" >/dev/null 2>"$dir/err"; rc=$?
+    [ $rc = 2 ] && grep -q 'must end in .off (OFF) or .obj (OBJ)' "$dir/err" || fail "-o m.stl: $rc"
+    [ ! -e "$dir/m.stl" ] || fail "-o m.stl wrote a file"
     "$emm" mesh info --json "$dir/m.off" >"$dir/json" || fail "info --json"
     cat "$dir/json"
     grep -q "\"faces\": $faces," "$dir/json" || fail "json faces"

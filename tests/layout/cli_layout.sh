@@ -20,7 +20,8 @@ for s in grid+naive@32 tiles+convolution@64 quadtree+extrapolated@16 cache@tiles
     tail -n 1 "$f" | grep -q '^</svg>$' || fail "$s: $f does not end with </svg>"
     grep -q '<path fill=' "$f" || fail "$s: $f draws no cells"
     grep -q "layout, CELL" "$f" || fail "$s: $f has no title"
-    [ -s "$DIR/out" ] && fail "$s: --svg alone printed to stdout"
+    [ "$(wc -l < "$DIR/out")" = 1 ] && grep -q "^wrote $f: $s's [0-9]* cells over 3000 triangles\$" "$DIR/out" ||
+        fail "$s: --svg does not say what it wrote: $(cat "$DIR/out")"
     ls "$DIR" | grep -q '\.tmp\.' && fail "$s: a temporary file was left behind"
 done
 

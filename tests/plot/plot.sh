@@ -80,6 +80,17 @@ one_line "$W/short.json: results\[0\].cycles"
 printf '[1, 2]' >"$W/notreport.json"
 expect 1 "$EMM" plot "$W/notreport.json"
 one_line "$W/notreport.json: not an emm report"
+# A trace, a text file and a timeline say what they are.
+"$EMM" trace synth --mesh "$W/m.off" --pattern curve --visits 50 -o "$W/x.emmt" >/dev/null 2>&1 ||
+    no "trace synth"
+expect 1 "$EMM" plot "$W/x.emmt"
+one_line "$W/x.emmt: an emm trace, not a report: simulate it first"
+printf 'hello\n' >"$W/text.txt"
+expect 1 "$EMM" plot "$W/text.txt"
+one_line "$W/text.txt: not a JSON report"
+printf '{"traceEvents": []}' >"$W/tl.json"
+expect 1 "$EMM" plot "$W/tl.json"
+one_line "$W/tl.json: a timeline, not a report"
 expect 1 "$EMM" plot "$W/none.json"
 one_line "$W/none.json: cannot open"
 

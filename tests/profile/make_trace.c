@@ -22,7 +22,7 @@ int main(int argc, char **argv)
         if (emm_trace_writer_open(argv[2], &a, 1, &g, 0, &w, &err) != EMM_OK)
             goto fail;
         for (uint64_t i = 0; i < 4096; i++) {
-            emm_trace_record r = {0x1000 + 8 * i, 0, 0, 8, 1, 0};
+            emm_trace_record r = {0x1000 + 8 * i, 0, 0, 8, 1, 0, 0};
             if (emm_trace_write(w, &r, 1, &err) != EMM_OK)
                 goto fail;
         }
@@ -61,9 +61,9 @@ int main(int argc, char **argv)
         }
     }
     for (uint32_t i = 0; i < 2 * N * N; i++) {
-        emm_trace_record r[4] = {{order[i], 1, 4, 24, 1, 0}};
+        emm_trace_record r[4] = {{order[i], 1, 4, 24, 1, 0, 0}};
         for (int k = 0; k < 3; k++)
-            r[1 + k] = (emm_trace_record){(uint64_t)tri[3 * order[i] + k], 0, 8, 24, 1, 0};
+            r[1 + k] = (emm_trace_record){(uint64_t)tri[3 * order[i] + k], 0, 8, 24, 1, 0, 0};
         if (emm_trace_write(w, r, 4, &err) != EMM_OK)
             goto fail;
     }

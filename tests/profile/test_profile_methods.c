@@ -173,12 +173,12 @@ static void test_profiler(void)
     emm_error err;
     REQUIRE(emm_profiler_new(&info, 3, "t", &p, &err) == EMM_OK);
     emm_trace_record recs[] = {
-        {0, 0, 8, 8, 0, 0}, {1, 0, 8, 8, 0, 0}, /* a leading index-order sweep: left out */
-        {77, 2, 0, 4, 0, 0},                     /* RAW: no position */
-        {0, 0, 8, 8, 0, 0}, {0, 0, 16, 8, 0, 0}, /* breaks the sweep; one element access */
-        {0, 1, 4, 24, 0, 0},                     /* the triangle: its centroid */
-        {2, 0, 8, 8, 0, 0},
-        {1, 0, 8, 8, 0, 0},                      /* past the window */
+        {0, 0, 8, 8, 0, 0, 0}, {1, 0, 8, 8, 0, 0, 0}, /* a leading index-order sweep: left out */
+        {77, 2, 0, 4, 0, 0, 0},                     /* RAW: no position */
+        {0, 0, 8, 8, 0, 0, 0}, {0, 0, 16, 8, 0, 0, 0}, /* breaks the sweep; one element access */
+        {0, 1, 4, 24, 0, 0, 0},                     /* the triangle: its centroid */
+        {2, 0, 8, 8, 0, 0, 0},
+        {1, 0, 8, 8, 0, 0, 0},                      /* past the window */
     };
     REQUIRE(emm_profiler_add(p, recs, 8, &err) == EMM_OK);
     CHECK(emm_profiler_full(p));
@@ -196,7 +196,7 @@ static void test_profiler(void)
 
     /* A sweep of one access is none: the first access is given back. */
     REQUIRE(emm_profiler_new(&info, 3, "t", &p, &err) == EMM_OK);
-    emm_trace_record jump[] = {{1, 0, 8, 8, 0, 0}, {0, 0, 8, 8, 0, 0}, {0, 1, 4, 24, 0, 0}};
+    emm_trace_record jump[] = {{1, 0, 8, 8, 0, 0, 0}, {0, 0, 8, 8, 0, 0, 0}, {0, 1, 4, 24, 0, 0, 0}};
     REQUIRE(emm_profiler_add(p, jump, 3, &err) == EMM_OK);
     CHECK(emm_profiler_full(p));
     CHECK(emm_profiler_swept(p, &sweep_records) == 0 && sweep_records == 0);
@@ -205,7 +205,7 @@ static void test_profiler(void)
     emm_profiler_free(p);
 
     REQUIRE(emm_profiler_new(&info, 10, "t", &p, &err) == EMM_OK);
-    emm_trace_record bad = {9, 0, 8, 8, 0, 0};
+    emm_trace_record bad = {9, 0, 8, 8, 0, 0, 0};
     CHECK(emm_profiler_add(p, &bad, 1, &err) == EMM_ERR_FORMAT);
     CHECK(strstr(err.message, "vertex 9") != NULL);
     emm_profiler_free(p);

@@ -210,13 +210,10 @@ static void test_write_append_decide(void)
     CHECK(strstr(err.message, "missing_table.txt") != NULL);
     emm_table_free(r);
     unsetenv("EMM_TABLE");
-    if (access(emm_table_default_path(), F_OK) != 0) {
-        r = emm_table_new();
-        CHECK(emm_table_load_standard(r, NULL, &err) == EMM_ERR_IO);
-        CHECK(strstr(err.message, emm_table_default_path()) != NULL);
-        emm_table_free(r);
-    }
-    CHECK(strstr(emm_table_default_path(), "table.txt") != NULL);
+    char def[4096];
+    /* Run from the build tree: the source tree's table. */
+    CHECK(emm_table_default_path(def, sizeof def));
+    CHECK(strstr(def, "/data/table.txt") != NULL);
     emm_table_free(t);
 }
 

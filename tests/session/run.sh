@@ -50,6 +50,9 @@ grep -q "cannot find libemmshim.so; tried $work/bin/../lib/libemmshim.so" "$work
 stand=$(ldd "$emm" | awk '/libm\.so/ { print $3; exit }')
 [ -n "$stand" ] || stand=$(ldd "$emm" | awk '/libc\.so/ { print $3; exit }')
 cp "$stand" "$work/lib/libemmshim.so" || exit 1
+# The copy is laid out as an install: its shipped table in share/emm.
+mkdir -p "$work/share/emm" &&
+    ln -s "$(dirname "$emm")/../share/emm/table.txt" "$work/share/emm/table.txt" || exit 1
 shim=$(cd "$work/lib" && pwd -P)/libemmshim.so
 LD_PRELOAD= "$work/bin/emm" run --report "$work/r-%p.json" --strategy cache --profile 5it \
     --compare none --quiet -- sh -c 'echo "$LD_PRELOAD|$EMM_REPORT|$EMM_STRATEGY|$EMM_PROFILE|$EMM_COMPARE|$EMM_LOG"; exit 3' \

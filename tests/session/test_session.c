@@ -194,11 +194,11 @@ static int feed(emm_session *s, size_t batch, int iterations_every)
         for (size_t k = i; k < nrecs && k < i + batch; k++) {
             uint32_t w = recs[k].work;
             if (w > 0 && k % 5 == 0) {
-                raw[n++] = (emm_raw_access){(uint64_t)(uintptr_t)&stray, 8, 1};
+                raw[n++] = (emm_raw_access){(uint64_t)(uintptr_t)&stray, 8, 1, 0};
                 w -= 1;
             }
             raw[n++] = (emm_raw_access){addr_of(&recs[k]),
-                                        recs[k].bytes | (recs[k].write ? EMM_RAW_WRITE : 0), w};
+                                        recs[k].bytes | (recs[k].write ? EMM_RAW_WRITE : 0), w, 0};
         }
         emm_session_state st = emm_session_access(s, raw, n);
         if (iterations_every && (i / batch) % (size_t)iterations_every == 0)
@@ -351,7 +351,7 @@ static void test_decide_checked(void)
     /* A leading index-order sweep (a program initialising per-vertex data):
      * left out of the profile, which still matches `mine` exactly. */
     for (size_t v = 0; v < nv; v++) {
-        emm_raw_access a = {vbase + v * VSTRIDE + 8, 8, 0};
+        emm_raw_access a = {vbase + v * VSTRIDE + 8, 8, 0, 0};
         CHECK(emm_session_access(s, &a, 1) == EMM_SESSION_PROFILING);
     }
     CHECK(feed(s, 777, 0) == 1);
@@ -679,7 +679,7 @@ static void test_bad_geometry(void)
     /* Not in index order: no leading sweep. */
     emm_raw_access a[WINDOW];
     for (size_t i = 0; i < WINDOW; i++)
-        a[i] = (emm_raw_access){vbase + ((i * 7919 + 1) % nv) * VSTRIDE + 8, 8, 0};
+        a[i] = (emm_raw_access){vbase + ((i * 7919 + 1) % nv) * VSTRIDE + 8, 8, 0, 0};
     CHECK(emm_session_access(s, a, WINDOW) == EMM_SESSION_DECIDE);
     CHECK(emm_session_decide(s, &err) == EMM_ERR_MESH);
     CHECKF(has(err.message, "vertex index"), "%s", err.message);
@@ -716,7 +716,7 @@ static void test_tags(void)
      * asks for the decision now, on the array's fields copied as it left. */
     CHECK(emm_session_untag(s, vmem) == EMM_SESSION_DECIDE);
     CHECK(emm_session_ranges(s, lo, hi, 4) == 0);
-    emm_raw_access x = {vbase + 8, 8, 0};
+    emm_raw_access x = {vbase + 8, 8, 0, 0};
     emm_session_access(s, &x, 1);
     CHECK(emm_session_decide(s, &err) == EMM_OK);
     CHECK(emm_session_finish(s, NULL, &err) == EMM_OK);

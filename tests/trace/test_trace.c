@@ -482,7 +482,7 @@ static void test_future_version(void)
     spit(dst, b, len);
     emm_error err;
     CHECK(read_all(dst, &err) == EMM_ERR_UNSUPPORTED);
-    CHECKF(strstr(err.message, "unsupported trace version 7 (this emm reads up to 1)") != NULL,
+    CHECKF(strstr(err.message, "unsupported trace version 7 (this emm reads up to 2)") != NULL,
            "%s", err.message);
     free(b);
     remove(src);
@@ -587,7 +587,9 @@ static void test_bad_block_content(void)
     REQUIRE(write_trace(src, recs, 40, 0, &g, &err) == EMM_OK);
     size_t len;
     unsigned char *orig = slurp(src, &len);
-    const size_t blk = EMM_TRACE_HEADER_SIZE + 3 * EMM_TRACE_ARRAY_SIZE + 8 + 5 * 24 + 3 * 12 + 8;
+    /* Header, array table, geometry, an empty module table. */
+    const size_t blk = EMM_TRACE_HEADER_SIZE + 3 * EMM_TRACE_ARRAY_SIZE + 8 + 5 * 24 + 3 * 12 + 8 +
+                       EMM_TRACE_MODULES_HEADER + 8;
     const size_t pay = blk + EMM_TRACE_BLOCK_HEADER_SIZE;
     const size_t plen = len - pay;
     REQUIRE(emm_le32(orig + blk) == EMM_TRACE_BLOCK_MAGIC && emm_le32(orig + blk + 12) == plen);
@@ -701,6 +703,91 @@ static void test_hash(void)
     CHECK(emm_trace_hash(buf, 0, 0) != emm_trace_hash(buf, 0, 1));
 }
 
+/* Version 2's pc column and module table: written, read back, compressed
+ * or not; the modules as given. */
+static void test_pcs_and_modules(void)
+{
+    const char *path = tpath(0, "pc");
+    enum { N = 70000 };
+    emm_trace_record *recs = malloc(N * sizeof *recs);
+    REQUIRE(recs);
+    for (size_t i = 0; i < N; i++) {
+        recs[i] = (emm_trace_record){.element = i % 1000, .array = (uint32_t)(i % 2),
+                                     .offset = 4, .bytes = 4, .work = 1,
+                                     .pc = i % 5 == 0 ? 0 : 0x555500001000u + 16 * (i % 37)};
+    }
+    const emm_trace_module mods[2] = {{0x555500000000u, 0x555500000000u, 0x555500100000u,
+                                       "/usr/bin/prog"},
+                                      {0x7f0000000000u, 0x7f0000001000u, 0x7f0000009000u, ""}};
+    emm_trace_geometry g = test_geometry();
+    for (int compress = 0; compress <= 1; compress++) {
+        emm_trace_options o = {compress, 1, mods, 2};
+        emm_trace_writer *w = NULL;
+        emm_error err;
+        REQUIRE(emm_trace_writer_open_ex(path, test_arrays, 3, &g, &o, &w, &err) == EMM_OK);
+        REQUIRE(emm_trace_write(w, recs, N, &err) == EMM_OK);
+        REQUIRE(emm_trace_writer_close(w, &err) == EMM_OK);
+        emm_trace_reader *r = NULL;
+        REQUIRE(emm_trace_reader_open(path, &r, &err) == EMM_OK);
+        const emm_trace_info *info = emm_trace_reader_info(r);
+        CHECK(info->has_pc && info->nmodules == 2);
+        CHECK(info->modules[0].bias == mods[0].bias && info->modules[0].lo == mods[0].lo &&
+              info->modules[0].hi == mods[0].hi &&
+              strcmp(info->modules[0].path, "/usr/bin/prog") == 0);
+        CHECK(info->modules[1].lo == mods[1].lo && strcmp(info->modules[1].path, "") == 0);
+        emm_trace_record *buf = malloc(N * sizeof *buf);
+        size_t got = 0, k;
+        while (emm_trace_read(r, buf + got, N - got, &k, &err) == EMM_OK && k > 0)
+            got += k;
+        CHECK(got == N);
+        size_t bad = 0;
+        for (size_t i = 0; i < got; i++)
+            bad += !same_record(&buf[i], &recs[i]) || buf[i].pc != recs[i].pc;
+        CHECKF(bad == 0, "%zu records differ", bad);
+        free(buf);
+        emm_trace_reader_close(r);
+    }
+    free(recs);
+    remove(path);
+}
+
+/* A version 1 file (no module table, six columns) is still read; its
+ * records have pc 0. Made from a version 2 file without pcs: the version
+ * set to 1 and the empty module table cut out. */
+static void test_version_1(void)
+{
+    const char *src = tpath(0, "v1_src"), *dst = tpath(1, "v1");
+    make_small(src, 0, 10);
+    size_t len;
+    unsigned char *b = slurp(src, &len);
+    const size_t mods = EMM_TRACE_HEADER_SIZE + 3 * EMM_TRACE_ARRAY_SIZE + 8 + 5 * 24 + 3 * 12 + 8;
+    const size_t cut = EMM_TRACE_MODULES_HEADER + 8;
+    REQUIRE(emm_le32(b + mods) == 0 && len > mods + cut);
+    memmove(b + mods, b + mods + cut, len - mods - cut);
+    emm_put_le32(b + EMM_TH_VERSION, 1);
+    rehash(b, 0, EMM_TH_CHECKSUM);
+    spit(dst, b, len - cut);
+    emm_error err;
+    emm_trace_reader *r = NULL;
+    REQUIRE(emm_trace_reader_open(dst, &r, &err) == EMM_OK);
+    const emm_trace_info *info = emm_trace_reader_info(r);
+    CHECK(info->version == 1 && !info->has_pc && info->nmodules == 0);
+    emm_trace_record buf[16];
+    size_t got = 0;
+    CHECK(emm_trace_read(r, buf, 16, &got, &err) == EMM_OK && got == 10);
+    for (size_t i = 0; i < got; i++)
+        CHECK(buf[i].pc == 0);
+    emm_trace_reader_close(r);
+    /* The pc flag is version 2's: in a version 1 header it is unknown. */
+    emm_put_le32(b + EMM_TH_FLAGS, 2);
+    rehash(b, 0, EMM_TH_CHECKSUM);
+    spit(dst, b, len - cut);
+    CHECK(read_all(dst, &err) == EMM_ERR_FORMAT && strstr(err.message, "unknown flags"));
+    free(b);
+    remove(src);
+    remove(dst);
+}
+
 int main(void)
 {
     test_hash();
@@ -716,5 +803,7 @@ int main(void)
     test_element_out_of_range();
     test_bad_block_content();
     test_writer_rejects();
+    test_pcs_and_modules();
+    test_version_1();
     return check_done();
 }

@@ -1,0 +1,194 @@
+/* The session's views of the chosen strategy's run beyond its totals: the
+ * trace with the program counters of the accesses and the program's
+ * modules (for emm annotate), the timeline (EMM_TIMELINE), and the source
+ * lines its DMA stalls came from, named in the summary and the report.
+ *
+ * The stalls are attributed record by record (emm_runner_costs: the chosen
+ * model runs costed; the others run as before) and summed by program
+ * counter (annotate.c, as emm annotate does); at finish the counters are
+ * resolved to source lines with libdw (srcline.c), off every capture path. */
+#include "session_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "error.h"
+#include "annotate.h"
+#include "srcline.h"
+
+/* The chosen model's costs, batch by batch (on the runner's thread). */
+static void on_costs(void *ctx, const emm_trace_record *recs, const emm_record_cost *cost,
+                     size_t n)
+{
+    emm_session *s = ctx;
+    emm_annotation_add(s->annotation, recs, cost, n);
+}
+
+/* The capture records program counters. */
+static bool has_pcs(const emm_session *s)
+{
+    return s->capture == EMM_CAPTURE_SANCOV;
+}
+
+void session_outputs_start(emm_session *s)
+{
+    emm_trace_module *mods = NULL;
+    uint32_t nmods = 0;
+    if (s->cfg.trace[0]) {
+        emm_trace_options o = {0, has_pcs(s), NULL, 0};
+        if (has_pcs(s) && emm_process_modules(&mods, &nmods, NULL) == EMM_OK) {
+            o.modules = mods;
+            o.nmodules = nmods;
+        }
+        if (emm_trace_writer_open_ex(s->cfg.trace, s->tarrays, s->ntarrays, &s->info.geometry, &o,
+                                     &s->trace, &s->trace_error) != EMM_OK) {
+            s->trace_failed = true;
+            s->trace = NULL;
+        }
+        free(mods);
+    }
+    emm_model *chosen = s->has_chosen ? emm_runner_model(s->runner, 0) : NULL;
+    if (s->cfg.timeline[0] && chosen) {
+        if (emm_timeline_open(s->cfg.timeline, s->machine, &s->chosen, 0, &s->timeline,
+                              &s->timeline_error) != EMM_OK) {
+            s->timeline_failed = true;
+            s->timeline = NULL;
+        } else {
+            emm_timeline_watch(s->timeline, chosen);
+        }
+    }
+    if (has_pcs(s) && chosen && s->chosen.kind == EMM_STRATEGY_EMM &&
+        (s->annotation = emm_annotation_new()) != NULL &&
+        emm_runner_costs(s->runner, 0, on_costs, s, NULL) != EMM_OK) {
+        emm_annotation_free(s->annotation);
+        s->annotation = NULL;
+    }
+}
+
+void session_window_done(emm_session *s)
+{
+    emm_model *chosen = s->has_chosen ? emm_runner_model(s->runner, 0) : NULL;
+    if (!chosen)
+        return;
+    emm_result r;
+    emm_model_result(chosen, &r);
+    s->window_cycles = r.total;
+}
+
+void session_stall_lines(emm_session *s)
+{
+    if (s->stall_lines_done || !s->annotation)
+        return;
+    s->stall_lines_done = true;
+    emm_trace_module *mods = NULL;
+    uint32_t nmods = 0;
+    s->stall_total = emm_annotation_total(s->annotation)->cycles[EMM_BUCKET_DMA_STALL];
+    if (emm_process_modules(&mods, &nmods, NULL) != EMM_OK)
+        return;
+    const emm_annotate_row *rows;
+    if (emm_annotation_resolve(s->annotation, mods, nmods, EMM_BUCKET_DMA_STALL, NULL) == EMM_OK) {
+        size_t n = emm_annotation_lines(s->annotation, &rows);
+        for (size_t i = 0; i < n && s->nstall_lines < SESSION_STALL_LINES; i++) {
+            if (!rows[i].file || !rows[i].cycles[EMM_BUCKET_DMA_STALL])
+                continue;
+            struct stall_line *l = &s->stall_lines[s->nstall_lines++];
+            snprintf(l->file, sizeof l->file, "%s", rows[i].file);
+            snprintf(l->function, sizeof l->function, "%s",
+                     rows[i].function ? rows[i].function : "?");
+            l->line = rows[i].line;
+            l->cycles = rows[i].cycles[EMM_BUCKET_DMA_STALL];
+        }
+    }
+    free(mods);
+}
+
+/* A path's last component: the summary names lines as a compiler would. */
+static const char *base_name(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    return slash ? slash + 1 : path;
+}
+
+void session_print_stall_lines(const emm_session *s, FILE *out)
+{
+    if (!s->nstall_lines || !s->stall_total)
+        return;
+    /* The stalls were counted on the window's choice (model 0); when the
+     * run's contest answered otherwise, say whose they are. */
+    char name[64];
+    if (s->has_predicted) {
+        emm_strategy_format(&s->predicted, name, sizeof name);
+        fprintf(out, "emm:   the prediction %s's DMA stalls came from", name);
+    } else {
+        fprintf(out, "emm:   the answer's DMA stalls come from");
+    }
+    for (size_t i = 0; i < s->nstall_lines; i++)
+        fprintf(out, "%s %s:%d %s (%.0f%%)", i ? "," : "", base_name(s->stall_lines[i].file),
+                s->stall_lines[i].line, s->stall_lines[i].function,
+                100.0 * (double)s->stall_lines[i].cycles / (double)s->stall_total);
+    fprintf(out, "   (emm annotate TRACE for every line)\n");
+}
+
+void session_write_stall_lines(json_writer *w, const emm_session *s)
+{
+    if (!has_pcs(s) || !s->stall_lines_done)
+        return;
+    char name[64];
+    emm_strategy_format(s->has_predicted ? &s->predicted : &s->chosen, name, sizeof name);
+    json_key(w, "stall_lines_strategy");
+    json_string(w, name);
+    json_key(w, "stall_lines");
+    json_begin_array(w);
+    for (size_t i = 0; i < s->nstall_lines; i++) {
+        json_begin_object(w);
+        json_key(w, "file");
+        json_string(w, s->stall_lines[i].file);
+        json_key(w, "line");
+        json_u64(w, (uint64_t)s->stall_lines[i].line);
+        json_key(w, "function");
+        json_string(w, s->stall_lines[i].function);
+        json_key(w, "dma_stall");
+        json_u64(w, s->stall_lines[i].cycles);
+        json_end_object(w);
+    }
+    json_end_array(w);
+}
+
+emm_status session_timeline_close(emm_session *s, emm_error *err)
+{
+    if (s->timeline_failed)
+        return emm_fail(err, s->timeline_error.status, "%s: %s",
+                        session_source(s, EMM_CONFIG_TIMELINE), s->timeline_error.message);
+    if (!s->timeline)
+        return EMM_OK;
+    emm_model *chosen = emm_runner_model(s->runner, 0);
+    emm_result r;
+    emm_model_result(chosen, &r);
+    char name[96];
+    emm_timeline_phase(s->timeline, "the profiling window (replayed at the decision)", 0,
+                       s->window_cycles);
+    /* Phases after the window: from their detection (the chosen model's
+     * clock then) to the next one's, or the end. */
+    uint64_t start = s->window_cycles;
+    for (int i = 1; i <= s->nphases; i++) {
+        uint64_t end = i < s->nphases ? s->phases[i].chosen_at : r.total;
+        if (i == 1)
+            snprintf(name, sizeof name, "run after the window: %s", s->phases[0].pattern);
+        else
+            snprintf(name, sizeof name, "phase %d: %s", i - 1, s->phases[i - 1].pattern);
+        emm_timeline_phase(s->timeline, name, start, end);
+        start = end;
+    }
+    emm_status st = emm_timeline_close(s->timeline, chosen, r.total, err);
+    s->timeline = NULL;
+    return st;
+}
+
+void session_lines_free(emm_session *s)
+{
+    if (s->timeline)
+        emm_timeline_abort(s->timeline, emm_runner_model(s->runner, 0));
+    s->timeline = NULL;
+    emm_annotation_free(s->annotation);
+    s->annotation = NULL;
+}
