@@ -578,8 +578,10 @@ static const struct emm_model_ops fetch_ops = {fetch_run,     fetch_reset, fetch
 
 /* The local store the cells may use (docs/fetch.md, "The local store"):
  * local.bytes less the look-up tables, when they fit emm.lookup_budget (and
- * half the local store); less the budget's page frames when they do not and
- * are paged. Those
+ * half the local store) and leave room for the largest cell; less the
+ * tables' page frames when they do not and are paged — the budget's
+ * frames, or fewer (at least two) when the largest cell needs the room.
+ * Those
  * tables depend on the layout, so it is built (shared, unchecked) first; a
  * cell that does not fit what the tables leave is reported by a private
  * build checked against exactly that, whose message names a CELL that
@@ -596,10 +598,22 @@ static emm_status plan_local_store(fetch_model *m, const emm_machine_params *p,
      * cells need the rest. */
     uint64_t budget = p->emm_lookup_budget < p->local_bytes / 2 ? p->emm_lookup_budget
                                                                  : p->local_bytes / 2;
-    if (tables > budget) {
+    uint64_t largest = 0;
+    for (uint32_t c = 0; c < m->ncells; c++)
+        if (m->cells[c].bytes > largest)
+            largest = m->cells[c].bytes;
+    /* Tables that fit neither their budget nor beside the largest cell (where
+     * two page frames would) are paged; their page frames take the budget,
+     * or what the largest cell leaves when that is less (at least two): a
+     * large cell costs the tables' frames, not the strategy. */
+    uint64_t two = 2 * (uint64_t)p->emm_lookup_page;
+    if (tables > budget || (largest + two <= p->local_bytes && tables > p->local_bytes - largest)) {
         m->paged = true;
         m->pg.page = p->emm_lookup_page;
-        uint64_t frames = budget / p->emm_lookup_page;
+        /* (A cell that leaves no two frames does not fit anyway: its
+         * error then reads against the budget's frames.) */
+        uint64_t room = largest + two <= p->local_bytes ? p->local_bytes - largest : budget;
+        uint64_t frames = (budget < room ? budget : room) / p->emm_lookup_page;
         m->pg.frames = (uint32_t)(frames < 2 ? 2 : frames > UINT32_MAX ? UINT32_MAX : frames);
         tables = (uint64_t)m->pg.frames * m->pg.page;
     }
@@ -609,10 +623,6 @@ static emm_status plan_local_store(fetch_model *m, const emm_machine_params *p,
                         "store (local.bytes); lower emm.lookup_budget to page them",
                         name, emm_grouped(tables, b1), emm_grouped(p->local_bytes, b2));
     m->budget = p->local_bytes - tables;
-    uint64_t largest = 0;
-    for (uint32_t c = 0; c < m->ncells; c++)
-        if (m->cells[c].bytes > largest)
-            largest = m->cells[c].bytes;
     if (largest <= m->budget)
         return EMM_OK;
     emm_layout *again = NULL;
