@@ -24,4 +24,17 @@ loader=$(num loader_writes) reads=$(num reads) writes=$(num writes)
 strategy=$(sed -n 's/^  "strategy": "\(.*\)",$/\1/p' "$R")
 case $strategy in ''|cache*) fail "report: strategy '$strategy' on a machine without a cache" ;; esac
 echo "window: $reads reads, $writes writes; loader: $loader writes not simulated; $strategy"
+# Every figure of the window-only report says so in its title.
+if [ -n "${EMM_CLI:-}" ]; then
+  "$EMM_CLI" plot "$R" --out "$WORK/plots" --format svg > "$WORK/plot.out" 2>&1 ||
+    { cat "$WORK/plot.out" >&2; fail "emm plot failed on the report"; }
+  n=0
+  for gp in "$WORK"/plots/*.gp; do
+    [ -e "$gp" ] || continue
+    n=$((n + 1))
+    grep -q 'window only' "$gp" || fail "$(basename "$gp"): its title does not say 'window only'"
+  done
+  [ "$n" -ge 2 ] || fail "emm plot drew $n figures"
+  echo "plots: $n figures, each titled 'window only'"
+fi
 echo "loader: ok"
