@@ -114,14 +114,16 @@ void session_print_stall_lines(const emm_session *s, FILE *out)
     if (!s->nstall_lines || !s->stall_total)
         return;
     /* The stalls were counted on the window's choice (model 0); when the
-     * run's contest answered otherwise, say whose they are. */
-    char name[64];
+     * run's contest answered otherwise they are not the answer's: say how
+     * to see the answer's instead of naming another strategy's lines. */
     if (s->has_predicted) {
-        emm_strategy_format(&s->predicted, name, sizeof name);
-        fprintf(out, "emm:   the prediction %s's DMA stalls came from", name);
-    } else {
-        fprintf(out, "emm:   the answer's DMA stalls come from");
+        char name[64];
+        emm_strategy_format(&s->chosen, name, sizeof name);
+        fprintf(out, "emm:   the answer's DMA stalls by source line: emm annotate %s --strategy %s\n",
+                s->cfg.trace[0] ? s->cfg.trace : "TRACE (rerun with --trace TRACE)", name);
+        return;
     }
+    fprintf(out, "emm:   the answer's DMA stalls come from");
     for (size_t i = 0; i < s->nstall_lines; i++)
         fprintf(out, "%s %s:%d %s (%.0f%%)", i ? "," : "", base_name(s->stall_lines[i].file),
                 s->stall_lines[i].line, s->stall_lines[i].function,
