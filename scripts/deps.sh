@@ -6,7 +6,7 @@ set -euo pipefail
 
 packages=(
   cmake make gcc g++ clang pkg-config   # the build (gcc and clang both supported)
-  libopenmesh-dev                       # mesh file IO (OFF, OBJ, PLY, STL)
+  libclang-rt-14-dev                    # libFuzzer's runtime (tests/fuzz, make fuzz, make check-asan)
   libqhull-dev                          # Delaunay triangulation for the mesh generator
   libunwind-dev                         # call-site names for the shim's tag rules
   libzstd-dev                           # optional zstd compression of trace blocks
