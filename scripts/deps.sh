@@ -12,6 +12,8 @@ packages=(
   libzstd-dev                           # optional zstd compression of trace blocks
   gnuplot-nox                           # emm plot
   glmark2-data                          # a real mesh (bunny.obj) for tests and benchmarks
+  python3                               # tests: reports read back with a strict JSON reader
+  time                                  # tests: /usr/bin/time measures the bad-input reproducers
 )
 
 missing=()

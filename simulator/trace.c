@@ -129,6 +129,10 @@ static emm_status check_arrays(const emm_trace_array *arrays, uint32_t narrays,
                 return emm_fail(err, bad,
                                 "%sarray %u is raw memory but has record size %u (must be 1)",
                                 what, i, a->record_size);
+            /* Its elements are the addresses themselves. */
+            if (a->base != 0)
+                return emm_fail(err, bad, "%sarray %u is raw memory but has base 0x%llx (must be 0)",
+                                what, i, (unsigned long long)a->base);
         } else {
             /* Every byte of the array must have a 64-bit address. */
             uint64_t span;
@@ -471,6 +475,11 @@ emm_status emm_trace_write(emm_trace_writer *w, const emm_trace_record *recs, si
         if (r->bytes == 0 || r->bytes > access_limit(a))
             return emm_fail(err, EMM_ERR_RANGE, "%s: record %llu: access of %u bytes (array %u takes 1 to %u)",
                             w->path, (unsigned long long)index, r->bytes, r->array, access_limit(a));
+        if (r->element + (r->bytes - 1) < r->element)
+            return emm_fail(err, EMM_ERR_RANGE,
+                            "%s: record %llu: an access of %u bytes at 0x%llx runs past the end of the "
+                            "64-bit address space",
+                            w->path, (unsigned long long)index, r->bytes, (unsigned long long)r->element);
         if (r->write > 1)
             return emm_fail(err, EMM_ERR_RANGE, "%s: record %llu: write flag %u (must be 0 or 1)",
                             w->path, (unsigned long long)index, r->write);
@@ -854,6 +863,10 @@ static emm_status describe_bad_record(const emm_trace_reader *r, uint64_t a, int
     if (work > UINT32_MAX)
         return emm_fail(err, EMM_ERR_FORMAT, "%s: work %llu exceeds 32 bits", where,
                         (unsigned long long)work);
+    if (e_known && e + (bytes - 1) < e)
+        return emm_fail(err, EMM_ERR_FORMAT,
+                        "%s: an access of %llu bytes at 0x%llx runs past the end of the 64-bit address space",
+                        where, (unsigned long long)bytes, (unsigned long long)e);
     return emm_fail(err, EMM_ERR_FORMAT, "%s: write flag %llu (must be 0 or 1)", where,
                     (unsigned long long)write);
 }
@@ -1024,7 +1037,10 @@ static emm_status next_block(emm_trace_reader *r, emm_trace_record *dst, size_t 
             uint64_t a = ca[i];
             uint64_t e = prev[a] + cd[i];
             prev[a] = e;
-            bad |= (uint64_t)(e > maxe[a]) | (uint64_t)(co[i] >= rsize[a]) | (uint64_t)(cb[i] > maxb[a]);
+            /* The last test is for raw arrays (element = address): a
+             * tagged array's records all lie below 2^64 (check_arrays). */
+            bad |= (uint64_t)(e > maxe[a]) | (uint64_t)(co[i] >= rsize[a]) | (uint64_t)(cb[i] > maxb[a]) |
+                   (uint64_t)(e + (cb[i] - 1) < e);
             o[i].element = e;
             o[i].array = (uint32_t)a;
             o[i].offset = (uint32_t)co[i];
@@ -1036,7 +1052,7 @@ static emm_status next_block(emm_trace_reader *r, emm_trace_record *dst, size_t 
         if (__builtin_expect(bad != 0, 0))
             for (uint32_t i = 0; i < m; i++)
                 if (o[i].element > maxe[o[i].array] || co[i] >= rsize[o[i].array] ||
-                    cb[i] > maxb[o[i].array])
+                    cb[i] > maxb[o[i].array] || o[i].element + (cb[i] - 1) < o[i].element)
                     return describe_bad_record(r, o[i].array, 1, o[i].element, co[i], cb[i],
                                                cw[i], cx[i], r->seen + i0 + i, pat, b, err);
     }

@@ -79,6 +79,8 @@ static void gen_records(emm_trace_record *r, size_t n)
                               ? EMM_TRACE_MAX_ACCESS_BYTES
                               : test_arrays[a].record_size;
         o->bytes = (y & 255) == 0 ? widest : (uint32_t)(1u << (y % 4));
+        if (o->element + (o->bytes - 1) < o->element) /* would run past 2^64 */
+            o->element -= o->bytes;
         o->work = (y & 1023) == 1 ? UINT32_MAX : (uint32_t)((y >> 16) % 40);
         o->write = (uint8_t)((y >> 40) % 4 == 0);
     }
@@ -656,6 +658,7 @@ static void test_writer_rejects(void)
         {.element = 0, .array = 2, .offset = 1, .bytes = 4},   /* raw: offset must be 0 */
         {.element = 1, .array = 0, .bytes = 81},               /* wider than the record */
         {.element = 0, .array = 2, .bytes = EMM_TRACE_MAX_ACCESS_BYTES + 1}, /* raw: too wide */
+        {.element = UINT64_MAX - 2, .array = 2, .bytes = 4},  /* raw: past 2^64 */
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         emm_trace_writer *w = NULL;
