@@ -3,9 +3,11 @@
 #   make check  install what is missing, build, run the whole test suite
 BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+FUZZ_SECONDS ?= 300
+FUZZ ?=
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build demo check check-asan bench thesis table install clean
+.PHONY: all deps configure build demo check check-asan asan-build fuzz bench thesis table install clean
 
 all: build
 
@@ -28,12 +30,20 @@ check: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 # The test suite again, built with clang under AddressSanitizer and
-# UndefinedBehaviorSanitizer (STYLE.md §10).
-check-asan: deps
+# UndefinedBehaviorSanitizer (STYLE.md §10), with the fuzz harnesses
+# replaying their corpora and regression files (tests/fuzz).
+asan-build: deps
 	@CC=clang CXX=clang++ cmake -S . -B build-asan -DEMM_SANITIZE=address,undefined >/dev/null
 	@env -u MAKELEVEL -u MAKEFLAGS -u MFLAGS cmake --build build-asan -j $(JOBS)
+
+check-asan: asan-build
 	@cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS)
+
+# Each libFuzzer harness of tests/fuzz for FUZZ_SECONDS (default 300), one
+# after the other (FUZZ="trace din" picks some), in the sanitizer build.
+fuzz: asan-build
+	@scripts/fuzz.sh build-asan $(FUZZ_SECONDS) $(FUZZ)
 
 bench: build
 	@scripts/bench.sh $(BUILD)

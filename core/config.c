@@ -364,6 +364,7 @@ emm_status emm_config_set(emm_config *c, emm_config_key k, const char *value, co
     if (ok)
         return EMM_OK;
     emm_clip(value, strlen(value), q);
+    emm_printable(why); /* it may quote a path made from the value */
     if (why[0])
         return emm_fail(err, EMM_ERR_INVALID, "%s='%s': %s", source, q, why);
     return emm_fail(err, EMM_ERR_INVALID, "%s='%s': expected %s", source, q, r->pub.accepts);

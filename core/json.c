@@ -33,7 +33,34 @@ static void separate(json_writer *w)
     newline(w);
 }
 
-static void put_string(FILE *out, const char *s)
+/* The length of the well-formed UTF-8 sequence at p (RFC 3629: no
+ * overlong forms, no surrogates, nothing past U+10FFFF), or 0. */
+static size_t utf8_length(const unsigned char *p)
+{
+    unsigned char c = p[0];
+    size_t n;
+    unsigned lo = 0x80, hi = 0xBF; /* the allowed range of the second byte */
+    if (c >= 0xC2 && c <= 0xDF)
+        n = 2;
+    else if (c >= 0xE0 && c <= 0xEF) {
+        n = 3;
+        if (c == 0xE0) lo = 0xA0;
+        if (c == 0xED) hi = 0x9F;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+        n = 4;
+        if (c == 0xF0) lo = 0x90;
+        if (c == 0xF4) hi = 0x8F;
+    } else
+        return 0;
+    if (p[1] < lo || p[1] > hi)
+        return 0;
+    for (size_t k = 2; k < n; k++)
+        if (p[k] < 0x80 || p[k] > 0xBF)
+            return 0;
+    return n;
+}
+
+void json_write_string(FILE *out, const char *s)
 {
     fputc('"', out);
     for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
@@ -44,10 +71,22 @@ static void put_string(FILE *out, const char *s)
         case '\r': fputs("\\r", out); break;
         case '\t': fputs("\\t", out); break;
         default:
-            if (*p < 0x20)
+            if (*p < 0x20) {
                 fprintf(out, "\\u%04x", *p);
-            else
+            } else if (*p < 0x80) {
                 fputc(*p, out);
+            } else {
+                /* Text that is not UTF-8 (a file name in another encoding)
+                 * would make the whole document invalid JSON: each byte
+                 * outside a well-formed sequence becomes U+FFFD. */
+                size_t n = utf8_length(p);
+                if (n == 0) {
+                    fputs("\\ufffd", out);
+                } else {
+                    fwrite(p, 1, n, out);
+                    p += n - 1;
+                }
+            }
         }
     }
     fputc('"', out);
@@ -56,7 +95,7 @@ static void put_string(FILE *out, const char *s)
 void json_key(json_writer *w, const char *key)
 {
     separate(w);
-    put_string(w->out, key);
+    json_write_string(w->out, key);
     fputs(w->pretty ? ": " : ":", w->out);
     w->pending = true;
 }
@@ -100,7 +139,7 @@ void json_end_array(json_writer *w) { end_container(w, ']'); }
 void json_string(json_writer *w, const char *s)
 {
     before_value(w);
-    put_string(w->out, s);
+    json_write_string(w->out, s);
 }
 
 void json_u64(json_writer *w, uint64_t v)

@@ -1,7 +1,7 @@
 /* Internal: a tiny streaming JSON writer for reports. It tracks nesting and
  * commas so callers write keys and values in order; output goes to a FILE.
  * Numbers are unsigned 64-bit integers or finite doubles; strings are
- * escaped. Errors are sticky: check json_failed() (or ferror) at the end. */
+ * escaped, and always valid UTF-8 (json_write_string). Errors are sticky: check json_failed() (or ferror) at the end. */
 #ifndef EMM_INTERNAL_JSON_H
 #define EMM_INTERNAL_JSON_H
 
@@ -35,6 +35,10 @@ void json_double(json_writer *w, double v);
 void json_fixed(json_writer *w, double v, int decimals);
 void json_bool(json_writer *w, bool v);
 void json_null(json_writer *w);
+/* Writes s as one JSON string: quotes, backslashes and control characters
+ * escaped; well-formed UTF-8 copied; every byte that is not part of a
+ * well-formed UTF-8 sequence written as \ufffd (docs/report.md). */
+void json_write_string(FILE *out, const char *s);
 /* Ends the document with a newline. */
 void json_finish(json_writer *w);
 bool json_failed(const json_writer *w);

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "error.h"
+#include "infile.h"
 
 struct jr_value {
     jr_type type;
@@ -455,37 +456,12 @@ emm_status jr_parse(const char *text, size_t len, const char *name, jr_value **o
 
 emm_status jr_parse_file(const char *path, jr_value **out, emm_error *err)
 {
-    FILE *f = fopen(path, "rb");
-    char *buf = NULL;
-    size_t len = 0, cap = 0;
-    emm_status st;
+    char *buf;
+    size_t len;
     *out = NULL;
-    if (!f)
-        return emm_fail(err, EMM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-    for (;;) {
-        size_t got;
-        if (cap - len < 65536) {
-            char *nb;
-            cap = cap ? 2 * cap : 1 << 16;
-            if (!(nb = realloc(buf, cap))) {
-                free(buf);
-                fclose(f);
-                return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
-            }
-            buf = nb;
-        }
-        got = fread(buf + len, 1, cap - len, f);
-        len += got;
-        if (got == 0)
-            break;
-    }
-    if (ferror(f)) {
-        int e = errno;
-        free(buf);
-        fclose(f);
-        return emm_fail(err, EMM_ERR_IO, "%s: cannot read: %s", path, strerror(e));
-    }
-    fclose(f);
+    emm_status st = emm_infile_read(path, "JSON report", JR_FILE_MAX, &buf, &len, err);
+    if (st != EMM_OK)
+        return st;
     if (len == 0) {
         free(buf);
         return emm_fail(err, EMM_ERR_FORMAT, "%s: empty file, not JSON", path);

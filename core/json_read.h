@@ -27,8 +27,13 @@ typedef struct jr_value jr_value;
  * tree (jr_free). Errors: EMM_ERR_FORMAT for malformed text, EMM_ERR_NOMEM. */
 emm_status jr_parse(const char *text, size_t len, const char *name, jr_value **out,
                     emm_error *err);
+/* The largest report jr_parse_file reads: 1 GiB (a whole sweep's report
+ * is a few MiB); from a pipe or device, EMM_INFILE_STREAM_MAX. */
+#define JR_FILE_MAX ((size_t)1 << 30)
+
 /* Reads and parses the file at path (named by its path in messages);
- * EMM_ERR_IO when it cannot be read. */
+ * EMM_ERR_IO when it cannot be read or is a directory, EMM_ERR_RANGE when
+ * it is larger than JR_FILE_MAX (infile.h). */
 emm_status jr_parse_file(const char *path, jr_value **out, emm_error *err);
 /* Frees a tree; NULL is allowed. */
 void jr_free(jr_value *v);

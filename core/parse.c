@@ -98,5 +98,15 @@ const char *emm_clip(const char *text, size_t len, char buf[EMM_CLIP + 1])
         memcpy(buf, text, len);
         buf[len] = '\0';
     }
+    emm_printable(buf);
     return buf;
+}
+
+void emm_printable(char *s)
+{
+    /* A newline or another control character in a value would split the
+     * one-line message, or hide part of it on a terminal. */
+    for (; *s; s++)
+        if ((unsigned char)*s < 0x20 || *s == 0x7f)
+            *s = '?';
 }

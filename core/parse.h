@@ -22,8 +22,11 @@ bool emm_parse_double(const char *s, double *out);
 const char *emm_grouped(uint64_t v, char buf[32]);
 
 /* Quotes text[0..len) in messages: cut to EMM_CLIP characters with "..." so
- * the explanation after it always fits one line. Returns buf. */
+ * the explanation after it always fits one line, control characters (a
+ * newline) shown as '?'. Returns buf. */
 #define EMM_CLIP 60
 const char *emm_clip(const char *text, size_t len, char buf[EMM_CLIP + 1]);
+/* Replaces control characters in s with '?', in place. */
+void emm_printable(char *s);
 
 #endif

@@ -23,6 +23,7 @@
 #include "mesh_internal.h"
 
 #include "error.h"
+#include "infile.h"
 #include "mesh_io.h"
 #include "outfile.h"
 
@@ -249,28 +250,6 @@ static file_kind kind_of(const char *path)
     return KIND_UNKNOWN;
 }
 
-static emm_status slurp(const char *path, size_t size, char **out, emm_error *err)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return emm_fail(err, EMM_ERR_IO, "%s: %s", path, strerror(errno));
-    char *data = malloc(size ? size : 1);
-    if (!data) {
-        fclose(f);
-        return out_of_memory(path, err);
-    }
-    size_t got = fread(data, 1, size, f);
-    bool failed = ferror(f) != 0;
-    int e = errno;
-    fclose(f);
-    if (failed || got != size) {
-        free(data);
-        return emm_fail(err, EMM_ERR_IO, "%s: %s", path, failed ? strerror(e) : "file changed while being read");
-    }
-    *out = data;
-    return EMM_OK;
-}
-
 /* "<path>: line L: face F" or "<path>: face F" where the reader knows no lines. */
 static void face_place(char *buf, size_t cap, const char *path, const emm_raw_mesh *r, size_t f)
 {
@@ -280,30 +259,49 @@ static void face_place(char *buf, size_t cap, const char *path, const emm_raw_me
         snprintf(buf, cap, "%s: face %zu", path, f + (size_t)r->index_base);
 }
 
-static bool has_repeat(const int64_t *c, size_t k, int64_t *which)
+/* A vertex that face f lists twice, found in O(k) with a stamp per vertex
+ * (stamp[v] == f + 1: v already met in f), so a face with a million
+ * corners costs a million steps, not 10^12. */
+static bool has_repeat(const int64_t *c, size_t k, size_t f, size_t *stamp, int64_t *which)
 {
-    for (size_t i = 0; i < k; i++)
-        for (size_t j = i + 1; j < k; j++)
-            if (c[i] == c[j]) {
-                *which = c[i];
-                return true;
-            }
+    for (size_t i = 0; i < k; i++) {
+        if (stamp[c[i]] == f + 1) {
+            *which = c[i];
+            return true;
+        }
+        stamp[c[i]] = f + 1;
+    }
     return false;
 }
 
+static emm_status check_face_list(const char *path, const emm_raw_mesh *r, size_t *stamp, size_t *nt,
+                                  size_t *split, emm_error *err);
+
 static emm_status check_faces(const char *path, const emm_raw_mesh *r, size_t *nt, size_t *split, emm_error *err)
+{
+    *nt = 0;
+    *split = 0;
+    size_t *stamp = calloc(r->nv ? r->nv : 1, sizeof *stamp);
+    if (!stamp)
+        return out_of_memory(path, err);
+    emm_status st = check_face_list(path, r, stamp, nt, split, err);
+    free(stamp);
+    return st;
+}
+
+static emm_status check_face_list(const char *path, const emm_raw_mesh *r, size_t *stamp, size_t *nt,
+                                  size_t *split, emm_error *err)
 {
     char place[600];
     long long base = r->index_base;
-    *nt = 0;
-    *split = 0;
     for (size_t f = 0; f < r->nf; f++) {
-        const int64_t *c = r->corner + r->face_start[f];
         size_t k = r->face_start[f + 1] - r->face_start[f];
         if (k < 3) {
             face_place(place, sizeof place, path, r, f);
             return emm_fail(err, EMM_ERR_MESH, "%s has %zu corners; a face needs at least 3", place, k);
         }
+        /* Only now: with no corner in the whole file, corner is NULL. */
+        const int64_t *c = r->corner + r->face_start[f];
         for (size_t i = 0; i < k; i++)
             if (c[i] < 0 || (uint64_t)c[i] >= r->nv) {
                 face_place(place, sizeof place, path, r, f);
@@ -311,7 +309,7 @@ static emm_status check_faces(const char *path, const emm_raw_mesh *r, size_t *n
                                 place, (long long)c[i] + base, r->nv);
             }
         int64_t v;
-        if (has_repeat(c, k, &v)) {
+        if (has_repeat(c, k, f, stamp, &v)) {
             face_place(place, sizeof place, path, r, f);
             return emm_fail(err, EMM_ERR_MESH, "%s repeats vertex %lld (degenerate face)", place,
                             (long long)v + base);
@@ -337,26 +335,41 @@ emm_status emm_mesh_open(const char *path, emm_mesh **out, emm_error *err)
     if (kind == KIND_UNKNOWN)
         return emm_fail(err, EMM_ERR_UNSUPPORTED,
                         "%s: unknown mesh file extension (emm reads .off, .obj, .ply and .stl)", path);
-    if (sb.st_size == 0)
-        return emm_fail(err, EMM_ERR_FORMAT, "%s: empty file", path);
-    if (access(path, R_OK) != 0)
-        return emm_fail(err, EMM_ERR_IO, "%s: %s", path, strerror(errno));
 
+    /* The whole file in memory: every reader parses bytes, and allocates
+     * only for what the bytes hold, so memory stays a small multiple of the
+     * file's size whatever its header declares. */
+    char *data;
+    size_t len;
+    emm_status st = emm_infile_read(path, "mesh file", SIZE_MAX, &data, &len, err);
+    if (st != EMM_OK)
+        return st;
+    st = emm_mesh_parse(path, data, len, out, err);
+    free(data);
+    return st;
+}
+
+emm_status emm_mesh_parse(const char *path, const char *data, size_t len, emm_mesh **out, emm_error *err)
+{
+    *out = NULL;
+    file_kind kind = kind_of(path);
+    if (kind == KIND_UNKNOWN)
+        return emm_fail(err, EMM_ERR_UNSUPPORTED,
+                        "%s: unknown mesh file extension (emm reads .off, .obj, .ply and .stl)", path);
+    if (len == 0)
+        return emm_fail(err, EMM_ERR_FORMAT, "%s: empty file", path);
     emm_raw_mesh raw;
     memset(&raw, 0, sizeof raw);
     emm_status st;
-    if (kind == KIND_OFF || kind == KIND_OBJ) {
-        char *data = NULL;
-        st = slurp(path, (size_t)sb.st_size, &data, err);
-        if (st != EMM_OK)
-            return st;
-        st = kind == KIND_OFF ? emm_read_off(path, data, (size_t)sb.st_size, &raw, err)
-                              : emm_read_obj(path, data, (size_t)sb.st_size, &raw, err);
-        free(data);
-        if (st == EMM_ERR_UNSUPPORTED && kind == KIND_OFF)
-            st = emm_read_openmesh(path, &raw, err); /* binary OFF */
-    } else {
-        st = emm_read_openmesh(path, &raw, err);
+    switch (kind) {
+    case KIND_OFF:
+        st = emm_read_off(path, data, len, &raw, err);
+        if (st == EMM_ERR_UNSUPPORTED)
+            st = emm_read_off_binary(path, data, len, &raw, err);
+        break;
+    case KIND_OBJ: st = emm_read_obj(path, data, len, &raw, err); break;
+    case KIND_PLY: st = emm_read_ply(path, data, len, &raw, err); break;
+    default: st = emm_read_stl(path, data, len, &raw, err); break;
     }
     if (st != EMM_OK)
         return st;

@@ -23,4 +23,9 @@ struct emm_mesh {
     double mean_edge;
 };
 
+/* emm_mesh_open on a file's bytes already in memory: `path` names the file
+ * in messages and its extension picks the format. Used by emm_mesh_open
+ * and by the fuzz harnesses (tests/fuzz). */
+emm_status emm_mesh_parse(const char *path, const char *data, size_t len, emm_mesh **out, emm_error *err);
+
 #endif

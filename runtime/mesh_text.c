@@ -14,76 +14,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-void emm_raw_mesh_free(emm_raw_mesh *raw)
-{
-    if (!raw)
-        return;
-    free(raw->xyz);
-    free(raw->corner);
-    free(raw->face_start);
-    free(raw->face_line);
-    memset(raw, 0, sizeof *raw);
-}
-
-/* ---- growing the raw arrays ---------------------------------------------- */
-
-typedef struct builder {
-    emm_raw_mesh *raw;
-    size_t ncorner;
-    size_t cap_v, cap_c, cap_f, cap_l;
-} builder;
-
-static bool grow(void **p, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap)
-        return true;
-    size_t n = *cap ? *cap : 256;
-    while (n < need) {
-        if (n > SIZE_MAX / 4 / elem)
-            return false;
-        n *= 2;
-    }
-    void *q = realloc(*p, n * elem);
-    if (!q)
-        return false;
-    *p = q;
-    *cap = n;
-    return true;
-}
-
-static bool add_vertex(builder *b, const double v[3])
-{
-    emm_raw_mesh *r = b->raw;
-    if (!grow((void **)&r->xyz, &b->cap_v, 3 * (r->nv + 1), sizeof(double)))
-        return false;
-    memcpy(r->xyz + 3 * r->nv, v, 3 * sizeof(double));
-    r->nv++;
-    return true;
-}
-
-static bool add_corner(builder *b, int64_t v)
-{
-    if (!grow((void **)&b->raw->corner, &b->cap_c, b->ncorner + 1, sizeof(int64_t)))
-        return false;
-    b->raw->corner[b->ncorner++] = v;
-    return true;
-}
-
-/* Closes the face whose corners were added since the previous one. */
-static bool end_face(builder *b, size_t line)
-{
-    emm_raw_mesh *r = b->raw;
-    if (!grow((void **)&r->face_start, &b->cap_f, r->nf + 2, sizeof(size_t)))
-        return false;
-    if (!grow((void **)&r->face_line, &b->cap_l, r->nf + 2, sizeof(size_t)))
-        return false;
-    if (r->nf == 0)
-        r->face_start[0] = 0;
-    r->face_line[r->nf] = line;
-    r->face_start[++r->nf] = b->ncorner;
-    return true;
-}
-
 /* ---- lines and numbers -------------------------------------------------- */
 
 typedef struct cursor {
@@ -105,7 +35,7 @@ static bool next_line(cursor *c)
         const char *hash = memchr(c->p, '#', (size_t)(stop - c->p));
         const char *text_end = hash ? hash : stop;
         size_t n = (size_t)(text_end - c->p);
-        if (!grow((void **)&c->buf, &c->cap, n + 1, 1)) {
+        if (!emm_raw_grow((void **)&c->buf, &c->cap, n + 1, 1)) {
             c->nomem = true;
             return false;
         }
@@ -180,7 +110,7 @@ static bool off_keyword(const char *s, size_t n)
     return n - i == 3 && memcmp(s + i, "OFF", 3) == 0;
 }
 
-static emm_status parse_off(const char *path, cursor *c, builder *b, emm_error *err)
+static emm_status parse_off(const char *path, cursor *c, emm_raw_builder *b, emm_error *err)
 {
     if (!next_line(c))
         return emm_fail(err, EMM_ERR_FORMAT, "%s: empty file (no OFF header)", path);
@@ -220,7 +150,7 @@ static emm_status parse_off(const char *path, cursor *c, builder *b, emm_error *
                                 "%s: line %zu: vertex %lld: expected three coordinates", path, c->line, i);
             s = skip_blank(s);
         }
-        if (!add_vertex(b, v))
+        if (!emm_raw_add_vertex(b, v))
             return out_of_memory(path, err);
     }
     for (long long f = 0; f < nf; f++) {
@@ -239,11 +169,11 @@ static emm_status parse_off(const char *path, cursor *c, builder *b, emm_error *
                 return emm_fail(err, EMM_ERR_FORMAT,
                                 "%s: line %zu: face %lld: expected %lld vertex indices, found %lld",
                                 path, c->line, f, k, j);
-            if (!add_corner(b, idx))
+            if (!emm_raw_add_corner(b, idx))
                 return out_of_memory(path, err);
         }
         /* Anything after the indices is a face colour, which emm ignores. */
-        if (!end_face(b, c->line))
+        if (!emm_raw_end_face(b, c->line))
             return out_of_memory(path, err);
     }
     if (next_line(c))
@@ -256,7 +186,7 @@ emm_status emm_read_off(const char *path, const char *data, size_t len, emm_raw_
 {
     memset(raw, 0, sizeof *raw);
     cursor c = { .p = data, .end = data + len };
-    builder b = { .raw = raw };
+    emm_raw_builder b = { .raw = raw, .lines = true };
     emm_status st = parse_off(path, &c, &b, err);
     if (st != EMM_OK && st != EMM_ERR_NOMEM && c.nomem)
         st = out_of_memory(path, err);
@@ -268,7 +198,7 @@ emm_status emm_read_off(const char *path, const char *data, size_t len, emm_raw_
 
 /* ---- OBJ ---------------------------------------------------------------- */
 
-static emm_status parse_obj(const char *path, cursor *c, builder *b, emm_error *err)
+static emm_status parse_obj(const char *path, cursor *c, emm_raw_builder *b, emm_error *err)
 {
     emm_raw_mesh *r = b->raw;
     while (next_line(c)) {
@@ -283,7 +213,7 @@ static emm_status parse_obj(const char *path, cursor *c, builder *b, emm_error *
                                     path, c->line, r->nv + 1);
                 s = skip_blank(s);
             }
-            if (!add_vertex(b, v))
+            if (!emm_raw_add_vertex(b, v))
                 return out_of_memory(path, err);
         } else if (kw == 1 && s[0] == 'f') {
             s = skip_blank(s + 1);
@@ -303,12 +233,12 @@ static emm_status parse_obj(const char *path, cursor *c, builder *b, emm_error *
                     return emm_fail(err, EMM_ERR_MESH,
                                     "%s: line %zu: face %zu refers to vertex %lld, but only %zu vertices precede it",
                                     path, c->line, r->nf + 1, idx, r->nv);
-                if (!add_corner(b, v))
+                if (!emm_raw_add_corner(b, v))
                     return out_of_memory(path, err);
                 s += strcspn(s, " \t\r\f\v");
                 s = skip_blank(s);
             }
-            if (!end_face(b, c->line))
+            if (!emm_raw_end_face(b, c->line))
                 return out_of_memory(path, err);
         }
         /* vt, vn, g, o, s, usemtl, mtllib, l, p: not part of the model. */
@@ -321,7 +251,7 @@ emm_status emm_read_obj(const char *path, const char *data, size_t len, emm_raw_
     memset(raw, 0, sizeof *raw);
     raw->index_base = 1;
     cursor c = { .p = data, .end = data + len };
-    builder b = { .raw = raw };
+    emm_raw_builder b = { .raw = raw, .lines = true };
     emm_status st = parse_obj(path, &c, &b, err);
     if (st == EMM_OK && c.nomem)
         st = out_of_memory(path, err);
@@ -332,5 +262,95 @@ emm_status emm_read_obj(const char *path, const char *data, size_t len, emm_raw_
         emm_raw_mesh_free(raw);
         raw->index_base = 1;
     }
+    return st;
+}
+
+/* ---- binary OFF ---------------------------------------------------------- */
+
+static emm_status parse_off_binary(const char *path, const char *data, size_t len, emm_raw_builder *b,
+                                   emm_error *err)
+{
+    /* The first line: [ST][N]OFF BINARY, nothing else. */
+    const char *nl = memchr(data, '\n', len);
+    size_t head = nl ? (size_t)(nl - data) : len;
+    const char *s = skip_blank(data);
+    size_t kw = 0;
+    while (s + kw < data + head && !isspace((unsigned char)s[kw]))
+        kw++;
+    const char *rest = s + kw;
+    while (rest < data + head && isspace((unsigned char)*rest))
+        rest++;
+    const char *word_end = rest;
+    while (word_end < data + head && !isspace((unsigned char)*word_end))
+        word_end++;
+    const char *after = word_end;
+    while (after < data + head && isspace((unsigned char)*after))
+        after++;
+    if (!off_keyword(s, kw) || word_end - rest != 6 || memcmp(rest, "BINARY", 6) != 0 ||
+        after != data + head)
+        return emm_fail(err, EMM_ERR_FORMAT, "%s: line 1: not an OFF file (expected \"OFF BINARY\")", path);
+    if (memchr(s, 'C', kw))
+        return emm_fail(err, EMM_ERR_UNSUPPORTED,
+                        "%s: binary OFF with vertex colours (COFF) is not supported", path);
+    size_t st_extra = kw >= 2 && s[0] == 'S' && s[1] == 'T' ? 2 : 0; /* texture u, v */
+    size_t n_extra = memchr(s, 'N', kw) ? 3 : 0;                      /* a normal */
+    size_t vertex_bytes = 4 * (3 + n_extra + st_extra);
+
+    const unsigned char *p = (const unsigned char *)data + head + (nl ? 1 : 0);
+    const unsigned char *end = (const unsigned char *)data + len;
+    if (end - p < 12)
+        return emm_fail(err, EMM_ERR_FORMAT, "%s: truncated: the binary OFF header has no vertex and face counts",
+                        path);
+    uint32_t nv = emm_raw_le32(p), nf = emm_raw_le32(p + 4);
+    p += 12; /* and the edge count, which nothing needs */
+    if (nv > INT32_MAX || nf > INT32_MAX)
+        return emm_fail(err, EMM_ERR_FORMAT, "%s: the header declares %u vertices and %u faces; "
+                        "emm takes at most %d of each", path, nv, nf, INT32_MAX);
+    /* Every vertex and face must fit in what follows (a face takes at least
+     * its 4-byte count) before anything is read. */
+    uint64_t left = (uint64_t)(end - p);
+    if ((uint64_t)nv * vertex_bytes + (uint64_t)nf * 4 > left)
+        return emm_fail(err, EMM_ERR_FORMAT,
+                        "%s: truncated: the data ends before the %u vertices and %u faces the header declares",
+                        path, nv, nf);
+    for (uint32_t i = 0; i < nv; i++, p += vertex_bytes) {
+        double v[3];
+        for (int k = 0; k < 3; k++) {
+            uint32_t bits = emm_raw_le32(p + 4 * k);
+            float c;
+            memcpy(&c, &bits, 4);
+            v[k] = c;
+        }
+        if (!emm_raw_add_vertex(b, v))
+            return out_of_memory(path, err);
+    }
+    for (uint32_t f = 0; f < nf; f++) {
+        uint32_t k = (uint32_t)(end - p) >= 4 ? emm_raw_le32(p) : UINT32_MAX;
+        if (k == UINT32_MAX || (uint64_t)k * 4 > (uint64_t)(end - p) - 4 ||
+            (uint64_t)(nf - f - 1) * 4 > (uint64_t)(end - p) - 4 - (uint64_t)k * 4)
+            return emm_fail(err, EMM_ERR_FORMAT,
+                            "%s: truncated: the data ends before the %u vertices and %u faces the header declares",
+                            path, nv, nf);
+        p += 4;
+        for (uint32_t j = 0; j < k; j++, p += 4)
+            if (!emm_raw_add_corner(b, (int32_t)emm_raw_le32(p)))
+                return out_of_memory(path, err);
+        if (!emm_raw_end_face(b, 0))
+            return out_of_memory(path, err);
+    }
+    if (p != end)
+        return emm_fail(err, EMM_ERR_FORMAT, "%s: %zu unexpected bytes after the %u faces the header declares",
+                        path, (size_t)(end - p), nf);
+    return EMM_OK;
+}
+
+emm_status emm_read_off_binary(const char *path, const char *data, size_t len, emm_raw_mesh *raw,
+                               emm_error *err)
+{
+    memset(raw, 0, sizeof *raw);
+    emm_raw_builder b = { .raw = raw };
+    emm_status st = parse_off_binary(path, data, len, &b, err);
+    if (st != EMM_OK)
+        emm_raw_mesh_free(raw);
     return st;
 }

@@ -297,7 +297,12 @@ static inline bool convert(emm_session *s, const emm_raw_access *raw, emm_trace_
     r->element = rel / a->stride;
     r->offset = (uint32_t)(rel - r->element * a->stride);
     r->array = (uint32_t)i;
-    r->bytes = bytes;
+    /* A trace record stays within one record of its array (trace.h): a
+     * wider access, which only a tag with a stride smaller than the
+     * program's loads makes, is counted as the whole record. */
+    r->bytes = bytes < a->stride ? bytes : (uint32_t)a->stride;
+    if (r->bytes > EMM_TRACE_MAX_ACCESS_BYTES)
+        r->bytes = EMM_TRACE_MAX_ACCESS_BYTES;
     r->work = s->pending_work > UINT32_MAX ? UINT32_MAX : (uint32_t)s->pending_work;
     r->write = (raw->bytes_write & EMM_RAW_WRITE) != 0;
     r->pc = raw->pc;

@@ -17,6 +17,7 @@
 
 #include "datadir.h"
 #include "error.h"
+#include "infile.h"
 #include "outfile.h"
 #include "parse.h"
 #include "runner.h"
@@ -155,24 +156,33 @@ static int split(char *line, char **field, int cap)
     return n;
 }
 
+/* A table of a few thousand samples is a few hundred KiB. */
+#define EMM_TABLE_FILE_MAX ((size_t)64 << 20)
+
 emm_status emm_table_load(emm_table *t, const char *path, emm_error *err)
 {
-    FILE *fp = fopen(path, "r");
-    if (!fp)
-        return emm_fail(err, EMM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    char *text;
+    size_t len;
+    emm_status st = emm_infile_read(path, "strategy table", EMM_TABLE_FILE_MAX, &text, &len, err);
+    if (st != EMM_OK)
+        return st;
     size_t first = t->n;
-    emm_status st = EMM_OK;
-    char *line = NULL;
-    size_t cap = 0;
+    const char *end = text + len;
+    char *next = text;
     long lineno = 0;
     bool header = false;
     enum { MAXF = EMM_FEATURES + 4 };
     int version = EMM_TABLE_VERSION, fixed = 4; /* fields before the features */
     char *field[MAXF];
-    while (st == EMM_OK && getline(&line, &cap, fp) >= 0) {
+    while (st == EMM_OK && next < end) {
+        char *line = next;
+        char *nl = memchr(line, '\n', (size_t)(end - line));
+        size_t n = nl ? (size_t)(nl - line) : (size_t)(end - line);
+        line[n] = '\0'; /* the newline, or the NUL after the text */
+        next = line + n + 1;
         lineno++;
-        if (strlen(line) > 0 && line[strlen(line) - 1] != '\n' && !feof(fp)) {
-            st = emm_fail(err, EMM_ERR_FORMAT, "%s:%ld: malformed line", path, lineno);
+        if (strlen(line) != n) {
+            st = emm_fail(err, EMM_ERR_FORMAT, "%s:%ld: malformed line (NUL byte)", path, lineno);
             break;
         }
         int nf = split(line, field, MAXF);
@@ -257,13 +267,10 @@ emm_status emm_table_load(emm_table *t, const char *path, emm_error *err)
         snprintf(src, sizeof src, "%s:%ld", path, lineno);
         st = push(t, &s, src, err);
     }
-    if (st == EMM_OK && ferror(fp))
-        st = emm_fail(err, EMM_ERR_IO, "%s: read error", path);
     if (st == EMM_OK && !header)
         st = emm_fail(err, EMM_ERR_FORMAT, "%s: empty file: no 'emm-table %d features=%d' header",
                       path, EMM_TABLE_VERSION, EMM_FEATURES);
-    free(line);
-    fclose(fp);
+    free(text);
     if (st != EMM_OK) {
         for (size_t i = first; i < t->n; i++)
             free(t->source[i]);

@@ -6,14 +6,15 @@ set -euo pipefail
 
 packages=(
   cmake make gcc g++ clang pkg-config   # the build (gcc and clang both supported)
-  libopenmesh-dev                       # mesh file IO (OFF, OBJ, PLY, STL)
+  libclang-rt-14-dev                    # libFuzzer's runtime (tests/fuzz, make fuzz, make check-asan)
   libqhull-dev                          # Delaunay triangulation for the mesh generator
   libunwind-dev                         # call-site names for the shim's tag rules
   libzstd-dev                           # optional zstd compression of trace blocks
   libdw-dev                             # elfutils' DWARF reader: emm annotate's source lines
   gnuplot-nox                           # emm plot
   glmark2-data                          # a real mesh (bunny.obj) for tests and benchmarks
-  python3                               # the timeline tests read the JSON with Python's own parser
+  python3                               # tests: reports and timelines read back with a strict JSON reader
+  time                                  # tests: /usr/bin/time measures the bad-input reproducers
 )
 
 missing=()

@@ -178,7 +178,7 @@ static inline void access_one(struct hot *h, uint64_t addr, uint32_t bytes, int 
 {
     uint64_t compute = h->compute_per_access + (uint64_t)work * h->compute_per_work;
     uint64_t b = addr >> h->line_shift;
-    uint64_t last = (addr + bytes - 1) >> h->line_shift;
+    uint64_t last = emm_last_byte(addr, bytes) >> h->line_shift;
     h->n.compute += compute;
     if (policy == EMM_CACHE_FETCH_ALWAYS)
         h->n.now += compute;

@@ -42,7 +42,7 @@ static void direct_run_records(direct_model *m, const emm_trace_record *recs, si
         m->work += r->work;
         if (r->write || rec == 0) {
             uint64_t a = emm_addr_of(&m->map, r);
-            uint64_t words = ((a + r->bytes - 1) >> ws) - (a >> ws) + 1;
+            uint64_t words = (emm_last_byte(a, r->bytes) >> ws) - (a >> ws) + 1;
             if (r->write)
                 m->words_written += words;
             else
@@ -74,7 +74,7 @@ static void direct_run(emm_model *model, const emm_trace_record *recs, size_t n)
     for (size_t i = 0; i < n; i++) {
         const emm_trace_record *r = &recs[i];
         uint64_t a = emm_addr_of(map, r);
-        uint64_t words = ((a + r->bytes - 1) >> ws) - (a >> ws) + 1;
+        uint64_t words = (emm_last_byte(a, r->bytes) >> ws) - (a >> ws) + 1;
         if (r->write)
             wr += words;
         else

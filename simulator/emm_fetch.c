@@ -394,7 +394,7 @@ static inline uint32_t vertex_cell(const fetch_model *m, uint64_t v, bool *point
 static void direct_access(fetch_model *m, const emm_trace_record *r)
 {
     uint64_t a = emm_addr_of(&m->map, r);
-    uint64_t words = ((a + r->bytes - 1) >> m->word_shift) - (a >> m->word_shift) + 1;
+    uint64_t words = (emm_last_byte(a, r->bytes) >> m->word_shift) - (a >> m->word_shift) + 1;
     charge(m, EMM_BUCKET_REMOTE_ACCESS, words * (r->write ? m->direct_write : m->direct_read));
     m->other_accesses++;
 }

@@ -234,6 +234,15 @@ static emm_status build_once(const double *xyz, size_t nv, const int32_t *tri, s
     choose_plane(l, xyz, tri);
 
     double *c[EMM_MAX_DIMS] = {NULL, NULL, NULL};
+    /* Cells divide the bounding box: past ±1e300 its extent, or a sum of
+     * three coordinates, can overflow to infinity and every cell index
+     * would be meaningless (a fuzzed trace's geometry found this). */
+    for (uint32_t k = 0; k < l->dims; k++)
+        if (!(fabs(l->lo[k]) <= 1e300 && fabs(l->hi[k]) <= 1e300)) {
+            st = emm_fail(err, EMM_ERR_RANGE, "%s: coordinates beyond +-1e300 cannot be laid out in cells",
+                          name);
+            goto done;
+        }
     l->tri_cell = malloc(nt * sizeof *l->tri_cell);
     for (uint32_t k = 0; k < l->dims; k++)
         c[k] = malloc(nt * sizeof *c[k]);

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "error.h"
+#include "infile.h"
 #include "parse.h"
 
 enum key_type { KEY_COUNT, KEY_SIZE, KEY_FETCH, KEY_GRANULARITY };
@@ -22,6 +23,9 @@ struct key_desc {
     uint64_t fallback;
     uint64_t min, max;
 };
+
+/* A machine file is a few dozen keys; anything past 1 MiB is not one. */
+#define EMM_MACHINE_FILE_MAX ((size_t)1 << 20)
 
 #define P(field) offsetof(emm_machine_params, field)
 #define K(x) ((uint64_t)(x) << 10)
@@ -380,35 +384,12 @@ emm_status emm_machine_load_text(emm_machine *m, const char *name, const char *t
 
 emm_status emm_machine_load(emm_machine *m, const char *path, emm_error *err)
 {
-    FILE *f = fopen(path, "rb");
     char *text;
-    long size;
-    size_t got;
-    emm_status st;
-
-    if (!f)
-        return emm_fail(err, EMM_ERR_IO, "%s: %s", path, strerror(errno));
-    if (fseek(f, 0, SEEK_END) != 0 || (size = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0) {
-        fclose(f);
-        return emm_fail(err, EMM_ERR_IO, "%s: cannot read", path);
-    }
-    if (size > (1L << 20)) {
-        fclose(f);
-        return emm_fail(err, EMM_ERR_FORMAT, "%s: too large for a machine file", path);
-    }
-    text = malloc((size_t)size + 1);
-    if (!text) {
-        fclose(f);
-        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
-    }
-    got = fread(text, 1, (size_t)size, f);
-    fclose(f);
-    if (got != (size_t)size) {
-        free(text);
-        return emm_fail(err, EMM_ERR_IO, "%s: cannot read", path);
-    }
-    text[got] = '\0';
-    if (strlen(text) != got) {
+    size_t len;
+    emm_status st = emm_infile_read(path, "machine file", EMM_MACHINE_FILE_MAX, &text, &len, err);
+    if (st != EMM_OK)
+        return st;
+    if (strlen(text) != len) {
         free(text);
         return emm_fail(err, EMM_ERR_FORMAT, "%s: not a text file (NUL byte)", path);
     }

@@ -45,6 +45,17 @@ static inline uint64_t emm_addr_of(const emm_addr_map *map, const emm_trace_reco
     return map->base[r->array] + r->element * map->size[r->array] + r->offset;
 }
 
+/* The last byte an access of `bytes` (>= 1) at `addr` touches, clamped to
+ * the top of the 64-bit address space: an access that would wrap past 2^64
+ * (a raw address from an imported or damaged trace can) ends at the last
+ * address, so the lines and words a model counts for it stay bounded by
+ * its size. Every model counts its units from here. */
+static inline uint64_t emm_last_byte(uint64_t addr, uint32_t bytes)
+{
+    uint64_t last;
+    return __builtin_add_overflow(addr, (uint64_t)bytes - 1, &last) ? UINT64_MAX : last;
+}
+
 /* emm_model_new with the layouts and geometry the models of one run share
  * (the model runner passes its own share; emm_model_new a fresh one). */
 emm_status emm_model_create(const emm_machine *m, const emm_strategy *s,

@@ -134,6 +134,10 @@ static emm_status check_arrays(const emm_trace_array *arrays, uint32_t narrays,
                 return emm_fail(err, bad,
                                 "%sarray %u is raw memory but has record size %u (must be 1)",
                                 what, i, a->record_size);
+            /* Its elements are the addresses themselves. */
+            if (a->base != 0)
+                return emm_fail(err, bad, "%sarray %u is raw memory but has base 0x%llx (must be 0)",
+                                what, i, (unsigned long long)a->base);
         } else {
             /* Every byte of the array must have a 64-bit address. */
             uint64_t span;
@@ -145,6 +149,14 @@ static emm_status check_arrays(const emm_trace_array *arrays, uint32_t narrays,
         }
     }
     return EMM_OK;
+}
+
+/* The most bytes one record of array a may claim (trace.h). */
+static uint32_t access_limit(const emm_trace_array *a)
+{
+    return a->kind == EMM_ARRAY_RAW || a->record_size > EMM_TRACE_MAX_ACCESS_BYTES
+               ? EMM_TRACE_MAX_ACCESS_BYTES
+               : a->record_size;
 }
 
 static emm_status check_geometry(const emm_trace_geometry *g, const char *what, emm_status bad,
@@ -523,9 +535,14 @@ emm_status emm_trace_write(emm_trace_writer *w, const emm_trace_record *recs, si
                             "%s: record %llu: offset %u outside the %u-byte record of array %u",
                             w->path, (unsigned long long)index, r->offset, a->record_size,
                             r->array);
-        if (r->bytes == 0)
-            return emm_fail(err, EMM_ERR_RANGE, "%s: record %llu: access of 0 bytes", w->path,
-                            (unsigned long long)index);
+        if (r->bytes == 0 || r->bytes > access_limit(a))
+            return emm_fail(err, EMM_ERR_RANGE, "%s: record %llu: access of %u bytes (array %u takes 1 to %u)",
+                            w->path, (unsigned long long)index, r->bytes, r->array, access_limit(a));
+        if (r->element + (r->bytes - 1) < r->element)
+            return emm_fail(err, EMM_ERR_RANGE,
+                            "%s: record %llu: an access of %u bytes at 0x%llx runs past the end of the "
+                            "64-bit address space",
+                            w->path, (unsigned long long)index, r->bytes, (unsigned long long)r->element);
         if (r->write > 1)
             return emm_fail(err, EMM_ERR_RANGE, "%s: record %llu: write flag %u (must be 0 or 1)",
                             w->path, (unsigned long long)index, r->write);
@@ -592,6 +609,7 @@ struct emm_trace_reader {
     uint64_t *limit; /* elements allowed per array; UINT64_MAX = any (raw) */
     uint64_t *maxe;  /* largest element allowed (raw: UINT64_MAX) */
     uint64_t *rsize; /* record size per array; 0 for an empty array, so no record passes */
+    uint64_t *maxb;  /* the most bytes one access of the array may claim */
     uint64_t *prev;
     /* Progress through the blocks. */
     uint64_t block;      /* blocks decoded so far */
@@ -640,6 +658,7 @@ static void reader_free(emm_trace_reader *r)
     free(r->limit);
     free(r->maxe);
     free(r->rsize);
+    free(r->maxb);
     free(r->prev);
     free(r->stored);
     free(r->raw);
@@ -788,10 +807,12 @@ static emm_status reader_tables(emm_trace_reader *r, emm_error *err)
     r->limit = malloc((na ? na : 1) * sizeof *r->limit);
     r->maxe = malloc((na ? na : 1) * sizeof *r->maxe);
     r->rsize = malloc((na ? na : 1) * sizeof *r->rsize);
+    r->maxb = malloc((na ? na : 1) * sizeof *r->maxb);
     r->prev = calloc(na ? na : 1, sizeof *r->prev);
     r->xyz = malloc(nv ? (size_t)nv * 24 : 1);
     r->tri = malloc(nt ? (size_t)nt * 12 : 1);
-    if (!buf || !r->arrays || !r->limit || !r->maxe || !r->rsize || !r->prev || !r->xyz || !r->tri) {
+    if (!buf || !r->arrays || !r->limit || !r->maxe || !r->rsize || !r->maxb || !r->prev || !r->xyz ||
+        !r->tri) {
         free(buf);
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the trace's tables", p);
     }
@@ -811,6 +832,7 @@ static emm_status reader_tables(emm_trace_reader *r, emm_error *err)
             r->limit[i] = raw ? UINT64_MAX : r->arrays[i].count;
             r->maxe[i] = raw ? UINT64_MAX : r->arrays[i].count - 1;
             r->rsize[i] = raw || r->arrays[i].count > 0 ? r->arrays[i].record_size : 0;
+            r->maxb[i] = access_limit(&r->arrays[i]);
         }
         char what[600];
         snprintf(what, sizeof what, "%s: byte %llu: ", p, (unsigned long long)at);
@@ -858,8 +880,10 @@ emm_status emm_trace_reader_open(const char *path, emm_trace_reader **out, emm_e
         s = emm_fail(err, EMM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
     else if (fstat(fileno(r->f), &st) != 0)
         s = emm_fail(err, EMM_ERR_IO, "%s: cannot stat: %s", path, strerror(errno));
+    else if (S_ISDIR(st.st_mode))
+        s = emm_fail(err, EMM_ERR_IO, "%s: is a directory, not a trace", path);
     else if (!S_ISREG(st.st_mode))
-        s = emm_fail(err, EMM_ERR_IO, "%s: not a regular file", path);
+        s = emm_fail(err, EMM_ERR_IO, "%s: not a regular file (a trace is read with random access)", path);
     if (s == EMM_OK) {
         r->file_size = (uint64_t)st.st_size;
         s = reader_header(r, err);
@@ -959,12 +983,17 @@ static emm_status describe_bad_record(const emm_trace_reader *r, uint64_t a, int
                         "%s: offset %llu outside the %u-byte record of array %llu", where,
                         (unsigned long long)offset, r->arrays[a].record_size,
                         (unsigned long long)a);
-    if (bytes == 0 || bytes > UINT32_MAX)
-        return emm_fail(err, EMM_ERR_FORMAT, "%s: access of %llu bytes", where,
-                        (unsigned long long)bytes);
+    if (bytes == 0 || bytes > access_limit(&r->arrays[a]))
+        return emm_fail(err, EMM_ERR_FORMAT, "%s: access of %llu bytes (array %llu takes 1 to %u)",
+                        where, (unsigned long long)bytes, (unsigned long long)a,
+                        access_limit(&r->arrays[a]));
     if (work > UINT32_MAX)
         return emm_fail(err, EMM_ERR_FORMAT, "%s: work %llu exceeds 32 bits", where,
                         (unsigned long long)work);
+    if (e_known && e + (bytes - 1) < e)
+        return emm_fail(err, EMM_ERR_FORMAT,
+                        "%s: an access of %llu bytes at 0x%llx runs past the end of the 64-bit address space",
+                        where, (unsigned long long)bytes, (unsigned long long)e);
     return emm_fail(err, EMM_ERR_FORMAT, "%s: write flag %llu (must be 0 or 1)", where,
                     (unsigned long long)write);
 }
@@ -1097,7 +1126,7 @@ static emm_status next_block(emm_trace_reader *r, emm_trace_record *dst, size_t 
     if (na == 0)
         return emm_fail(err, EMM_ERR_FORMAT, "%s: byte %llu: block %llu has records but the trace has no arrays",
                         p, (unsigned long long)at, (unsigned long long)b);
-    const uint64_t *maxe = r->maxe, *rsize = r->rsize;
+    const uint64_t *maxe = r->maxe, *rsize = r->rsize, *maxb = r->maxb;
     uint64_t *prev = r->prev;
     memset(prev, 0, (size_t)na * sizeof *prev);
     /* The fields with fixed bounds are checked per column: a column whose
@@ -1105,7 +1134,8 @@ static emm_status next_block(emm_trace_reader *r, emm_trace_record *dst, size_t 
      * per-value check, which is always so for files emm wrote unless a field
      * spans its whole 32-bit range. */
     static const uint64_t lo[EMM_TRACE_MAX_COLUMNS] = {0, 0, 0, 1, 0, 0, 0};
-    uint64_t hi[EMM_TRACE_MAX_COLUMNS] = {0, 0, 0, UINT32_MAX, UINT32_MAX, 1, UINT64_MAX};
+    uint64_t hi[EMM_TRACE_MAX_COLUMNS] = {0, 0, 0, EMM_TRACE_MAX_ACCESS_BYTES, UINT32_MAX, 1,
+                                           UINT64_MAX};
     hi[EMM_COL_ARRAY] = na - 1;
     int scan[EMM_TRACE_MAX_COLUMNS] = {0};
     for (int c = 0; c < (int)ncols; c++) {
@@ -1139,7 +1169,10 @@ static emm_status next_block(emm_trace_reader *r, emm_trace_record *dst, size_t 
             uint64_t a = ca[i];
             uint64_t e = prev[a] + cd[i];
             prev[a] = e;
-            bad |= (uint64_t)(e > maxe[a]) | (uint64_t)(co[i] >= rsize[a]);
+            /* The last test is for raw arrays (element = address): a
+             * tagged array's records all lie below 2^64 (check_arrays). */
+            bad |= (uint64_t)(e > maxe[a]) | (uint64_t)(co[i] >= rsize[a]) | (uint64_t)(cb[i] > maxb[a]) |
+                   (uint64_t)(e + (cb[i] - 1) < e);
             o[i].element = e;
             o[i].array = (uint32_t)a;
             o[i].offset = (uint32_t)co[i];
@@ -1156,7 +1189,8 @@ static emm_status next_block(emm_trace_reader *r, emm_trace_record *dst, size_t 
                 o[i].pc = 0;
         if (__builtin_expect(bad != 0, 0))
             for (uint32_t i = 0; i < m; i++)
-                if (o[i].element > maxe[o[i].array] || co[i] >= rsize[o[i].array])
+                if (o[i].element > maxe[o[i].array] || co[i] >= rsize[o[i].array] ||
+                    cb[i] > maxb[o[i].array] || o[i].element + (cb[i] - 1) < o[i].element)
                     return describe_bad_record(r, o[i].array, 1, o[i].element, co[i], cb[i],
                                                cw[i], cx[i], r->seen + i0 + i, pat, b, err);
     }

@@ -8,6 +8,7 @@
 #include "parse.h"
 #include "emm/mesh.h"
 #include "generate.h"
+#include "json.h"
 
 static void usage_mesh(FILE *out)
 {
@@ -143,22 +144,6 @@ static int cmd_gen(int argc, char **argv)
     return st == EMM_OK ? EMM_EXIT_OK : cli_fail(&err);
 }
 
-/* Writes s as a JSON string. */
-static void json_string(FILE *out, const char *s)
-{
-    fputc('"', out);
-    for (; *s; s++) {
-        unsigned char c = (unsigned char)*s;
-        if (c == '"' || c == '\\')
-            fprintf(out, "\\%c", c);
-        else if (c < 0x20)
-            fprintf(out, "\\u%04x", c);
-        else
-            fputc(c, out);
-    }
-    fputc('"', out);
-}
-
 static int cmd_info(int argc, char **argv)
 {
     const char *cmd = "mesh info";
@@ -193,7 +178,7 @@ static int cmd_info(int argc, char **argv)
                                (unsigned long long)nt * EMM_THESIS_TRIANGLE_BYTES;
     if (json) {
         printf("{\"file\": ");
-        json_string(stdout, path);
+        json_write_string(stdout, path);
         printf(", \"vertices\": %zu, \"faces\": %zu, \"boundary_edges\": %zu, "
                "\"polygons_split\": %zu, \"bbox\": [[%.17g, %.17g, %.17g], [%.17g, %.17g, %.17g]], "
                "\"mean_edge_length\": %.17g, \"thesis_vertex_bytes\": %u, "

@@ -159,8 +159,8 @@ static emm_status check_profile(const plot_report *rep, const jr_value *p, emm_e
 }
 
 /* What a file that is not a report is, from its first bytes, so that the
- * user hears "a trace" rather than a JSON syntax error: EMM_OK when it may
- * be JSON (it starts with '{' or '['). */
+ * user hears "a trace" rather than a JSON syntax error: EMM_OK (err left as
+ * it was) when it may be JSON (it starts with '{' or '['). */
 static emm_status sniff_input(const char *path, emm_error *err)
 {
     unsigned char head[8] = {0};
@@ -189,10 +189,14 @@ static emm_status load_report(const char *path, plot_report *rep, emm_error *err
     emm_status st;
     memset(rep, 0, sizeof *rep);
     rep->path = path;
-    if ((st = sniff_input(path, err)) != EMM_OK)
+    /* A file that reads but does not parse may be a trace or text: say
+     * which instead of a JSON syntax error. (A file that cannot be read, is
+     * a directory or is too large keeps the reader's message.) */
+    if ((st = jr_parse_file(path, &rep->root, err)) != EMM_OK) {
+        if (st == EMM_ERR_FORMAT)
+            sniff_input(path, err);
         return st;
-    if ((st = jr_parse_file(path, &rep->root, err)) != EMM_OK)
-        return st;
+    }
     if (jr_is(rep->root, JR_OBJECT) && jr_get(rep->root, "traceEvents"))
         return bad(err, path, "a timeline, not a report: open it in Perfetto's UI "
                    "(ui.perfetto.dev) or chrome://tracing");

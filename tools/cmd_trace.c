@@ -62,8 +62,9 @@ static const char import_usage[] =
     "\n"
     "  --din        the input format (the only one)\n"
     "  -o TRACE     the trace to write (required)\n"
-    "  --bytes N    bytes per access (default: to the end of the aligned 4-byte\n"
-    "               word holding the address, the word Dinero IV would access)\n"
+    "  --bytes N    bytes per access, 1 to 4096 (default: to the end of the\n"
+    "               aligned 4-byte word holding the address, the word Dinero IV\n"
+    "               would access)\n"
     "  --compress   zstd-compress the trace's blocks\n";
 
 /* ------------------------------------------------------------------------ */
@@ -295,44 +296,6 @@ static int trace_export(int argc, char **argv)
 
 /* ------------------------------------------------------------------------ */
 
-static int hexval(int c)
-{
-    if (c >= '0' && c <= '9')
-        return c - '0';
-    if (c >= 'a' && c <= 'f')
-        return c - 'a' + 10;
-    if (c >= 'A' && c <= 'F')
-        return c - 'A' + 10;
-    return -1;
-}
-
-static int is_blank(int c)
-{
-    return c == ' ' || c == '\t' || c == '\r';
-}
-
-/* Parses a hex number with an optional 0x; returns the position after it or
- * NULL (with *why set) when there is no number or it overflows 64 bits. */
-static const char *parse_hex(const char *p, uint64_t *out, const char **why)
-{
-    if (p[0] == '0' && (p[1] == 'x' || p[1] == 'X') && hexval(p[2]) >= 0)
-        p += 2;
-    if (hexval(*p) < 0) {
-        *why = "expected a hex number";
-        return NULL;
-    }
-    uint64_t v = 0;
-    for (int d; (d = hexval(*p)) >= 0; p++) {
-        if (v >> 60) {
-            *why = "number does not fit in 64 bits";
-            return NULL;
-        }
-        v = v << 4 | (uint64_t)d;
-    }
-    *out = v;
-    return p;
-}
-
 static int trace_import(int argc, char **argv)
 {
     const char *cmd = "trace import";
@@ -354,8 +317,9 @@ static int trace_import(int argc, char **argv)
             const char *v = cli_value(cmd, argc, argv, &i);
             if (!v || !cli_u64(cmd, "--bytes", v, &fixed_bytes))
                 return EMM_EXIT_USAGE;
-            if (fixed_bytes == 0 || fixed_bytes > UINT32_MAX)
-                return cli_usage_error(cmd, "--bytes must be between 1 and %u", UINT32_MAX);
+            if (fixed_bytes == 0 || fixed_bytes > EMM_TRACE_MAX_ACCESS_BYTES)
+                return cli_usage_error(cmd, "--bytes must be between 1 and %u",
+                                       EMM_TRACE_MAX_ACCESS_BYTES);
         } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
             return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
         } else if (in) {
@@ -373,8 +337,15 @@ static int trace_import(int argc, char **argv)
 
     const char *in_name = strcmp(in, "-") == 0 ? "stdin" : in;
     FILE *f = strcmp(in, "-") == 0 ? stdin : fopen(in, "r");
+    struct stat sb;
     if (!f) {
         cli_error("%s: cannot open: %s", in, strerror(errno));
+        return EMM_EXIT_FAIL;
+    }
+    if (fstat(fileno(f), &sb) == 0 && S_ISDIR(sb.st_mode)) {
+        cli_error("%s: is a directory, not a din file", in_name);
+        if (f != stdin)
+            fclose(f);
         return EMM_EXIT_FAIL;
     }
     /* Raw memory: element = address, one byte per record, no known end. */
@@ -386,105 +357,19 @@ static int trace_import(int argc, char **argv)
             fclose(f);
         return cli_fail(&err);
     }
-    emm_trace_record *buf = malloc(READ_BATCH * sizeof *buf);
-    if (!buf) {
-        cli_error("%s: out of memory", in_name);
-        emm_trace_writer_abort(w);
-        if (f != stdin)
-            fclose(f);
-        return EMM_EXIT_FAIL;
-    }
-    char *line = NULL;
-    size_t cap = 0, nbuf = 0;
-    uint64_t lineno = 0, accesses = 0, skipped = 0;
-    int ok = 1;
-    ssize_t len;
-    while (ok && (len = getline(&line, &cap, f)) >= 0) {
-        lineno++;
-        if ((size_t)len != strlen(line)) {
-            cli_error("%s:%" PRIu64 ": NUL byte in the line", in_name, lineno);
-            ok = 0;
-            break;
-        }
-        const char *p = line, *why = NULL;
-        while (is_blank(*p))
-            p++;
-        if (*p == '\n' || *p == '\0')
-            continue; /* blank lines carry nothing */
-        uint64_t label, addr;
-        if (!(p = parse_hex(p, &label, &why))) {
-            cli_error("%s:%" PRIu64 ": label: %s", in_name, lineno, why);
-            ok = 0;
-            break;
-        }
-        if (!is_blank(*p)) {
-            cli_error("%s:%" PRIu64 ": %s", in_name, lineno,
-                      *p == '\n' || *p == '\0' ? "no address after the label"
-                                               : "the label is not a hex number");
-            ok = 0;
-            break;
-        }
-        while (is_blank(*p))
-            p++;
-        if (!(p = parse_hex(p, &addr, &why))) {
-            cli_error("%s:%" PRIu64 ": address: %s", in_name, lineno, why);
-            ok = 0;
-            break;
-        }
-        if (!is_blank(*p) && *p != '\n' && *p != '\0') {
-            cli_error("%s:%" PRIu64 ": the address is not a hex number", in_name, lineno);
-            ok = 0;
-            break;
-        }
-        if (label == 2) {
-            skipped++;
-            continue;
-        }
-        if (label > 1) {
-            cli_error("%s:%" PRIu64 ": label %" PRIu64
-                      " is not supported (0 read, 1 write, 2 instruction fetch)",
-                      in_name, lineno, label);
-            ok = 0;
-            break;
-        }
-        buf[nbuf++] = (emm_trace_record){
-            .element = addr,
-            .array = 0,
-            .offset = 0,
-            .bytes = fixed_bytes ? (uint32_t)fixed_bytes : (uint32_t)(4 - (addr & 3)),
-            .work = 0,
-            .write = (uint8_t)label,
-        };
-        accesses++;
-        if (nbuf == READ_BATCH) {
-            if (emm_trace_write(w, buf, nbuf, &err) != EMM_OK) {
-                cli_fail(&err);
-                ok = 0;
-            }
-            nbuf = 0;
-        }
-    }
-    if (ok && ferror(f)) {
-        cli_error("%s: cannot read: %s", in_name, strerror(errno));
-        ok = 0;
-    }
-    if (ok && nbuf > 0 && emm_trace_write(w, buf, nbuf, &err) != EMM_OK) {
-        cli_fail(&err);
-        ok = 0;
-    }
-    free(line);
-    free(buf);
+    emm_din_counts counts;
+    emm_status st = emm_din_import(f, in_name, (uint32_t)fixed_bytes, w, &counts, &err);
     if (f != stdin)
         fclose(f);
-    if (!ok) {
+    if (st != EMM_OK) {
         emm_trace_writer_abort(w);
-        return EMM_EXIT_FAIL;
+        return cli_fail(&err);
     }
     if (emm_trace_writer_close(w, &err) != EMM_OK)
         return cli_fail(&err);
-    printf("%s: %" PRIu64 " accesses", out, accesses);
-    if (skipped)
-        printf(" (%" PRIu64 " instruction fetches skipped)", skipped);
+    printf("%s: %" PRIu64 " accesses", out, counts.accesses);
+    if (counts.skipped)
+        printf(" (%" PRIu64 " instruction fetches skipped)", counts.skipped);
     printf("\n");
     return EMM_EXIT_OK;
 }

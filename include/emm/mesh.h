@@ -2,8 +2,8 @@
  *
  * A triangle mesh: a vertex array (id, coordinates) and a triangle array
  * (id, three vertex ids, three edge-neighbour ids). Vertex→triangle incidence
- * is stored with offsets (no fixed slot count). Files are read through
- * OpenMesh (OFF, OBJ, PLY ascii and binary, STL); polygons are
+ * is stored with offsets (no fixed slot count). Files are read by emm's own
+ * parsers (OFF, OBJ, PLY ascii and binary, STL); polygons are
  * fan-triangulated around their first vertex. Every mesh this API returns is
  * valid: finite coordinates, in-range indices, no repeated vertex in a face,
  * every edge shared by at most two triangles. */

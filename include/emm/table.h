@@ -58,7 +58,9 @@ EMM_API emm_table *emm_table_new(void);
 EMM_API void emm_table_free(emm_table *t);
 
 /* Reads a table file and adds its samples to t. A name already in t (from
- * this file or an earlier one) is an error; t is unchanged on failure. */
+ * this file or an earlier one) is an error; t is unchanged on failure. A
+ * file larger than 64 MiB (16 MiB from a pipe or device) is refused as too
+ * large, a directory as one. */
 EMM_API emm_status emm_table_load(emm_table *t, const char *path, emm_error *err);
 
 /* Adds one sample (name and pattern are checked as the parser checks them). */

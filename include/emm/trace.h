@@ -12,6 +12,8 @@
 
 #include "emm/common.h"
 
+#include <stdio.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -25,13 +27,20 @@ typedef struct emm_trace_array {
     uint64_t base;        /* original address of record 0 */
 } emm_trace_array;
 
+/* The most bytes one access may claim: an access of a tagged array also
+ * stays within one record (bytes <= record_size). Captured accesses are
+ * loads and stores of at most 64 bytes; the bound keeps a model's work per
+ * record small whatever a trace file says (the cache walks bytes / 64 lines
+ * per record). */
+#define EMM_TRACE_MAX_ACCESS_BYTES 4096u
+
 /* One access. `work` is the compute (in cycles, or instrumented basic blocks
  * where the capture counts them) since the previous record. */
 typedef struct emm_trace_record {
     uint64_t element;
     uint32_t array;   /* index into the trace's arrays */
     uint32_t offset;  /* byte offset inside the record */
-    uint32_t bytes;   /* bytes accessed, >= 1 */
+    uint32_t bytes;   /* bytes accessed, 1 .. EMM_TRACE_MAX_ACCESS_BYTES and <= record_size */
     uint32_t work;
     uint8_t write;    /* 0 read, 1 write */
     uint64_t pc;      /* the program counter of the access (the return address of
@@ -111,6 +120,28 @@ EMM_API emm_status emm_trace_read(emm_trace_reader *r, emm_trace_record *buf, si
 /* Starts reading the records again from the first. */
 EMM_API emm_status emm_trace_rewind(emm_trace_reader *r, emm_error *err);
 EMM_API void emm_trace_reader_close(emm_trace_reader *r);
+
+/* The longest din line emm_din_import takes, in bytes (a din line is a
+ * label and an address: a few dozen characters). */
+#define EMM_DIN_LINE_MAX 4096
+
+typedef struct emm_din_counts {
+    uint64_t lines;    /* lines read */
+    uint64_t accesses; /* records written */
+    uint64_t skipped;  /* instruction fetches (label 2) left out */
+} emm_din_counts;
+
+/* Reads Dinero IV's din text from `in` (named `name` in messages, e.g. its
+ * path or "stdin") and appends one record per read or write to `w`, whose
+ * only array must be raw memory (docs/trace-format.md "din"). `bytes` is the
+ * size of every access, 1 .. EMM_TRACE_MAX_ACCESS_BYTES, or 0 for "to the
+ * end of the aligned 4-byte word", the word Dinero IV accesses. Memory
+ * stays bounded whatever `in` holds: a line longer than EMM_DIN_LINE_MAX
+ * is an error, as are a NUL byte, a malformed line, an unsupported label
+ * and an access running past the top of the 64-bit address space, each
+ * "NAME:LINE: problem". The caller aborts or closes w. */
+EMM_API emm_status emm_din_import(FILE *in, const char *name, uint32_t bytes, emm_trace_writer *w,
+                                  emm_din_counts *counts, emm_error *err);
 
 /* "vertices", "triangles" or "raw" (a static string; "?" for other values). */
 EMM_API const char *emm_trace_kind_name(emm_array_kind kind);

@@ -67,7 +67,7 @@ static inline void write_binary_stl(const char *path, size_t cut)
     fclose(f);
 }
 
-/* Binary OFF as OpenMesh reads it: "OFF BINARY", then little-endian
+/* Binary OFF as OpenMesh writes it: "OFF BINARY", then little-endian
  * 32-bit counts, float coordinates and per face a count and indices. */
 static inline void write_binary_off(const char *path, size_t cut)
 {

@@ -46,9 +46,9 @@ static int formats(void)
         emm_mesh *m = open_ok(files[f]);
         printf("%s: %zu vertices, %zu triangles, %zu polygons split\n", files[f], emm_mesh_vertex_count(m),
                emm_mesh_triangle_count(m), emm_mesh_polygons_split(m));
-        /* STL lists each facet's corners; OpenMesh's STL reader merges
-         * equal positions in order of first appearance, which gives back
-         * the four shared vertices in the OFF file's order. */
+        /* STL lists each facet's corners; the STL reader merges equal
+         * positions in order of first appearance, which gives back the
+         * four shared vertices in the OFF file's order. */
         CHECKF(emm_mesh_vertex_count(m) == 4, "%s", files[f]);
         CHECKF(emm_mesh_triangle_count(m) == 2, "%s", files[f]);
         CHECKF(emm_mesh_polygons_split(m) == (strstr(files[f], ".obj") ? 1u : 0u), "%s", files[f]);

@@ -1,7 +1,6 @@
 /* A program linked against libemm.so (not the static library the other
- * tests use) reads PLY and STL: OpenMesh's readers register themselves in
- * static constructors of libOpenMeshCore, and this checks that they are
- * there for a shared-library user too. Only EMM_API names are used. */
+ * tests use) reads every format: the readers are all there for a
+ * shared-library user too. Only EMM_API names are used. */
 #include "emm/mesh.h"
 
 #include <stdio.h>

@@ -74,7 +74,13 @@ static void gen_records(emm_trace_record *r, size_t n)
             o->offset = (uint32_t)(rnd() % test_arrays[a].record_size);
         }
         uint64_t y = rnd();
-        o->bytes = (y & 255) == 0 ? UINT32_MAX : (uint32_t)(1u << (y % 4));
+        /* Now and then the widest access the array takes (trace.h). */
+        uint32_t widest = a == 2 || test_arrays[a].record_size > EMM_TRACE_MAX_ACCESS_BYTES
+                              ? EMM_TRACE_MAX_ACCESS_BYTES
+                              : test_arrays[a].record_size;
+        o->bytes = (y & 255) == 0 ? widest : (uint32_t)(1u << (y % 4));
+        if (o->element + (o->bytes - 1) < o->element) /* would run past 2^64 */
+            o->element -= o->bytes;
         o->work = (y & 1023) == 1 ? UINT32_MAX : (uint32_t)((y >> 16) % 40);
         o->write = (uint8_t)((y >> 40) % 4 == 0);
     }
@@ -600,6 +606,7 @@ static void test_bad_block_content(void)
         const char *want;
     } cases[] = {
         {8 + 8 * EMM_COL_BYTES, 8, 0, "access of 0 bytes"},
+        {8 + 8 * EMM_COL_BYTES, 8, 5000, "bytes (array"},
         {8 + 8 * EMM_COL_WRITE, 8, 2, "write flag 2"},
         {8 + 8 * EMM_COL_ARRAY, 8, 5, "array 5 out of range (3 arrays)"},
         {8 + 8 * EMM_COL_WORK, 8, UINT32_MAX, "work 4294967"},
@@ -651,6 +658,9 @@ static void test_writer_rejects(void)
         {.element = 1, .array = 0, .bytes = 0},                /* zero bytes */
         {.element = 1, .array = 0, .bytes = 4, .write = 2},    /* write flag */
         {.element = 0, .array = 2, .offset = 1, .bytes = 4},   /* raw: offset must be 0 */
+        {.element = 1, .array = 0, .bytes = 81},               /* wider than the record */
+        {.element = 0, .array = 2, .bytes = EMM_TRACE_MAX_ACCESS_BYTES + 1}, /* raw: too wide */
+        {.element = UINT64_MAX - 2, .array = 2, .bytes = 4},  /* raw: past 2^64 */
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         emm_trace_writer *w = NULL;

@@ -1,0 +1,13 @@
+/* EMM_TAG rules (core/tag_rules.c). */
+#include "fuzz.h"
+#include "emm/config.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    char *s = fuzz_string(data, size);
+    emm_tag_rules rules;
+    emm_error err;
+    fuzz_check_error(emm_tag_rules_parse(s, &rules, &err), &err);
+    free(s);
+    return 0;
+}
