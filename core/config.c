@@ -19,7 +19,8 @@
  * <accepts>"). */
 typedef bool (*row_parser)(emm_config *c, const char *v, long pid, char *why, size_t cap);
 
-static const char *const capture_names[EMM_CAPTURE_COUNT] = {"auto", "sancov", "fault", "api"};
+static const char *const capture_names[EMM_CAPTURE_COUNT] = {"auto", "sancov", "fault", "api",
+                                                                    "valgrind"};
 static const char *const compare_names[EMM_COMPARE_COUNT] = {"baselines", "all", "none"};
 static const char *const log_words[] = {"quiet", "summary", "verbose"};
 
@@ -274,9 +275,13 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
     [EMM_CONFIG_TAG] = {{"EMM_TAG", "--tag", "RULES", "rules KIND:key=value,...;... (see below)",
         "(none)", "tag arrays by rule, e.g. vertices:site=read_mesh,stride=80,xyz=8:f64", {{0}}},
         parse_tag},
-    [EMM_CONFIG_CAPTURE] = {{"EMM_CAPTURE", "--capture", "C", "auto, sancov, fault or api", "auto",
+    [EMM_CONFIG_CAPTURE] = {{"EMM_CAPTURE", "--capture", "C",
+        "auto, sancov, fault, api or valgrind", "auto",
         "how accesses are seen: sancov (a build with emm_sancov_executable), fault (page\n"
-        "protection, profiling window only), api (programs using emm_mesh_*); auto picks", {{0}}},
+        "protection, profiling window only), api (programs using emm_mesh_*), valgrind\n"
+        "(emm's Valgrind tool, the whole run of an unmodified binary; emm run starts it);\n"
+        "auto picks, and emm run picks valgrind for a binary without coverage hooks or\n"
+        "emm calls when Valgrind and the tool are there", {{0}}},
         parse_capture},
     [EMM_CONFIG_PROFILE] = {{"EMM_PROFILE", "--profile", "N",
         "a count of accesses (16384, 16K) or of iterations (5it), at least 1", "16384",

@@ -185,16 +185,25 @@ static void answer_locked(emm_session_state st)
         shim.state = st;
 }
 
+void shim_feed_locked(const emm_raw_access *rec, size_t n)
+{
+    if (session_live_locked())
+        answer_locked(emm_session_access(shim.session, rec, n));
+}
+
 void shim_flush_thread(void)
 {
     struct shim_tbuf *b = &shim_tbuf;
-    if (b->n == 0)
+    bool drain = shim.ops && shim.ops->drain_locked;
+    if (b->n == 0 && !drain)
         return;
     shim_busy++;
     pthread_mutex_lock(&shim.lock);
-    if (session_live_locked())
-        answer_locked(emm_session_access(shim.session, b->rec, b->n));
+    if (b->n)
+        shim_feed_locked(b->rec, b->n);
     b->n = 0;
+    if (drain)
+        shim.ops->drain_locked();
     pthread_mutex_unlock(&shim.lock);
     shim_leave();
 }
@@ -805,15 +814,17 @@ static void step_aside(const char *msg)
     shim_log("%s", msg);
 }
 
-/* EMM_CAPTURE=auto: the first backend, in this order, that wants the program. */
+/* EMM_CAPTURE=auto: the first backend, in this order, that wants the
+ * program (valgrind: the program runs under emm's Valgrind tool). */
 static const struct shim_capture_ops *pick_capture(void)
 {
     static const struct shim_capture_ops *const order[] = {
-        &shim_capture_sancov, &shim_capture_api, &shim_capture_fault};
+        &shim_capture_valgrind, &shim_capture_sancov, &shim_capture_api, &shim_capture_fault};
     static const struct shim_capture_ops *const all[EMM_CAPTURE_COUNT] = {
         [EMM_CAPTURE_SANCOV] = &shim_capture_sancov,
         [EMM_CAPTURE_FAULT] = &shim_capture_fault,
-        [EMM_CAPTURE_API] = &shim_capture_api};
+        [EMM_CAPTURE_API] = &shim_capture_api,
+        [EMM_CAPTURE_VALGRIND] = &shim_capture_valgrind};
     if (shim.config.capture != EMM_CAPTURE_AUTO)
         return all[shim.config.capture];
     for (size_t i = 0; i + 1 < sizeof order / sizeof *order; i++)

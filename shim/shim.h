@@ -80,12 +80,16 @@ struct shim_capture_ops {
     void (*ranges_locked)(void);
     /* The window closed: the arrays must be readable for the decision. */
     void (*before_decide_locked)(void);
+    /* Records held outside the threads' buffers (the valgrind tool's) go to
+     * the session (shim_feed_locked); called by every flush. */
+    void (*drain_locked)(void);
     /* In a forked child, which never records. */
     void (*fork_child)(void);
 };
 extern const struct shim_capture_ops shim_capture_sancov SHIM_HIDDEN;
 extern const struct shim_capture_ops shim_capture_fault SHIM_HIDDEN;
 extern const struct shim_capture_ops shim_capture_api SHIM_HIDDEN;
+extern const struct shim_capture_ops shim_capture_valgrind SHIM_HIDDEN;
 
 struct shim {
     /* Set once before main. */
@@ -140,8 +144,12 @@ void shim_tag_array(emm_array_kind kind, const void *base, size_t bytes, size_t 
                     size_t offset, emm_scalar type, bool from_rule, void *map,
                     size_t map_len) SHIM_HIDDEN;
 void shim_untag_array(const void *base) SHIM_HIDDEN;
-/* Sends the calling thread's buffer to the session (takes the lock). */
+/* Sends the calling thread's buffer, and the backend's records
+ * (drain_locked), to the session (takes the lock). */
 void shim_flush_thread(void) SHIM_HIDDEN;
+/* Feeds records to the session while it captures, and decides when it
+ * asks; with shim.lock held. */
+void shim_feed_locked(const emm_raw_access *rec, size_t n) SHIM_HIDDEN;
 void shim_register_thread(void) SHIM_HIDDEN;
 /* The session's ranges, [lo, hi) pairs (up to cap; returns how many). */
 size_t shim_ranges_locked(uint64_t *lo, uint64_t *hi, size_t cap) SHIM_HIDDEN;

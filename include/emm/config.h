@@ -29,6 +29,7 @@ typedef enum emm_capture {
     EMM_CAPTURE_SANCOV,   /* a build with emm_sancov_executable */
     EMM_CAPTURE_FAULT,    /* page protection, the profiling window only */
     EMM_CAPTURE_API,      /* programs using emm_mesh_* */
+    EMM_CAPTURE_VALGRIND, /* emm's Valgrind tool, the whole run of an unmodified binary */
     EMM_CAPTURE_COUNT
 } emm_capture;
 
