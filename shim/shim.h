@@ -47,7 +47,8 @@ struct shim_tag {
     emm_array_kind kind;
     size_t stride, offset;
     emm_scalar type;
-    bool from_rule;  /* count follows the block's size on realloc */
+    int rule;        /* the EMM_TAG rule that selected it (count follows the block's
+                        size on realloc), or -1 for an emm_tag_* call */
     void *map;       /* the block's own pages (a backend's map), or NULL */
     size_t map_len;
     bool protected_; /* its pages are PROT_NONE right now (fault) */
@@ -139,9 +140,10 @@ void shim_log(const char *fmt, ...) __attribute__((format(printf, 1, 2))) SHIM_H
 
 /* --- preload.c ---------------------------------------------------------- */
 void shim_resolve(void) SHIM_HIDDEN;
-/* Tags / untags an array (explicit calls, rules, the api backend). */
+/* Tags / untags an array (explicit calls with rule -1, rules, the api
+ * backend). */
 void shim_tag_array(emm_array_kind kind, const void *base, size_t bytes, size_t stride,
-                    size_t offset, emm_scalar type, bool from_rule, void *map,
+                    size_t offset, emm_scalar type, int rule, void *map,
                     size_t map_len) SHIM_HIDDEN;
 void shim_untag_array(const void *base) SHIM_HIDDEN;
 /* Sends the calling thread's buffer, and the backend's records
@@ -185,8 +187,11 @@ size_t shim_rules_min(void) SHIM_HIDDEN;
  * msg filled. */
 bool shim_rules_init(char *msg, size_t cap) SHIM_HIDDEN;
 /* The rule (index, >= 0) that selects an allocation of `size` bytes made
- * now, from this call stack, or -1; counts nth= selectors. Called with
+ * now, from this call stack, or -1; counts nth= selectors; *site gets the
+ * name of the frame a site= rule matched (else NULL). Called with
  * shim_busy set, without the lock. */
-int shim_rules_match(size_t size) SHIM_HIDDEN;
+int shim_rules_match(size_t size, const char **site) SHIM_HIDDEN;
+/* One line per rule that selected no block, with the sites seen. */
+void shim_rules_report(void) SHIM_HIDDEN;
 
 #endif

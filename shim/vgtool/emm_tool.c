@@ -38,6 +38,7 @@
 #include "pub_tool_libcprint.h"
 #include "pub_tool_machine.h"
 #include "pub_tool_mallocfree.h"
+#include "pub_tool_options.h"
 #include "pub_tool_tooliface.h"
 #include "pub_tool_transtab.h"
 #include "libvex_guest_amd64.h"
@@ -70,6 +71,10 @@ static struct emm_vg_record *over;
 static ULong over_head, over_n, over_cap;
 static Addr drain_entry;
 
+/* --emm-stats=yes: what the capture did, at exit. */
+static Bool show_stats;
+static ULong stat_records, stat_drains, stat_diverted, stat_over_peak;
+
 /* ---- the records ------------------------------------------------------- */
 
 static struct emm_vg_record *slot(void)
@@ -80,6 +85,8 @@ static struct emm_vg_record *slot(void)
         over_cap = over_cap ? 2 * over_cap : 65536;
         over = VG_(realloc)("emm.overflow", over, over_cap * sizeof *over);
     }
+    if (over_n + 1 - over_head > stat_over_peak)
+        stat_over_peak = over_n + 1 - over_head;
     return &over[over_n++];
 }
 
@@ -95,6 +102,7 @@ static VG_REGPARM(3) void hit(Addr a, UWord bytes_write, Addr pc)
             r->work = work > 0xffffffffULL ? 0xffffffffu : (UInt)work;
             r->pc = pc;
             work = 0;
+            stat_records++;
             if (n >= high_water && drain_entry)
                 need_drain = 1;
             return;
@@ -186,6 +194,8 @@ static Bool client_request(ThreadId tid, UWord *arg, UWord *ret)
         set_ranges((const ULong *)arg[1], (const ULong *)arg[2], arg[3]);
         break;
     case EMM_VG_TAKE:
+        stat_diverted += need_drain != 0;
+        stat_drains++;
         need_drain = 0;
         *ret = n;
         break;
@@ -431,9 +441,27 @@ static void post_clo_init(void)
 {
 }
 
+static Bool command_line_option(const HChar *arg)
+{
+    if VG_BOOL_CLO(arg, "--emm-stats", show_stats) {
+    } else {
+        return False;
+    }
+    return True;
+}
+
+static void usage(void)
+{
+    VG_(printf)("    --emm-stats=no|yes        what the capture did, at exit [no]\n");
+}
+
 static void fini(Int exitcode)
 {
     (void)exitcode;
+    if (show_stats)
+        VG_(umsg)("emm tool: %llu records, %llu drains (%llu with the buffer full), "
+                  "overflow peak %llu records\n",
+                  stat_records, stat_drains, stat_diverted, stat_over_peak);
 }
 
 static void pre_clo_init(void)
@@ -446,6 +474,7 @@ static void pre_clo_init(void)
     VG_(details_avg_translation_sizeB)(275);
     VG_(basic_tool_funcs)(post_clo_init, instrument, fini);
     VG_(needs_client_requests)(client_request);
+    VG_(needs_command_line_options)(command_line_option, usage, usage);
 }
 
 VG_DETERMINE_INTERFACE_VERSION(pre_clo_init)
