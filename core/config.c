@@ -52,6 +52,15 @@ static bool parse_strict(emm_config *c, const char *v, long pid, char *why, size
     return true;
 }
 
+static bool parse_list_sites(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid; (void)why; (void)cap;
+    if (strcmp(v, "0") != 0 && strcmp(v, "1") != 0)
+        return false;
+    c->list_sites = v[0] == '1';
+    return true;
+}
+
 static bool parse_tag(emm_config *c, const char *v, long pid, char *why, size_t cap)
 {
     (void)pid;
@@ -325,6 +334,12 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
         {{"--quiet", "0", "no summary"}, {"-q", "0", "the same as --quiet"},
          {"--verbose", "2", "more detail"}, {"-v", "2", "the same as --verbose"}}},
         parse_log},
+    [EMM_CONFIG_LIST_SITES] = {{"EMM_LIST_SITES", NULL, NULL, "0 or 1", "0",
+        "1: run the program once and list, at exit, its candidate arrays (blocks of 64 KiB\n"
+        "or more, by call site, with the whole stack and what their records look like),\n"
+        "each with a suggested EMM_TAG rule; nothing is tagged or simulated",
+        {{"--list-sites", "1", "list the program's candidate arrays and a rule for each"}}},
+        parse_list_sites},
 };
 
 const emm_config_row *emm_config_row_get(emm_config_key k)
@@ -478,4 +493,5 @@ void emm_config_dump(const emm_config *c, FILE *out)
     fprintf(out, "emm:   EMM_TRACE=%s\n", c->trace);
     fprintf(out, "emm:   EMM_TIMELINE=%s\n", c->timeline);
     fprintf(out, "emm:   EMM_LOG=%d\n", c->log);
+    fprintf(out, "emm:   EMM_LIST_SITES=%d\n", c->list_sites);
 }

@@ -46,6 +46,9 @@ __thread struct shim_tbuf shim_tbuf SHIM_TLS;
 __thread int shim_in_alloc SHIM_TLS;
 int shim_pending_signal;
 
+/* EMM_LIST_SITES: the smallest block listed. */
+#define SHIM_LIST_MIN (64 * 1024)
+
 static pthread_key_t thread_key;
 static int finishing;
 
@@ -259,6 +262,15 @@ static void shim_finish(void)
 {
     if (!shim.enabled || __atomic_exchange_n(&finishing, 1, __ATOMIC_ACQ_REL))
         return;
+    if (shim.sites) { /* list mode: the candidate arrays, nothing simulated */
+        shim_busy++;
+        pthread_mutex_lock(&shim.lock);
+        shim.finished = true;
+        emm_sites_print(shim.sites, program_invocation_short_name, stderr);
+        pthread_mutex_unlock(&shim.lock);
+        shim_busy--;
+        return;
+    }
     shim_busy++;
     shim_flush_thread();
     pthread_mutex_lock(&shim.lock);
@@ -400,7 +412,7 @@ static bool alloc_begin(size_t size, size_t align, struct pending *pd)
     if (size < shim.rule_min || shim_busy || !shim.enabled || shim.finished)
         return false;
     shim_busy++;
-    pd->rule = shim_rules_match(size, &pd->site);
+    pd->rule = shim.sites ? -1 : shim_rules_match(size, &pd->site);
     pd->map = pd->rule >= 0 && shim.ops->map ? shim.ops->map(size, align, &pd->map_len) : NULL;
     return true;
 }
@@ -417,8 +429,23 @@ static void *alloc_end(struct pending *pd, void *p, size_t size)
     } else if (pd->map) {
         munmap(pd->map, pd->map_len);
     }
+    if (p && shim.sites)
+        shim_rules_list(p, size);
     shim_leave();
     return p;
+}
+
+/* EMM_LIST_SITES: a block about to be freed or moved is read first. */
+static void list_release(const void *p)
+{
+    if (!shim.sites || shim_busy)
+        return;
+    shim_busy++;
+    pthread_mutex_lock(&shim.lock);
+    if (!shim.finished)
+        emm_sites_release(shim.sites, p);
+    pthread_mutex_unlock(&shim.lock);
+    shim_leave();
 }
 
 /* Leaves an allocator function; the outermost acts on a pending signal. */
@@ -484,6 +511,7 @@ void free(void *p)
         /* Inside the shim (shim_busy) a block is never a tagged one: the shim
          * and the session free only their own. */
         struct shim_tag t;
+        list_release(p);
         if (!shim_busy && tag_exists_quick(p) && take_tag(p, &t))
             release(&t, p);
         else
@@ -584,6 +612,7 @@ static void *realloc_impl(void *p, size_t size)
     }
     if (!shim_busy && tag_exists_quick(p))
         return realloc_tagged(p, size);
+    list_release(p);
     struct pending pd;
     if (!alloc_begin(size, 16, &pd))
         return shim_real.realloc(p, size);
@@ -889,6 +918,21 @@ __attribute__((constructor(101))) static void shim_init(void)
     }
     if (!shim_rules_init(msg, sizeof msg)) {
         step_aside(msg);
+        shim_leave();
+        return;
+    }
+    if (shim.config.list_sites) {
+        /* List mode: no session, no capture; every large block is noted. */
+        static const struct shim_capture_ops list_ops = {.kind = EMM_CAPTURE_AUTO};
+        shim.ops = &list_ops;
+        if (!(shim.sites = emm_sites_new(SHIM_LIST_MIN))) {
+            step_aside("EMM_LIST_SITES: out of memory");
+            shim_leave();
+            return;
+        }
+        pthread_atfork(fork_prepare, fork_parent, fork_child);
+        shim.rule_min = SHIM_LIST_MIN;
+        __atomic_store_n(&shim.enabled, true, __ATOMIC_RELEASE);
         shim_leave();
         return;
     }

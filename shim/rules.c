@@ -57,7 +57,7 @@ static struct {
 
 bool shim_rules_init(char *msg, size_t cap)
 {
-    bool need = false;
+    bool need = shim.config.list_sites;
     for (size_t i = 0; i < shim.config.tags.n; i++)
         need = need || shim.config.tags.rule[i].site[0];
     if (!need)
@@ -65,7 +65,8 @@ bool shim_rules_init(char *msg, size_t cap)
 #if defined(__x86_64__)
     void *h = dlopen("libunwind.so.8", RTLD_NOW | RTLD_LOCAL);
     if (!h) {
-        snprintf(msg, cap, "EMM_TAG: site= needs libunwind.so.8: %s", dlerror());
+        snprintf(msg, cap, "%s needs libunwind.so.8: %s",
+                 shim.config.list_sites ? "EMM_LIST_SITES" : "EMM_TAG: site=", dlerror());
         return false;
     }
     *(void **)&unw.getcontext = dlsym(h, "_Ux86_64_getcontext");
@@ -277,4 +278,18 @@ void shim_rules_report(void)
         pthread_mutex_unlock(&cache.lock);
         shim_log("%s", line);
     }
+}
+
+void shim_rules_list(const void *block, size_t size)
+{
+    const char *name[MAX_FRAMES];
+    uintptr_t ip[MAX_FRAMES];
+    int n = stack_frames(name, ip);
+    uint64_t path = 14695981039346656037ull;
+    for (int k = 0; k < n; k++)
+        path = (path ^ ip[k]) * 1099511628211ull;
+    pthread_mutex_lock(&shim.lock);
+    if (shim.sites && !shim.finished)
+        emm_sites_add(shim.sites, path, name, (size_t)n, block, size);
+    pthread_mutex_unlock(&shim.lock);
 }

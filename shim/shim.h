@@ -19,6 +19,7 @@
 
 #include "emm/config.h"
 #include "emm/session.h"
+#include "emm/sites.h"
 
 #define SHIM_TLS __attribute__((tls_model("initial-exec")))
 #define SHIM_HIDDEN __attribute__((visibility("hidden")))
@@ -101,6 +102,7 @@ struct shim {
 
     pthread_mutex_t lock;               /* the session, the tag table, the rules' counters */
     emm_session *session;
+    emm_sites *sites;                   /* EMM_LIST_SITES: the candidate arrays (no session) */
     emm_session_state state;
     bool finished;                      /* finish ran, or a forked child went quiet */
     bool failed;                        /* decide failed: stop capturing */
@@ -193,5 +195,8 @@ bool shim_rules_init(char *msg, size_t cap) SHIM_HIDDEN;
 int shim_rules_match(size_t size, const char **site) SHIM_HIDDEN;
 /* One line per rule that selected no block, with the sites seen. */
 void shim_rules_report(void) SHIM_HIDDEN;
+/* EMM_LIST_SITES: a block of `size` bytes just allocated at `block`, from
+ * this call stack, into shim.sites (takes the lock). */
+void shim_rules_list(const void *block, size_t size) SHIM_HIDDEN;
 
 #endif

@@ -54,7 +54,12 @@ static void usage(FILE *out)
             "VALGRIND_LIB set to the tool's directory, <libdir>/emm/valgrind/. --capture\n"
             "auto does the same for a binary that neither links emm's coverage hooks\n"
             "(emm_sancov_executable) nor calls emm, when valgrind is on PATH and the tool\n"
-            "was built; otherwise it preloads the shim, which picks sancov, api or fault.\n");
+            "was built; otherwise it preloads the shim, which picks sancov, api or fault.\n"
+            "\n"
+            "--list-sites runs PROGRAM once and lists, at exit, its candidate arrays: blocks\n"
+            "of 64 KiB or more by call path, with the whole stack, what their records look\n"
+            "like and a suggested EMM_TAG rule each. A rule that matches nothing says so at\n"
+            "exit with the sites seen closest to it; --verbose names each tagged block's site.\n");
 }
 
 /* out = a + b + c; false when it does not fit. */
@@ -277,8 +282,9 @@ int emm_cmd_run(int argc, char **argv)
             cli_error("run: --capture valgrind is unavailable: %s", why);
             return EMM_EXIT_FAIL;
         }
-    } else if (cfg.capture == EMM_CAPTURE_AUTO &&
+    } else if (cfg.capture == EMM_CAPTURE_AUTO && !cfg.list_sites &&
                find_program(argv[i], program, sizeof program) && !links_emm(program)) {
+        /* (--list-sites captures nothing: the preloaded shim suffices.) */
         vgdir = valgrind_setup(launcher, sizeof launcher, why, sizeof why);
     }
 

@@ -137,6 +137,7 @@ typedef enum emm_config_key {
     EMM_CONFIG_TRACE,
     EMM_CONFIG_TIMELINE,
     EMM_CONFIG_LOG,
+    EMM_CONFIG_LIST_SITES,
     EMM_CONFIG_COUNT
 } emm_config_key;
 
@@ -170,6 +171,7 @@ typedef struct emm_config {
     char trace[EMM_CONFIG_PATH_MAX];        /* EMM_TRACE */
     char timeline[EMM_CONFIG_PATH_MAX];     /* EMM_TIMELINE */
     int log;                      /* EMM_LOG: 0 quiet, 1 summary, 2 verbose */
+    int list_sites;               /* EMM_LIST_SITES: list the candidate arrays, simulate nothing */
     /* Where each value came from — the variable or the option that set it
      * (static strings of the table), NULL for a default — so that every
      * message names what the user typed. */
