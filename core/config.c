@@ -43,22 +43,25 @@ static int word(const char *v, const char *const *words, int n)
     return -1;
 }
 
+/* "0" or "1" into *flag. */
+static bool parse_01(const char *v, int *flag)
+{
+    if (strcmp(v, "0") != 0 && strcmp(v, "1") != 0)
+        return false;
+    *flag = v[0] == '1';
+    return true;
+}
+
 static bool parse_strict(emm_config *c, const char *v, long pid, char *why, size_t cap)
 {
     (void)pid; (void)why; (void)cap;
-    if (strcmp(v, "0") != 0 && strcmp(v, "1") != 0)
-        return false;
-    c->strict = v[0] == '1';
-    return true;
+    return parse_01(v, &c->strict);
 }
 
 static bool parse_list_sites(emm_config *c, const char *v, long pid, char *why, size_t cap)
 {
     (void)pid; (void)why; (void)cap;
-    if (strcmp(v, "0") != 0 && strcmp(v, "1") != 0)
-        return false;
-    c->list_sites = v[0] == '1';
-    return true;
+    return parse_01(v, &c->list_sites);
 }
 
 static bool parse_tag(emm_config *c, const char *v, long pid, char *why, size_t cap)

@@ -209,8 +209,9 @@ static char *valgrind_setup(char *launcher, size_t lcap, char *why, size_t wcap)
     char tried[4096];
     char *tool = find_beside(VGTOOL_NAME, tried, sizeof tried);
     if (!tool) {
-        snprintf(why, wcap, "emm's Valgrind tool was not built (Valgrind's tool headers and "
-                 "libraries, Debian package valgrind, were missing); tried %s", tried);
+        snprintf(why, wcap, "emm's Valgrind tool is not beside this emm (it is built where "
+                 "Valgrind's tool headers and libraries, Debian package valgrind, are "
+                 "installed); tried %s", tried);
         return NULL;
     }
     if (!find_program("valgrind", launcher, lcap)) {
