@@ -19,7 +19,8 @@
  * <accepts>"). */
 typedef bool (*row_parser)(emm_config *c, const char *v, long pid, char *why, size_t cap);
 
-static const char *const capture_names[EMM_CAPTURE_COUNT] = {"auto", "sancov", "fault", "api"};
+static const char *const capture_names[EMM_CAPTURE_COUNT] = {"auto", "sancov", "fault", "api",
+                                                                    "valgrind"};
 static const char *const compare_names[EMM_COMPARE_COUNT] = {"baselines", "all", "none"};
 static const char *const log_words[] = {"quiet", "summary", "verbose"};
 
@@ -42,13 +43,25 @@ static int word(const char *v, const char *const *words, int n)
     return -1;
 }
 
+/* "0" or "1" into *flag. */
+static bool parse_01(const char *v, int *flag)
+{
+    if (strcmp(v, "0") != 0 && strcmp(v, "1") != 0)
+        return false;
+    *flag = v[0] == '1';
+    return true;
+}
+
 static bool parse_strict(emm_config *c, const char *v, long pid, char *why, size_t cap)
 {
     (void)pid; (void)why; (void)cap;
-    if (strcmp(v, "0") != 0 && strcmp(v, "1") != 0)
-        return false;
-    c->strict = v[0] == '1';
-    return true;
+    return parse_01(v, &c->strict);
+}
+
+static bool parse_list_sites(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid; (void)why; (void)cap;
+    return parse_01(v, &c->list_sites);
 }
 
 static bool parse_tag(emm_config *c, const char *v, long pid, char *why, size_t cap)
@@ -274,9 +287,13 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
     [EMM_CONFIG_TAG] = {{"EMM_TAG", "--tag", "RULES", "rules KIND:key=value,...;... (see below)",
         "(none)", "tag arrays by rule, e.g. vertices:site=read_mesh,stride=80,xyz=8:f64", {{0}}},
         parse_tag},
-    [EMM_CONFIG_CAPTURE] = {{"EMM_CAPTURE", "--capture", "C", "auto, sancov, fault or api", "auto",
+    [EMM_CONFIG_CAPTURE] = {{"EMM_CAPTURE", "--capture", "C",
+        "auto, sancov, fault, api or valgrind", "auto",
         "how accesses are seen: sancov (a build with emm_sancov_executable), fault (page\n"
-        "protection, profiling window only), api (programs using emm_mesh_*); auto picks", {{0}}},
+        "protection, profiling window only), api (programs using emm_mesh_*), valgrind\n"
+        "(emm's Valgrind tool, the whole run of an unmodified binary; emm run starts it);\n"
+        "auto picks, and emm run picks valgrind for a binary without coverage hooks or\n"
+        "emm calls when Valgrind and the tool are there", {{0}}},
         parse_capture},
     [EMM_CONFIG_PROFILE] = {{"EMM_PROFILE", "--profile", "N",
         "a count of accesses (16384, 16K) or of iterations (5it), at least 1", "16384",
@@ -320,6 +337,12 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
         {{"--quiet", "0", "no summary"}, {"-q", "0", "the same as --quiet"},
          {"--verbose", "2", "more detail"}, {"-v", "2", "the same as --verbose"}}},
         parse_log},
+    [EMM_CONFIG_LIST_SITES] = {{"EMM_LIST_SITES", NULL, NULL, "0 or 1", "0",
+        "1: run the program once and list, at exit, its candidate arrays (blocks of 64 KiB\n"
+        "or more, by call site, with the whole stack and what their records look like),\n"
+        "each with a suggested EMM_TAG rule; nothing is tagged or simulated",
+        {{"--list-sites", "1", "list the program's candidate arrays and a rule for each"}}},
+        parse_list_sites},
 };
 
 const emm_config_row *emm_config_row_get(emm_config_key k)
@@ -474,4 +497,5 @@ void emm_config_dump(const emm_config *c, FILE *out)
     fprintf(out, "emm:   EMM_TRACE=%s\n", c->trace);
     fprintf(out, "emm:   EMM_TIMELINE=%s\n", c->timeline);
     fprintf(out, "emm:   EMM_LOG=%d\n", c->log);
+    fprintf(out, "emm:   EMM_LIST_SITES=%d\n", c->list_sites);
 }

@@ -47,6 +47,8 @@ static bool parse_field(const char *v, size_t len, bool vertices, uint32_t *offs
         *type = EMM_U32;
     else if (!vertices && strcmp(t, "i64") == 0)
         *type = EMM_I64;
+    else if (!vertices && strcmp(t, "u16") == 0)
+        *type = EMM_U16;
     else
         return false;
     *offset = (uint32_t)off;
@@ -55,7 +57,7 @@ static bool parse_field(const char *v, size_t len, bool vertices, uint32_t *offs
 
 static size_t scalar_size(emm_scalar t)
 {
-    return t == EMM_F64 || t == EMM_I64 ? 8 : 4;
+    return t == EMM_F64 || t == EMM_I64 ? 8 : t == EMM_U16 ? 2 : 4;
 }
 
 static bool is_key(const char *p, size_t kl, const char *key)
@@ -131,7 +133,7 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
             have_field = true;
         } else if (is_key(p, kl, "vidx") && !vertices) {
             if (!parse_field(v, vl, false, &r->offset, &r->type))
-                return emm_fail(err, EMM_ERR_INVALID, "'%s': expected vidx=OFFSET:i32|u32|i64",
+                return emm_fail(err, EMM_ERR_INVALID, "'%s': expected vidx=OFFSET:i32|u32|u16|i64",
                                 emm_clip(p, plen, q));
             have_field = true;
         } else {
@@ -147,7 +149,7 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
     if (!have_field)
         return emm_fail(err, EMM_ERR_INVALID,
                         vertices ? "rule '%s' needs xyz=OFFSET:f32|f64"
-                                 : "rule '%s' needs vidx=OFFSET:i32|u32|i64",
+                                 : "rule '%s' needs vidx=OFFSET:i32|u32|u16|i64",
                         emm_clip(text, len, q));
     if ((uint64_t)r->offset + 3 * scalar_size(r->type) > r->stride)
         return emm_fail(err, EMM_ERR_INVALID,
@@ -185,6 +187,34 @@ emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *
     return EMM_OK;
 }
 
+static const char *scalar_name(emm_scalar t)
+{
+    switch (t) {
+    case EMM_F32: return "f32";
+    case EMM_F64: return "f64";
+    case EMM_I32: return "i32";
+    case EMM_U32: return "u32";
+    case EMM_I64: return "i64";
+    case EMM_U16: return "u16";
+    default: return "?";
+    }
+}
+
+void emm_tag_rule_format(const emm_tag_rule *r, char *out, size_t cap)
+{
+    bool vertices = r->kind == EMM_ARRAY_VERTICES;
+    char site[EMM_TAG_SITE_MAX + 8] = "", nth[32] = "", min[32] = "";
+    if (r->site[0])
+        snprintf(site, sizeof site, "site=%s,", r->site);
+    if (r->nth)
+        snprintf(nth, sizeof nth, "nth=%llu,", (unsigned long long)r->nth);
+    uint64_t def = r->stride > DEFAULT_MIN ? r->stride : DEFAULT_MIN;
+    if (r->min != def)
+        snprintf(min, sizeof min, "min=%llu,", (unsigned long long)r->min);
+    snprintf(out, cap, "%s:%s%s%sstride=%u,%s=%u:%s", vertices ? "vertices" : "triangles", site,
+             min, nth, r->stride, vertices ? "xyz" : "vidx", r->offset, scalar_name(r->type));
+}
+
 void emm_tag_rules_help(FILE *out)
 {
     fprintf(out,
@@ -193,7 +223,7 @@ void emm_tag_rules_help(FILE *out)
             "looking past allocator and C++ standard-library frames such as std::vector's),\n"
             "min=BYTES (K/M/G; default max(stride, 4K)), nth=N (the Nth block the other\n"
             "selectors select, from 1). Record: stride=BYTES (required), xyz=OFFSET:f32|f64\n"
-            "(vertices), vidx=OFFSET:i32|u32|i64 (triangles). Count = block size / stride;\n"
+            "(vertices), vidx=OFFSET:i32|u32|u16|i64 (triangles). Count = block size / stride;\n"
             "a block must be a whole number of records. A rule with site= follows the first\n"
             "allocation call in that function it selects (a growing std::vector reallocates\n"
             "from that same call); the function's other allocations go to later rules, so\n"
@@ -278,4 +308,133 @@ int emm_tag_site_is_library(const char *symbol, const char *object)
         if (strncmp(base, libs[i], strlen(libs[i])) == 0)
             return 1;
     return 0;
+}
+
+/* ---- site names from demangled symbols, and the unmatched rules --------- */
+
+void emm_tag_site_names(const char *symbol, const char *demangled, char *name, size_t ncap,
+                        char *qualified, size_t qcap)
+{
+    if (ncap == 0 || qcap == 0)
+        return;
+    if (!demangled) {
+        emm_tag_site_name(symbol, name, ncap);
+        snprintf(qualified, qcap, "%s", name);
+        return;
+    }
+    /* The function's part: up to its parameter list, the last '(' at the top
+     * level, after the return type a template function's name carries. */
+    char buf[1024];
+    snprintf(buf, sizeof buf, "%s", demangled);
+    char *clone = strstr(buf, " [clone");
+    if (clone)
+        *clone = '\0';
+    int depth = 0;
+    size_t len = strlen(buf), start = 0, paren = len;
+    for (size_t i = 0; i < len; i++) {
+        char c = buf[i];
+        if (c == '<')
+            depth++;
+        else if (c == '>' && depth > 0)
+            depth--;
+        else if (c == '(' && depth == 0) {
+            paren = i;
+            break;
+        } else if (c == ' ' && depth == 0)
+            start = i + 1;
+    }
+    /* Template arguments dropped. */
+    char q[1024];
+    size_t n = 0;
+    depth = 0;
+    for (size_t i = start; i < paren && n + 1 < sizeof q; i++) {
+        char c = buf[i];
+        if (c == '<')
+            depth++;
+        else if (c == '>' && depth > 0)
+            depth--;
+        else if (depth == 0)
+            q[n++] = c;
+    }
+    q[n] = '\0';
+    snprintf(qualified, qcap, "%s", q);
+    const char *last = q, *sep;
+    while ((sep = strstr(last, "::")))
+        last = sep + 2;
+    snprintf(name, ncap, "%s", last);
+}
+
+int emm_tag_site_matches(const char *site, const char *name, const char *qualified)
+{
+    if (strcmp(site, name) == 0 || strcmp(site, qualified) == 0)
+        return 1;
+    size_t ls = strlen(site), lq = strlen(qualified);
+    return ls + 2 <= lq && strcmp(qualified + lq - ls, site) == 0 &&
+           memcmp(qualified + lq - ls - 2, "::", 2) == 0;
+}
+
+/* The longest common substring of a and b, in characters (short names). */
+static size_t common(const char *a, const char *b)
+{
+    size_t best = 0, la = strlen(a), lb = strlen(b);
+    for (size_t i = 0; i < la; i++)
+        for (size_t j = 0; j < lb; j++) {
+            size_t k = 0;
+            while (i + k < la && j + k < lb && a[i + k] == b[j + k])
+                k++;
+            if (k > best)
+                best = k;
+        }
+    return best;
+}
+
+void emm_tag_unmatched_message(const emm_tag_rule *r, size_t index,
+                               const emm_tag_site_seen *seen, size_t nseen, char *out,
+                               size_t cap)
+{
+    char text[256];
+    emm_tag_rule_format(r, text, sizeof text);
+    int w = snprintf(out, cap, "EMM_TAG rule %zu (%s) matched no allocation", index + 1, text);
+    if (w < 0 || (size_t)w >= cap)
+        return;
+    size_t used = (size_t)w;
+    if (nseen == 0) {
+        snprintf(out + used, cap - used,
+                 r->site[0] ? "; no allocation of %llu bytes or more was seen (min=)"
+                            : "; no block of %llu bytes or more was allocated",
+                 (unsigned long long)r->min);
+        return;
+    }
+    bool taken[64] = {false};
+    for (int k = 0; k < 3 && (size_t)k < nseen; k++) {
+        size_t best = SIZE_MAX;
+        long best_score = -1;
+        for (size_t i = 0; i < nseen && i < 64; i++) {
+            if (taken[i])
+                continue;
+            bool whole = seen[i].largest % r->stride == 0;
+            long name = (long)(r->site[0] ? common(r->site, seen[i].name) : 0);
+            long score = (name < 255 ? name : 255) * (1L << 40) + (whole ? 1L << 32 : 0) +
+                         (long)(seen[i].largest >> 8 < (1u << 31) ? seen[i].largest >> 8
+                                                                 : (1u << 31));
+            if (score > best_score) {
+                best_score = score;
+                best = i;
+            }
+        }
+        if (best == SIZE_MAX)
+            break;
+        taken[best] = true;
+        w = snprintf(out + used, cap - used, "%s%s (%llu block%s, up to %llu bytes%s)",
+                     k == 0 ? "; sites seen, closest first: " : ", ", seen[best].name,
+                     (unsigned long long)seen[best].count, seen[best].count == 1 ? "" : "s",
+                     (unsigned long long)seen[best].largest,
+                     seen[best].largest % r->stride ? ", not whole records" : "");
+        if (w < 0 || (size_t)w >= cap - used)
+            return;
+        used += (size_t)w;
+    }
+    if (r->site[0])
+        snprintf(out + used, cap - used,
+                 " (a function the compiler inlined is no frame of the stack: name its caller)");
 }

@@ -20,6 +20,7 @@
 #include "session_internal.h"
 
 #include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -34,10 +35,18 @@
  * and in all when the window counts iterations. */
 #define SESSION_RECORDS_PER_ELEMENT 32u
 #define SESSION_ITERATION_RECORDS (1u << 20)
-/* Element writes before the first read that are taken for the loader (a
- * mesh of some 20,000 vertices and 40,000 triangles); a longer stretch of
- * writes opens the window anyway. */
+/* Element writes before the first read that are taken for the loader: at
+ * least this many (a mesh of some 20,000 vertices and 40,000 triangles),
+ * and as many as the arrays tagged so far have held records (a loader
+ * writes each once, a growing vector's copies included); a longer stretch
+ * of writes opens the window anyway. */
 #define SESSION_LOADER_ELEMENTS 65536u
+
+static uint64_t loader_allowance(const emm_session *s)
+{
+    return s->tagged_records > SESSION_LOADER_ELEMENTS ? s->tagged_records
+                                                       : SESSION_LOADER_ELEMENTS;
+}
 /* Element writes in the window after which it ends, in windows. */
 #define SESSION_WRITE_WINDOWS 2
 
@@ -134,7 +143,7 @@ static bool valid_field(emm_array_kind kind, emm_scalar type)
     if (kind == EMM_ARRAY_VERTICES)
         return type == EMM_F32 || type == EMM_F64;
     if (kind == EMM_ARRAY_TRIANGLES)
-        return type == EMM_I32 || type == EMM_U32 || type == EMM_I64;
+        return type == EMM_I32 || type == EMM_U32 || type == EMM_I64 || type == EMM_U16;
     return false;
 }
 
@@ -160,8 +169,35 @@ static void drop_slot(emm_session *s, int i, bool keep)
         s->last = -1;
 }
 
+const char *session_origin(const emm_session *s, const session_array *a, char *buf, size_t cap)
+{
+    if (a->rule >= 0 && (size_t)a->rule < s->cfg.tags.n) {
+        char text[256];
+        emm_tag_rule_format(&s->cfg.tags.rule[a->rule], text, sizeof text);
+        snprintf(buf, cap, "EMM_TAG rule %d (%s)", a->rule + 1, text);
+    } else {
+        snprintf(buf, cap, "the emm_tag_%s call",
+                 a->kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles");
+    }
+    return buf;
+}
+
 int emm_session_tag(emm_session *s, emm_array_kind kind, const void *base, size_t count,
                     size_t stride, size_t field_offset, emm_scalar type)
+{
+    return emm_session_tag_rule(s, kind, base, count, stride, field_offset, type, -1);
+}
+
+/* Drops the live arrays other than `keep` that overlap [lo, hi). */
+static void drop_overlaps(emm_session *s, uint64_t lo, uint64_t hi, int keep)
+{
+    for (int i = 0; i < s->narrays; i++)
+        if (i != keep && s->arrays[i].live && s->arrays[i].base < hi && lo < s->arrays[i].end)
+            drop_slot(s, i, false);
+}
+
+int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, size_t count,
+                         size_t stride, size_t field_offset, emm_scalar type, int rule)
 {
     uint64_t lo = (uint64_t)(uintptr_t)base, span;
     if (s->phase == PHASE_FAILED || s->phase == PHASE_DONE || !base || count == 0 ||
@@ -170,9 +206,7 @@ int emm_session_tag(emm_session *s, emm_array_kind kind, const void *base, size_
         __builtin_mul_overflow((uint64_t)count, (uint64_t)stride, &span) ||
         lo > UINT64_MAX - span)
         return -1;
-    for (int i = 0; i < s->narrays; i++)
-        if (s->arrays[i].live && s->arrays[i].base < lo + span && lo < s->arrays[i].end)
-            drop_slot(s, i, false);
+    drop_overlaps(s, lo, lo + span, -1);
     /* A slot is free when nothing refers to it any more: not live, not named
      * by a window record, not feeding a trace array. */
     int slot = -1;
@@ -219,11 +253,44 @@ int emm_session_tag(emm_session *s, emm_array_kind kind, const void *base, size_
     a->refs = 0;
     a->snap = NULL;
     a->trace_index = tidx;
+    a->rule = rule;
+    a->top = 0;
+    a->moves = 0;
+    s->tagged_records += count;
     if (tidx >= 0 && a->count > s->tarrays[tidx].count) {
         a->count = s->tarrays[tidx].count; /* later elements are not in the trace */
         a->end = lo + a->count * stride;
     }
     return slot;
+}
+
+emm_session_state emm_session_move(emm_session *s, const void *old, const void *base,
+                                   size_t count)
+{
+    uint64_t from = (uint64_t)(uintptr_t)old, lo = (uint64_t)(uintptr_t)base, span;
+    for (int i = 0; i < s->narrays; i++) {
+        session_array *a = &s->arrays[i];
+        if (!a->live || a->base != from)
+            continue;
+        if (!base || count == 0 || __builtin_mul_overflow((uint64_t)count, a->stride, &span) ||
+            lo > UINT64_MAX - span) {
+            drop_slot(s, i, false);
+            break;
+        }
+        drop_overlaps(s, lo, lo + span, i);
+        if (count > a->count)
+            s->tagged_records += count - a->count;
+        a->base = lo;
+        a->count = count;
+        a->moves++;
+        if (a->trace_index >= 0 && a->count > s->tarrays[a->trace_index].count)
+            a->count = s->tarrays[a->trace_index].count; /* later elements are not in the trace */
+        if (a->top > a->count)
+            a->top = a->count;
+        a->end = lo + a->count * a->stride;
+        break;
+    }
+    return public_state(s);
 }
 
 emm_session_state emm_session_untag(emm_session *s, const void *base)
@@ -292,9 +359,11 @@ static inline bool convert(emm_session *s, const emm_raw_access *raw, emm_trace_
     s->pending_work += raw->work;
     if (i < 0 || bytes == 0)
         return false;
-    const session_array *a = &s->arrays[i];
+    session_array *a = &s->arrays[i];
     uint64_t rel = raw->addr - a->base;
     r->element = rel / a->stride;
+    if (r->element >= a->top)
+        a->top = r->element + 1;
     r->offset = (uint32_t)(rel - r->element * a->stride);
     r->array = (uint32_t)i;
     /* A trace record stays within one record of its array (trace.h): a
@@ -336,11 +405,16 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
         /* Until the first read of the mesh, the program is loading it: the
          * thesis measures from the moment the mesh is frozen in memory (§5),
          * so the loader's writes are counted, not buffered nor simulated. */
-        if (!s->wopen) {
-            /* A program that only writes, or a loader of more than
-             * SESSION_LOADER_ELEMENTS elements, opens the window anyway: capture must stay bounded (fault capture pays tens
-             * of microseconds an access until the decision). */
-            if (r.write && s->loader_elements < SESSION_LOADER_ELEMENTS) {
+        /* A write before the traversal's first profiled read is the
+         * loader's too: a loader that reads what it wrote (a growing
+         * std::vector copies its elements, an index-order sweep) opened the
+         * window, but the traversal has not begun. */
+        if (!s->wopen || (r.write && s->welements == 0)) {
+            /* A program that only writes, or a loader that writes more
+             * elements than the arrays hold (loader_allowance), opens the
+             * window anyway: capture must stay bounded (fault capture pays
+             * tens of microseconds an access until the decision). */
+            if (r.write && s->loader_elements < loader_allowance(s)) {
                 s->loader_writes++;
                 if (!s->lany || r.array != s->llast_array || r.element != s->llast_element)
                     s->loader_elements++;
@@ -373,7 +447,10 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
         s->wwany = true;
         s->wwlast_array = r.array;
         s->wwlast_element = r.element;
-        s->wactivity += next;
+        /* Counted from the traversal's first profiled read: a loader's
+         * sweeps (a growing vector's copies) before it do not end the
+         * window under fault capture. */
+        s->wactivity += next && s->welements > 0;
         if (r.write) {
             s->wwrites++;
             s->welement_writes += next;
@@ -418,6 +495,13 @@ void session_simulate(emm_session *s, const emm_trace_record *recs, size_t n)
         s->trace = NULL;
     }
     s->accesses += n;
+    for (size_t k = 0; k < n; k++) {
+        s->elements += !s->eany || recs[k].array != s->elast_array ||
+                       recs[k].element != s->elast_element;
+        s->eany = true;
+        s->elast_array = recs[k].array;
+        s->elast_element = recs[k].element;
+    }
     if (s->probing)
         session_phases_see(s, recs, n);
 }

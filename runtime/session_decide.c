@@ -35,75 +35,179 @@ static int64_t read_index(const unsigned char *p, emm_scalar t)
         memcpy(&v, p, sizeof v);
         return v;
     }
+    if (t == EMM_U16) {
+        uint16_t v;
+        memcpy(&v, p, sizeof v);
+        return v;
+    }
     int64_t v;
     memcpy(&v, p, sizeof v);
     return v;
 }
 
-/* The live array of `kind` with the most records: the mesh itself; other
- * arrays of the kind are per-element data beside it. */
-static int largest(const emm_session *s, emm_array_kind kind)
+/* Whether array a is a better mesh than array b: live (an array already
+ * gone, a growing vector's old buffer, is not the mesh the run goes on
+ * with), then read most by the window, then the most records. */
+static bool better_mesh(const session_array *a, const session_array *b)
 {
-    int best = -1;
-    for (int i = 0; i < s->narrays; i++)
-        if (session_usable(&s->arrays[i]) && s->arrays[i].kind == kind &&
-            (best < 0 || s->arrays[i].count > s->arrays[best].count))
+    if (a->live != b->live)
+        return a->live;
+    if (a->refs != b->refs)
+        return a->refs > b->refs;
+    return a->count > b->count;
+}
+
+/* The array of `kind` that is the mesh (better_mesh); other arrays of the
+ * kind are per-element data beside it (normals, colours), or gone. When
+ * one rule selected several live arrays, the summary says which was taken
+ * (s->pick_note): a rule's nth= or min= picks another. */
+static int mesh_array(emm_session *s, emm_array_kind kind)
+{
+    int best = -1, same_rule = 0;
+    for (int i = 0; i < s->narrays; i++) {
+        const session_array *a = &s->arrays[i];
+        if (session_usable(a) && a->kind == kind && (best < 0 || better_mesh(a, &s->arrays[best])))
             best = i;
+    }
+    if (best < 0 || s->arrays[best].rule < 0)
+        return best;
+    for (int i = 0; i < s->narrays; i++)
+        same_rule += s->arrays[i].live && s->arrays[best].live && s->arrays[i].kind == kind &&
+                     s->arrays[i].rule == s->arrays[best].rule;
+    if (same_rule > 1) {
+        char o[512];
+        size_t used = strlen(s->pick_note);
+        snprintf(s->pick_note + used, sizeof s->pick_note - used,
+                 "%s%s selected %d live %s arrays; the mesh is the one at 0x%llx (%llu records, "
+                 "%llu window accesses), the others are per-element data (nth= picks another)",
+                 used ? "; " : "", session_origin(s, &s->arrays[best], o, sizeof o), same_rule,
+                 kind == EMM_ARRAY_VERTICES ? "vertex" : "triangle",
+                 (unsigned long long)s->arrays[best].base,
+                 (unsigned long long)s->arrays[best].count,
+                 (unsigned long long)s->arrays[best].refs);
+    }
     return best;
 }
 
+/* The records of an array in use: all of them for an emm_tag_* call; for a
+ * block a rule selected, whose size is a capacity, those up to the highest
+ * element the program accessed (its loader's writes included). */
+static uint64_t in_use(const session_array *a)
+{
+    return a->rule >= 0 && a->top > 0 && a->top < a->count ? a->top : a->count;
+}
+
+/* A coordinate a mesh can have: finite, not subnormal, not absurdly large.
+ * Integers or pointers read as floating point are subnormal or huge: a
+ * wrong stride or offset shows here. */
+static bool plausible(double x, emm_scalar t)
+{
+    double tiny = t == EMM_F32 ? 1.1754943508222875e-38 : 2.2250738585072014e-308;
+    return isfinite(x) && (x == 0 || fabs(x) >= tiny) && fabs(x) < 1e30;
+}
+
+/* The array's count becomes the records in use: later accesses past them
+ * are not the mesh's. */
+static void shrink_to(session_array *a, uint64_t count)
+{
+    if (count < a->count && !a->snap) {
+        a->count = count;
+        a->end = a->base + count * a->stride;
+    }
+}
+
 /* "Freeze the data": copies the positions and the triangles' vertex indices
- * out of the program's arrays, checking them. */
+ * out of the program's arrays, checking them. Without a triangle array the
+ * geometry is the vertices alone (nt = 0: the layouts cut cells of
+ * vertices). */
 static emm_status read_geometry(emm_session *s, emm_error *err)
 {
-    int gv = largest(s, EMM_ARRAY_VERTICES), gt = largest(s, EMM_ARRAY_TRIANGLES);
+    int gv = mesh_array(s, EMM_ARRAY_VERTICES), gt = mesh_array(s, EMM_ARRAY_TRIANGLES);
+    char vo[512], to[512];
     if (gv < 0)
         return emm_fail(err, EMM_ERR_INVALID,
                         "%s: no vertex array was tagged (emm_tag_vertices or an EMM_TAG "
                         "'vertices:' rule), so there is no geometry to lay out",
                         s->program);
-    const session_array *v = &s->arrays[gv];
-    if (v->count > INT32_MAX)
-        return emm_fail(err, EMM_ERR_RANGE, "%s: the vertex array has %llu records (at most %d)",
-                        s->program, (unsigned long long)v->count, INT32_MAX);
-    s->xyz = malloc(3 * v->count * sizeof *s->xyz);
-    if (!s->xyz)
-        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
-    for (uint64_t i = 0; i < v->count; i++) {
-        const unsigned char *p = session_field_at(v, i);
-        for (int c = 0; c < 3; c++) {
-            double x = read_coord(p + (size_t)c * session_scalar_bytes(v->type), v->type);
-            if (!isfinite(x))
-                return emm_fail(err, EMM_ERR_MESH,
-                                "%s: tagged vertex array at 0x%llx: vertex %llu has a non-finite "
-                                "coordinate (is xyz's offset or type wrong?)",
-                                s->program, (unsigned long long)v->base, (unsigned long long)i);
-            s->xyz[3 * i + (uint64_t)c] = x;
-        }
-    }
-    s->info.geometry.nv = v->count;
-    s->info.geometry.xyz = s->xyz;
+    session_array *v = &s->arrays[gv];
+    session_origin(s, v, vo, sizeof vo);
+    uint64_t nv = in_use(v), nt = 0;
+    int64_t highest = -1;
     if (gt >= 0) {
-        const session_array *t = &s->arrays[gt];
-        s->tri = malloc(3 * t->count * sizeof *s->tri);
+        session_array *t = &s->arrays[gt];
+        session_origin(s, t, to, sizeof to);
+        nt = in_use(t);
+        s->tri = malloc((nt ? 3 * nt : 1) * sizeof *s->tri);
         if (!s->tri)
             return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
-        for (uint64_t i = 0; i < t->count; i++) {
+        for (uint64_t i = 0; i < nt; i++) {
             const unsigned char *p = session_field_at(t, i);
             for (int c = 0; c < 3; c++) {
                 int64_t x = read_index(p + (size_t)c * session_scalar_bytes(t->type), t->type);
-                if (x < 0 || (uint64_t)x >= v->count)
+                if (x < 0 || (uint64_t)x >= v->count || x > INT32_MAX) {
+                    /* Blame the array that changed, when one did. */
+                    const char *why = v->moves || t->moves
+                                          ? "the arrays were reallocated while the program ran: "
+                                            "the indices may be of another state of the mesh"
+                                          : "is vidx's offset or type wrong, or the vertex rule's "
+                                            "block the wrong one?";
                     return emm_fail(err, EMM_ERR_MESH,
-                                    "%s: tagged triangle array at 0x%llx: triangle %llu has vertex "
-                                    "index %lld, outside the %llu tagged vertices (is vidx's "
-                                    "offset or type wrong?)",
-                                    s->program, (unsigned long long)t->base,
+                                    "%s: %s: the block at 0x%llx is refused: triangle %llu has "
+                                    "vertex index %lld, outside the %llu records of %s at 0x%llx "
+                                    "(%s)",
+                                    s->program, to, (unsigned long long)t->base,
                                     (unsigned long long)i, (long long)x,
-                                    (unsigned long long)v->count);
+                                    (unsigned long long)v->count, vo, (unsigned long long)v->base,
+                                    why);
+                }
+                if (x > highest)
+                    highest = x;
                 s->tri[3 * i + (uint64_t)c] = (int32_t)x;
             }
         }
-        s->info.geometry.nt = t->count;
+        shrink_to(t, nt);
+        /* The vertices the triangles use are in use, written or not. */
+        if (v->rule >= 0 && (uint64_t)(highest + 1) > nv)
+            nv = (uint64_t)(highest + 1);
+        s->info.geometry.nt = nt;
+        s->info.geometry.tri = s->tri;
+    }
+    if (nv > INT32_MAX)
+        return emm_fail(err, EMM_ERR_RANGE, "%s: the vertex array has %llu records (at most %d)",
+                        s->program, (unsigned long long)nv, INT32_MAX);
+    s->xyz = malloc(3 * (nv ? nv : 1) * sizeof *s->xyz);
+    if (!s->xyz)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
+    static const char axis[] = "xyz";
+    for (uint64_t i = 0; i < nv; i++) {
+        const unsigned char *p = session_field_at(v, i);
+        for (int c = 0; c < 3; c++) {
+            double x = read_coord(p + (size_t)c * session_scalar_bytes(v->type), v->type);
+            if (!plausible(x, v->type))
+                return emm_fail(err, EMM_ERR_MESH,
+                                "%s: %s: the block at 0x%llx (%llu records of %llu bytes) is "
+                                "refused: vertex %llu has %c = %g, not a coordinate (is stride "
+                                "or xyz's offset or type wrong?)",
+                                s->program, vo, (unsigned long long)v->base,
+                                (unsigned long long)v->count, (unsigned long long)v->stride,
+                                (unsigned long long)i, axis[c], x);
+            s->xyz[3 * i + (uint64_t)c] = x;
+        }
+    }
+    shrink_to(v, nv);
+    s->info.geometry.nv = nv;
+    s->info.geometry.xyz = s->xyz;
+    if (gt < 0) {
+        /* Vertex positions only (a half-edge mesh, a point set): each vertex
+         * is its own degenerate triangle, so the layouts cut cells of
+         * vertices and every strategy runs on them. */
+        s->vertex_only = true;
+        s->tri = malloc(3 * (nv ? nv : 1) * sizeof *s->tri);
+        if (!s->tri)
+            return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
+        for (uint64_t i = 0; i < 3 * nv; i++)
+            s->tri[i] = (int32_t)(i / 3);
+        s->info.geometry.nt = nv;
         s->info.geometry.tri = s->tri;
     }
     return EMM_OK;
@@ -118,7 +222,9 @@ static emm_status freeze_arrays(emm_session *s, emm_error *err)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", s->program);
     for (int i = 0; i < s->narrays; i++) {
         session_array *a = &s->arrays[i];
-        uint64_t limit = a->kind == EMM_ARRAY_VERTICES ? s->info.geometry.nv : s->info.geometry.nt;
+        uint64_t limit = a->kind == EMM_ARRAY_VERTICES ? s->info.geometry.nv
+                         : s->vertex_only           ? 0
+                                                    : s->info.geometry.nt;
         a->trace_index = -1;
         if (!session_usable(a) || a->count > limit)
             continue;

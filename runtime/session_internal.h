@@ -67,6 +67,10 @@ typedef struct session_array {
                             decision while the window named it; else NULL */
     uint64_t refs;       /* window records that name this slot */
     int32_t trace_index; /* the trace array it feeds after the decision, or -1 */
+    int rule;            /* the EMM_TAG rule that selected the block (count is its
+                            capacity), or -1 for an emm_tag_* call */
+    uint64_t top;        /* 1 + the highest element accessed since it was tagged */
+    unsigned moves;      /* reallocations since it was tagged */
 } session_array;
 
 struct emm_session {
@@ -91,13 +95,15 @@ struct emm_session {
     uint64_t welements, iterations;
     uint64_t wreads, wwrites; /* the window's records by direction */
     uint64_t welement_writes; /* its element writes (consecutive ones count once) */
-    uint64_t wactivity;  /* its element accesses of either direction, counted alike */
+    uint64_t wactivity;  /* its element accesses of either direction, counted alike, from
+                            the first profiled read on */
     bool wwany;
     uint32_t wwlast_array;
     uint64_t wwlast_element;
     bool wopen;          /* the first read of the mesh came: the window is open */
     uint64_t loader_writes; /* writes before it: the loader's, not simulated */
     uint64_t loader_elements; /* of them, element writes (consecutive ones count once) */
+    uint64_t tagged_records; /* records of every array tagged (or grown) so far */
     bool lany;
     uint32_t llast_array;
     uint64_t llast_element;
@@ -114,6 +120,9 @@ struct emm_session {
     uint32_t ntarrays;
     double *xyz;
     int32_t *tri;
+    char pick_note[1024]; /* which of a rule's several arrays is the mesh, or "" */
+    bool vertex_only;    /* no triangle array: the geometry's triangles are the vertices,
+                            each (v, v, v), and the layouts cut cells of vertices */
     emm_trace_info info;
     double *D;           /* the window's distance profile, nD values */
     size_t nD;
@@ -147,6 +156,11 @@ struct emm_session {
     emm_trace_record *chunk;
     size_t nchunk;
     uint64_t accesses;   /* records simulated */
+    uint64_t elements;   /* of them, element accesses (consecutive ones to one element count
+                            once) */
+    bool eany;
+    uint32_t elast_array;
+    uint64_t elast_element;
     /* phases */
     program_phase phases[SESSION_MAX_PHASES];
     int nphases;
@@ -186,7 +200,7 @@ static inline bool session_usable(const session_array *a)
 
 static inline size_t session_scalar_bytes(emm_scalar t)
 {
-    return t == EMM_F32 || t == EMM_I32 || t == EMM_U32 ? 4 : 8;
+    return t == EMM_U16 ? 2 : t == EMM_F32 || t == EMM_I32 || t == EMM_U32 ? 4 : 8;
 }
 
 /* The address of record i's three scalars, in the program's memory or in
@@ -197,6 +211,10 @@ static inline const unsigned char *session_field_at(const session_array *a, uint
         return a->snap + i * 3 * session_scalar_bytes(a->type);
     return (const unsigned char *)(uintptr_t)(a->base + i * a->stride + a->field);
 }
+
+/* Who described array a, for messages: "EMM_TAG rule 2 (triangles:...)" or
+ * "the emm_tag_triangles call". */
+const char *session_origin(const emm_session *s, const session_array *a, char *buf, size_t cap);
 
 /* The name a setting was given by (the variable or the option), for messages. */
 static inline const char *session_source(const emm_session *s, emm_config_key k)

@@ -24,10 +24,11 @@ static void on_costs(void *ctx, const emm_trace_record *recs, const emm_record_c
     emm_annotation_add(s->annotation, recs, cost, n);
 }
 
-/* The capture records program counters. */
+/* The capture records program counters: sancov's hooks' return addresses,
+ * the valgrind tool's instruction addresses. */
 static bool has_pcs(const emm_session *s)
 {
-    return s->capture == EMM_CAPTURE_SANCOV;
+    return s->capture == EMM_CAPTURE_SANCOV || s->capture == EMM_CAPTURE_VALGRIND;
 }
 
 void session_outputs_start(emm_session *s)

@@ -324,6 +324,8 @@ static void report_extra(json_writer *w, void *ctx)
     json_string(w, session_window_only(s) ? "window" : "run");
     json_key(w, "accesses");
     json_u64(w, s->accesses);
+    json_key(w, "element_accesses");
+    json_u64(w, s->elements);
     json_key(w, "share");
     if (session_window_only(s))
         json_null(w);
@@ -340,7 +342,14 @@ static void report_extra(json_writer *w, void *ctx)
     json_key(w, "vertices");
     json_u64(w, s->info.geometry.nv);
     json_key(w, "triangles");
-    json_u64(w, s->info.geometry.nt);
+    json_u64(w, s->vertex_only ? 0 : s->info.geometry.nt);
+    json_key(w, "cells_of");
+    json_string(w, s->vertex_only ? "vertices" : "triangles");
+    json_key(w, "note");
+    if (s->pick_note[0])
+        json_string(w, s->pick_note);
+    else
+        json_null(w);
     json_key(w, "bytes");
     json_u64(w, mesh_bytes);
     json_end_object(w);
@@ -528,14 +537,24 @@ void session_print_summary(const emm_session *s, FILE *out, const emm_result *re
             fprintf(out, " (%.2fx the answer)", (double)cache->total / (double)chosen->total);
         fputc('\n', out);
     }
+    char elems[32];
+    emm_grouped(s->elements, elems);
     if (session_window_only(s))
-        fprintf(out, "emm:   simulated: the profiling window only, %s accesses (the %s capture "
-                     "stops at the decision; its share of the run is unknown); an "
-                     "instrumented build (sancov) simulates the whole run\n",
-                emm_grouped(s->accesses, num), emm_capture_name(s->capture));
+        fprintf(out, "emm:   simulated: the profiling window only, %s accesses, %s element "
+                     "accesses (the %s capture stops at the decision; its share of the run is "
+                     "unknown); the valgrind capture or an instrumented build (sancov) "
+                     "simulates the whole run\n",
+                emm_grouped(s->accesses, num), elems, emm_capture_name(s->capture));
     else
-        fprintf(out, "emm:   simulated: the whole run from the frozen mesh on, %s accesses\n",
-                emm_grouped(s->accesses, num));
+        fprintf(out, "emm:   simulated: the whole run from the frozen mesh on, %s accesses, %s "
+                     "element accesses (the %s capture)\n",
+                emm_grouped(s->accesses, num), elems, emm_capture_name(s->capture));
+    if (s->pick_note[0])
+        fprintf(out, "emm:   %s\n", s->pick_note);
+    if (s->vertex_only)
+        fprintf(out, "emm:   the mesh: %s vertex positions and no triangle array: the layouts "
+                     "cut cells of vertices, which every strategy can run on\n",
+                emm_grouped(s->info.geometry.nv, num));
     if (s->nphases > 1) {
         fprintf(out, "emm:   phases: %d —", s->nphases);
         for (int i = 0; i < s->nphases; i++)

@@ -13,6 +13,10 @@ packages=(
   libdw-dev                             # elfutils' DWARF reader: emm annotate's source lines
   gnuplot-nox                           # emm plot
   glmark2-data                          # a real mesh (bunny.obj) for tests and benchmarks
+  valgrind                              # --capture valgrind: its tool headers and static core
+                                        # libraries build emm's tool; its launcher runs it
+  libopenmesh-apps                      # OpenMesh's command-line apps: tests on programs
+                                        # nobody here wrote
   python3                               # tests: reports and timelines read back with a strict JSON reader
   time                                  # tests: /usr/bin/time measures the bad-input reproducers
 )

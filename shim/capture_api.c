@@ -55,10 +55,10 @@ static void tag_mesh(const emm_mesh *m)
     shim_busy--;
     if (v0)
         shim_tag_array(EMM_ARRAY_VERTICES, v0, nv * vs, vs, offsetof(emm_vertex, xyz), EMM_F64,
-                       false, NULL, 0);
+                       -1, NULL, 0);
     if (t0)
         shim_tag_array(EMM_ARRAY_TRIANGLES, t0, nt * ts, ts, offsetof(emm_triangle, v), EMM_I32,
-                       false, NULL, 0);
+                       -1, NULL, 0);
 }
 
 emm_status emm_mesh_open(const char *path, emm_mesh **out, emm_error *err)

@@ -103,16 +103,52 @@ static void protect(struct shim_tag *t)
     t->protected_ = true;
 }
 
+/* Pages opened for good lately: a thread's fault on one of them whose
+ * handler ran only after the pages opened and the region left `reg` is
+ * retried, not taken for the program's own. */
+#define LIFTED 16
+static struct {
+    uintptr_t lo, hi;
+} lifted[LIFTED];
+static unsigned nlifted; /* atomic: lifted ranges ever recorded */
+static __thread uintptr_t retried SHIM_TLS; /* the address last retried by this thread */
+
 static void unprotect(struct shim_tag *t)
 {
     size_t i = (size_t)(t - shim.tags);
     uintptr_t plo = reg[i].plo, phi = reg[i].phi;
+    /* Open the pages before the region leaves `reg`: another thread that
+     * faults on them meanwhile must still find its region (a fault on a
+     * page no region claims is the program's own). */
+    if (plo < phi) {
+        mprotect((void *)plo, phi - plo, PROT_READ | PROT_WRITE);
+        unsigned k = __atomic_load_n(&nlifted, __ATOMIC_RELAXED) % LIFTED;
+        __atomic_store_n(&lifted[k].lo, 0, __ATOMIC_RELAXED);
+        __atomic_store_n(&lifted[k].hi, phi, __ATOMIC_RELAXED);
+        __atomic_store_n(&lifted[k].lo, plo, __ATOMIC_RELEASE);
+        __atomic_add_fetch(&nlifted, 1, __ATOMIC_RELEASE);
+    }
     __atomic_store_n(&reg[i].phi, 0, __ATOMIC_RELEASE);
     __atomic_store_n(&reg[i].plo, 0, __ATOMIC_RELAXED);
-    if (plo < phi)
-        mprotect((void *)plo, phi - plo, PROT_READ | PROT_WRITE);
     reg[i].io = 0;
     t->protected_ = false;
+}
+
+/* A fault no region claims on pages opened lately: its handler ran late.
+ * Retried once per address and thread (returning re-runs the access on
+ * the open page); a second fault there is the program's own. */
+static bool retry_lifted(uintptr_t a)
+{
+    if (retried == a)
+        return false;
+    for (unsigned k = 0; k < LIFTED; k++) {
+        uintptr_t lo = __atomic_load_n(&lifted[k].lo, __ATOMIC_ACQUIRE);
+        if (lo && a >= lo && a < __atomic_load_n(&lifted[k].hi, __ATOMIC_RELAXED)) {
+            retried = a;
+            return true;
+        }
+    }
+    return false;
 }
 
 static void on_tag_locked(struct shim_tag *t)
@@ -132,7 +168,9 @@ static void on_untag_locked(struct shim_tag *t)
 /* The window closed: every protection is lifted and capture stops. */
 static void lift_locked(void)
 {
-    __atomic_store_n(&watching, false, __ATOMIC_RELAXED);
+    /* Before the pages open: a trap handler that protects a page again
+     * after this store sees it and opens the page (on_trap). */
+    __atomic_store_n(&watching, false, __ATOMIC_SEQ_CST);
     for (size_t i = 0; i < SHIM_MAX_TAGS; i++)
         if (shim.tags[i].base && shim.tags[i].protected_)
             unprotect(&shim.tags[i]);
@@ -192,9 +230,12 @@ static void on_segv(int sig, siginfo_t *si, void *uctx)
     uintptr_t a = (uintptr_t)si->si_addr;
     int r = si->si_code == SEGV_ACCERR ? region_of(a) : -1;
     if (r < 0) {
+        if (si->si_code == SEGV_ACCERR && retry_lifted(a))
+            return;
         chain(sig, si, uctx);
         return;
     }
+    retried = 0;
     ucontext_t *uc = uctx;
     uintptr_t page = a & ~(uintptr_t)(page_size() - 1);
     bool write = (uc->uc_mcontext.gregs[REG_ERR] & 2) != 0;
@@ -215,8 +256,13 @@ static void on_trap(int sig, siginfo_t *si, void *uctx)
     }
     for (int i = 0; i < npending; i++) {
         int r = region_of(pending[i]);
-        if (r >= 0 && watching_now() && __atomic_load_n(&reg[r].io, __ATOMIC_RELAXED) == 0)
+        if (r >= 0 && watching_now() && __atomic_load_n(&reg[r].io, __ATOMIC_RELAXED) == 0) {
             mprotect((void *)pending[i], page_size(), PROT_NONE);
+            /* The window closed meanwhile (lift_locked) or the region
+             * left: its pages stay open. */
+            if (!__atomic_load_n(&watching, __ATOMIC_SEQ_CST) || region_of(pending[i]) != r)
+                mprotect((void *)pending[i], page_size(), PROT_READ | PROT_WRITE);
+        }
     }
     npending = 0;
     uc->uc_mcontext.gregs[REG_EFL] &= ~(greg_t)TRAP_FLAG;

@@ -46,6 +46,9 @@ __thread struct shim_tbuf shim_tbuf SHIM_TLS;
 __thread int shim_in_alloc SHIM_TLS;
 int shim_pending_signal;
 
+/* EMM_LIST_SITES: the smallest block listed. */
+#define SHIM_LIST_MIN (64 * 1024)
+
 static pthread_key_t thread_key;
 static int finishing;
 
@@ -185,16 +188,25 @@ static void answer_locked(emm_session_state st)
         shim.state = st;
 }
 
+void shim_feed_locked(const emm_raw_access *rec, size_t n)
+{
+    if (session_live_locked())
+        answer_locked(emm_session_access(shim.session, rec, n));
+}
+
 void shim_flush_thread(void)
 {
     struct shim_tbuf *b = &shim_tbuf;
-    if (b->n == 0)
+    bool drain = shim.ops && shim.ops->drain_locked;
+    if (b->n == 0 && !drain)
         return;
     shim_busy++;
     pthread_mutex_lock(&shim.lock);
-    if (session_live_locked())
-        answer_locked(emm_session_access(shim.session, b->rec, b->n));
+    if (b->n)
+        shim_feed_locked(b->rec, b->n);
     b->n = 0;
+    if (drain)
+        shim.ops->drain_locked();
     pthread_mutex_unlock(&shim.lock);
     shim_leave();
 }
@@ -223,6 +235,8 @@ static void finish_locked(void)
 {
     if (shim.ops->before_decide_locked)
         shim.ops->before_decide_locked();
+    if (shim.config.log >= 1)
+        shim_rules_report();
     if (shim.config.log >= 2) {
         size_t live = 0;
         for (size_t i = 0; i < SHIM_MAX_TAGS; i++)
@@ -248,6 +262,15 @@ static void shim_finish(void)
 {
     if (!shim.enabled || __atomic_exchange_n(&finishing, 1, __ATOMIC_ACQ_REL))
         return;
+    if (shim.sites) { /* list mode: the candidate arrays, nothing simulated */
+        shim_busy++;
+        pthread_mutex_lock(&shim.lock);
+        shim.finished = true;
+        emm_sites_print(shim.sites, program_invocation_short_name, stderr);
+        pthread_mutex_unlock(&shim.lock);
+        shim_busy--;
+        return;
+    }
     shim_busy++;
     shim_flush_thread();
     pthread_mutex_lock(&shim.lock);
@@ -283,7 +306,7 @@ static bool tag_exists_quick(const void *p)
 }
 
 void shim_tag_array(emm_array_kind kind, const void *base, size_t bytes, size_t stride,
-                    size_t offset, emm_scalar type, bool from_rule, void *map, size_t map_len)
+                    size_t offset, emm_scalar type, int rule, void *map, size_t map_len)
 {
     shim_busy++;
     shim_flush_thread();
@@ -313,10 +336,11 @@ void shim_tag_array(emm_array_kind kind, const void *base, size_t bytes, size_t 
     t->stride = stride;
     t->offset = offset;
     t->type = type;
-    t->from_rule = from_rule;
+    t->rule = rule;
     int idx = -1;
     if (session_live_locked())
-        idx = emm_session_tag(shim.session, kind, base, bytes / stride, stride, offset, type);
+        idx = emm_session_tag_rule(shim.session, kind, base, bytes / stride, stride, offset, type,
+                                   rule);
     if (shim.ops->on_tag_locked)
         shim.ops->on_tag_locked(t);
     ranges_changed_locked();
@@ -328,7 +352,7 @@ void shim_tag_array(emm_array_kind kind, const void *base, size_t bytes, size_t 
     pthread_mutex_unlock(&shim.lock);
     if (shim.config.log >= 2)
         shim_log("tagged %s at %p: %zu records of %zu bytes (%s)%s", kind_name(kind), base,
-                 bytes / stride, stride, from_rule ? "EMM_TAG rule" : "emm_tag call",
+                 bytes / stride, stride, rule >= 0 ? "EMM_TAG rule" : "emm_tag call",
                  idx < 0 ? ", not watched" : "");
     shim_leave();
 }
@@ -376,6 +400,7 @@ void shim_untag_array(const void *base)
 /* What the slow path of one allocation decided. */
 struct pending {
     int rule; /* the rule that selects the block, or -1 */
+    const char *site; /* the frame a site= rule matched, or NULL */
     void *map;
     size_t map_len;
 };
@@ -387,7 +412,7 @@ static bool alloc_begin(size_t size, size_t align, struct pending *pd)
     if (size < shim.rule_min || shim_busy || !shim.enabled || shim.finished)
         return false;
     shim_busy++;
-    pd->rule = shim_rules_match(size);
+    pd->rule = shim.sites ? -1 : shim_rules_match(size, &pd->site);
     pd->map = pd->rule >= 0 && shim.ops->map ? shim.ops->map(size, align, &pd->map_len) : NULL;
     return true;
 }
@@ -396,15 +421,31 @@ static void *alloc_end(struct pending *pd, void *p, size_t size)
 {
     if (p && pd->rule >= 0) {
         const emm_tag_rule *r = &shim.config.tags.rule[pd->rule];
-        shim_tag_array(r->kind, p, size - size % r->stride, r->stride, r->offset, r->type, true,
-                       pd->map, pd->map_len);
+        shim_tag_array(r->kind, p, size - size % r->stride, r->stride, r->offset, r->type,
+                       pd->rule, pd->map, pd->map_len);
         if (shim.config.log >= 2)
-            shim_log("EMM_TAG rule %d selected a block of %zu bytes", pd->rule + 1, size);
+            shim_log("EMM_TAG rule %d selected a block of %zu bytes%s%s", pd->rule + 1, size,
+                     pd->site ? " allocated under " : "", pd->site ? pd->site : "");
     } else if (pd->map) {
         munmap(pd->map, pd->map_len);
     }
+    if (p && shim.sites)
+        shim_rules_list(p, size);
     shim_leave();
     return p;
+}
+
+/* EMM_LIST_SITES: a block about to be freed or moved is read first. */
+static void list_release(const void *p)
+{
+    if (!shim.sites || shim_busy)
+        return;
+    shim_busy++;
+    pthread_mutex_lock(&shim.lock);
+    if (!shim.finished)
+        emm_sites_release(shim.sites, p);
+    pthread_mutex_unlock(&shim.lock);
+    shim_leave();
 }
 
 /* Leaves an allocator function; the outermost acts on a pending signal. */
@@ -470,6 +511,7 @@ void free(void *p)
         /* Inside the shim (shim_busy) a block is never a tagged one: the shim
          * and the session free only their own. */
         struct shim_tag t;
+        list_release(p);
         if (!shim_busy && tag_exists_quick(p) && take_tag(p, &t))
             release(&t, p);
         else
@@ -478,22 +520,39 @@ void free(void *p)
     alloc_leave();
 }
 
-/* realloc of a tagged block: the tag moves with it (the new block is the
- * same array). */
-static void *realloc_tagged(void *p, size_t size, const struct shim_tag *t)
+/* realloc of a tagged block: the same array, moved (the session keeps its
+ * place and its window: a loader growing its arrays does not end the
+ * window). The backend's untag side runs before the copy (the fault
+ * backend's pages open, the valgrind tool told no ranges: the copy is not
+ * the program's access) and its tag side after. */
+static void *realloc_tagged(void *p, size_t size)
 {
     if (size == 0) {
-        release(t, p);
+        struct shim_tag t;
+        if (take_tag(p, &t))
+            release(&t, p);
+        else
+            shim_real.free(p);
         return NULL;
     }
+    shim_busy++;
+    shim_flush_thread();
+    pthread_mutex_lock(&shim.lock);
+    int slot = find_tag_locked((uintptr_t)p);
+    if (slot < 0) { /* untagged meanwhile by another thread */
+        pthread_mutex_unlock(&shim.lock);
+        shim_leave();
+        return shim_real.realloc(p, size);
+    }
+    struct shim_tag *t = &shim.tags[slot];
+    if (shim.ops->on_untag_locked)
+        shim.ops->on_untag_locked(t);
     void *q, *map = NULL;
     size_t map_len = 0;
     if (t->map) {
         size_t old = t->map_len - (size_t)((uintptr_t)p - (uintptr_t)t->map);
-        shim_busy++;
         map = shim.ops->map ? shim.ops->map(size, 16, &map_len) : NULL;
         q = map ? map : shim_real.malloc(size);
-        shim_leave();
         if (q) {
             memcpy(q, p, old < size ? old : size);
             munmap(t->map, t->map_len);
@@ -501,18 +560,34 @@ static void *realloc_tagged(void *p, size_t size, const struct shim_tag *t)
     } else {
         q = shim_real.realloc(p, size);
     }
-    if (!q) { /* the old block stays valid and stays the array */
-        shim_tag_array(t->kind, p, t->bytes, t->stride, t->offset, t->type, t->from_rule, t->map,
-                       t->map_len);
-        errno = ENOMEM;
-        return NULL;
-    }
     size_t bytes = size - size % t->stride;
-    if (!t->from_rule && t->bytes < bytes)
+    if (t->rule < 0 && t->bytes < bytes)
         bytes = t->bytes;
-    if (bytes)
-        shim_tag_array(t->kind, q, bytes, t->stride, t->offset, t->type, t->from_rule, map,
-                       map_len);
+    if (q) {
+        if (session_live_locked())
+            answer_locked(emm_session_move(shim.session, p, q, bytes / t->stride));
+        t->base = (uintptr_t)q;
+        t->bytes = bytes;
+        t->map = map;
+        t->map_len = map_len;
+        __atomic_store_n(&shim.tag_base[slot], (uintptr_t)q, __ATOMIC_RELAXED);
+    }
+    if (q && bytes == 0) { /* shrunk below one record: no longer an array */
+        memset(t, 0, sizeof *t);
+        __atomic_store_n(&shim.tag_base[slot], 0, __ATOMIC_RELAXED);
+        __atomic_sub_fetch(&shim.live_tags, 1, __ATOMIC_RELAXED);
+    } else if (shim.ops->on_tag_locked) {
+        /* the old block, when q is NULL, stays valid and stays the array */
+        shim.ops->on_tag_locked(t);
+    }
+    ranges_changed_locked();
+    pthread_mutex_unlock(&shim.lock);
+    if (q && bytes && shim.config.log >= 2)
+        shim_log("moved %s from %p to %p: %zu records of %zu bytes", kind_name(t->kind), p, q,
+                 bytes / t->stride, t->stride);
+    shim_leave();
+    if (!q)
+        errno = ENOMEM;
     return q;
 }
 
@@ -535,9 +610,9 @@ static void *realloc_impl(void *p, size_t size)
             memcpy(q, p, arena_size(p) < size ? arena_size(p) : size);
         return q;
     }
-    struct shim_tag t;
-    if (!shim_busy && tag_exists_quick(p) && take_tag(p, &t))
-        return realloc_tagged(p, size, &t);
+    if (!shim_busy && tag_exists_quick(p))
+        return realloc_tagged(p, size);
+    list_release(p);
     struct pending pd;
     if (!alloc_begin(size, 16, &pd))
         return shim_real.realloc(p, size);
@@ -644,7 +719,7 @@ static void tag_call(emm_array_kind kind, const void *ptr, size_t count, size_t 
                      size_t offset, emm_scalar type)
 {
     if (shim.enabled && !shim.finished && ptr && count && stride && count <= SIZE_MAX / stride)
-        shim_tag_array(kind, ptr, count * stride, stride, offset, type, false, NULL, 0);
+        shim_tag_array(kind, ptr, count * stride, stride, offset, type, -1, NULL, 0);
 }
 
 void emm_tag_vertices(const void *ptr, size_t count, size_t stride, size_t xyz_offset,
@@ -805,15 +880,17 @@ static void step_aside(const char *msg)
     shim_log("%s", msg);
 }
 
-/* EMM_CAPTURE=auto: the first backend, in this order, that wants the program. */
+/* EMM_CAPTURE=auto: the first backend, in this order, that wants the
+ * program (valgrind: the program runs under emm's Valgrind tool). */
 static const struct shim_capture_ops *pick_capture(void)
 {
     static const struct shim_capture_ops *const order[] = {
-        &shim_capture_sancov, &shim_capture_api, &shim_capture_fault};
+        &shim_capture_valgrind, &shim_capture_sancov, &shim_capture_api, &shim_capture_fault};
     static const struct shim_capture_ops *const all[EMM_CAPTURE_COUNT] = {
         [EMM_CAPTURE_SANCOV] = &shim_capture_sancov,
         [EMM_CAPTURE_FAULT] = &shim_capture_fault,
-        [EMM_CAPTURE_API] = &shim_capture_api};
+        [EMM_CAPTURE_API] = &shim_capture_api,
+        [EMM_CAPTURE_VALGRIND] = &shim_capture_valgrind};
     if (shim.config.capture != EMM_CAPTURE_AUTO)
         return all[shim.config.capture];
     for (size_t i = 0; i + 1 < sizeof order / sizeof *order; i++)
@@ -841,6 +918,21 @@ __attribute__((constructor(101))) static void shim_init(void)
     }
     if (!shim_rules_init(msg, sizeof msg)) {
         step_aside(msg);
+        shim_leave();
+        return;
+    }
+    if (shim.config.list_sites) {
+        /* List mode: no session, no capture; every large block is noted. */
+        static const struct shim_capture_ops list_ops = {.kind = EMM_CAPTURE_AUTO};
+        shim.ops = &list_ops;
+        if (!(shim.sites = emm_sites_new(SHIM_LIST_MIN))) {
+            step_aside("EMM_LIST_SITES: out of memory");
+            shim_leave();
+            return;
+        }
+        pthread_atfork(fork_prepare, fork_parent, fork_child);
+        shim.rule_min = SHIM_LIST_MIN;
+        __atomic_store_n(&shim.enabled, true, __ATOMIC_RELEASE);
         shim_leave();
         return;
     }

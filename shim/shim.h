@@ -19,6 +19,7 @@
 
 #include "emm/config.h"
 #include "emm/session.h"
+#include "emm/sites.h"
 
 #define SHIM_TLS __attribute__((tls_model("initial-exec")))
 #define SHIM_HIDDEN __attribute__((visibility("hidden")))
@@ -47,7 +48,8 @@ struct shim_tag {
     emm_array_kind kind;
     size_t stride, offset;
     emm_scalar type;
-    bool from_rule;  /* count follows the block's size on realloc */
+    int rule;        /* the EMM_TAG rule that selected it (count follows the block's
+                        size on realloc), or -1 for an emm_tag_* call */
     void *map;       /* the block's own pages (a backend's map), or NULL */
     size_t map_len;
     bool protected_; /* its pages are PROT_NONE right now (fault) */
@@ -80,12 +82,16 @@ struct shim_capture_ops {
     void (*ranges_locked)(void);
     /* The window closed: the arrays must be readable for the decision. */
     void (*before_decide_locked)(void);
+    /* Records held outside the threads' buffers (the valgrind tool's) go to
+     * the session (shim_feed_locked); called by every flush. */
+    void (*drain_locked)(void);
     /* In a forked child, which never records. */
     void (*fork_child)(void);
 };
 extern const struct shim_capture_ops shim_capture_sancov SHIM_HIDDEN;
 extern const struct shim_capture_ops shim_capture_fault SHIM_HIDDEN;
 extern const struct shim_capture_ops shim_capture_api SHIM_HIDDEN;
+extern const struct shim_capture_ops shim_capture_valgrind SHIM_HIDDEN;
 
 struct shim {
     /* Set once before main. */
@@ -96,6 +102,7 @@ struct shim {
 
     pthread_mutex_t lock;               /* the session, the tag table, the rules' counters */
     emm_session *session;
+    emm_sites *sites;                   /* EMM_LIST_SITES: the candidate arrays (no session) */
     emm_session_state state;
     bool finished;                      /* finish ran, or a forked child went quiet */
     bool failed;                        /* decide failed: stop capturing */
@@ -135,13 +142,18 @@ void shim_log(const char *fmt, ...) __attribute__((format(printf, 1, 2))) SHIM_H
 
 /* --- preload.c ---------------------------------------------------------- */
 void shim_resolve(void) SHIM_HIDDEN;
-/* Tags / untags an array (explicit calls, rules, the api backend). */
+/* Tags / untags an array (explicit calls with rule -1, rules, the api
+ * backend). */
 void shim_tag_array(emm_array_kind kind, const void *base, size_t bytes, size_t stride,
-                    size_t offset, emm_scalar type, bool from_rule, void *map,
+                    size_t offset, emm_scalar type, int rule, void *map,
                     size_t map_len) SHIM_HIDDEN;
 void shim_untag_array(const void *base) SHIM_HIDDEN;
-/* Sends the calling thread's buffer to the session (takes the lock). */
+/* Sends the calling thread's buffer, and the backend's records
+ * (drain_locked), to the session (takes the lock). */
 void shim_flush_thread(void) SHIM_HIDDEN;
+/* Feeds records to the session while it captures, and decides when it
+ * asks; with shim.lock held. */
+void shim_feed_locked(const emm_raw_access *rec, size_t n) SHIM_HIDDEN;
 void shim_register_thread(void) SHIM_HIDDEN;
 /* The session's ranges, [lo, hi) pairs (up to cap; returns how many). */
 size_t shim_ranges_locked(uint64_t *lo, uint64_t *hi, size_t cap) SHIM_HIDDEN;
@@ -177,8 +189,14 @@ size_t shim_rules_min(void) SHIM_HIDDEN;
  * msg filled. */
 bool shim_rules_init(char *msg, size_t cap) SHIM_HIDDEN;
 /* The rule (index, >= 0) that selects an allocation of `size` bytes made
- * now, from this call stack, or -1; counts nth= selectors. Called with
+ * now, from this call stack, or -1; counts nth= selectors; *site gets the
+ * name of the frame a site= rule matched (else NULL). Called with
  * shim_busy set, without the lock. */
-int shim_rules_match(size_t size) SHIM_HIDDEN;
+int shim_rules_match(size_t size, const char **site) SHIM_HIDDEN;
+/* One line per rule that selected no block, with the sites seen. */
+void shim_rules_report(void) SHIM_HIDDEN;
+/* EMM_LIST_SITES: a block of `size` bytes just allocated at `block`, from
+ * this call stack, into shim.sites (takes the lock). */
+void shim_rules_list(const void *block, size_t size) SHIM_HIDDEN;
 
 #endif

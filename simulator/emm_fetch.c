@@ -722,6 +722,9 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
         o.vertex_bytes = EMM_THESIS_VERTEX_BYTES;
     if (o.triangle_bytes == 0)
         o.triangle_bytes = EMM_THESIS_TRIANGLE_BYTES;
+    /* A program without a triangle array: its geometry's triangles are its
+     * vertices (the session's cells of vertices), carrying no records. */
+    o.vertex_cells = have_v && !have_t;
     if ((st = emm_model_share_layout(share, trace, &o, name, &m->layout, err)) != EMM_OK) {
         m->layout = NULL;
         goto fail;

@@ -186,7 +186,7 @@ static void fill_sizes(emm_layout *l)
     for (uint32_t c = 0; c < l->ncells; c++) {
         emm_layout_cell *cell = &l->cells[c];
         cell->bytes = EMM_LAYOUT_HEADER_BYTES + (uint64_t)cell->nvert * l->opt.vertex_bytes +
-                      (uint64_t)cell->ntri * l->opt.triangle_bytes;
+                      (l->opt.vertex_cells ? 0 : (uint64_t)cell->ntri * l->opt.triangle_bytes);
         cell->offset = off;
         off += cell->bytes;
     }

@@ -3,8 +3,17 @@
  * It only prepares the environment: the shim found beside this executable
  * goes first in LD_PRELOAD, each option becomes its EMM_* variable, and the
  * program replaces this process (exec), so its exit status — or the signal
- * that ended it — is the status the caller sees, unchanged. */
+ * that ended it — is the status the caller sees, unchanged.
+ *
+ * Under --capture valgrind (and for --capture auto, a binary that neither
+ * links emm's coverage hooks nor calls emm, when Valgrind and emm's tool are
+ * there) the program runs under `valgrind --tool=emm` instead, with
+ * VALGRIND_LIB pointing at the tool's directory beside the shim
+ * (lib/emm/valgrind/); Valgrind preloads the shim into the program as the
+ * tool's own preload (shim/vgtool/CMakeLists.txt), so the launcher itself
+ * never loads it. Valgrind exits with the program's status. */
 #include <dirent.h>
+#include <elf.h>
 #include <errno.h>
 #include <limits.h>
 #include <stdio.h>
@@ -17,6 +26,7 @@
 #include "emm/session.h"
 
 #define SHIM_NAME "libemmshim.so"
+#define VGTOOL_NAME "emm/valgrind/emm-amd64-linux"
 
 static void usage(FILE *out)
 {
@@ -37,7 +47,20 @@ static void usage(FILE *out)
             "A bad option or variable is refused (exit status 2) before PROGRAM starts.\n"
             "The shim is looked for beside this executable: <bindir>/../lib/" SHIM_NAME
             " (build\n"
-            "tree and install), and <bindir>/../lib64 and <bindir>/../lib/<multiarch>/.\n");
+            "tree and install), and <bindir>/../lib64 and <bindir>/../lib/<multiarch>/.\n"
+            "\n"
+            "--capture valgrind runs PROGRAM under `valgrind --tool=emm` (the whole run of an\n"
+            "unmodified binary, threads exact; the capture about as fast as Cachegrind, the\n"
+            "session's simulation slower than natively, since it runs under Valgrind too),\n"
+            "with VALGRIND_LIB set to the tool's directory, <libdir>/emm/valgrind/. --capture\n"
+            "auto does the same for a binary that neither links emm's coverage hooks\n"
+            "(emm_sancov_executable) nor calls emm, when valgrind is on PATH and the tool\n"
+            "was built; otherwise it preloads the shim, which picks sancov, api or fault.\n"
+            "\n"
+            "--list-sites runs PROGRAM once and lists, at exit, its candidate arrays: blocks\n"
+            "of 64 KiB or more by call path, with the whole stack, what their records look\n"
+            "like and a suggested EMM_TAG rule each. A rule that matches nothing says so at\n"
+            "exit with the sites seen closest to it; --verbose names each tagged block's site.\n");
 }
 
 /* out = a + b + c; false when it does not fit. */
@@ -47,9 +70,10 @@ static bool join(char *out, size_t cap, const char *a, const char *b, const char
     return n >= 0 && (size_t)n < cap;
 }
 
-/* Where the shim may be, in order, relative to this executable. Returns
- * the first that exists, or NULL with the paths tried in `tried`. */
-static char *find_shim(char *tried, size_t cap)
+/* Where a file of emm's lib directory (the shim, the Valgrind tool) may
+ * be, in order, relative to this executable. Returns the first that exists,
+ * or NULL with the paths tried in `tried`. */
+static char *find_beside(const char *name, char *tried, size_t cap)
 {
     char exe[PATH_MAX];
     ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
@@ -69,9 +93,9 @@ static char *find_shim(char *tried, size_t cap)
     char cand[MAX_CAND][PATH_MAX];
     size_t nc = 0;
     char libdir[PATH_MAX];
-    if (join(cand[nc], PATH_MAX, exe, "/../lib/", SHIM_NAME))
+    if (join(cand[nc], PATH_MAX, exe, "/../lib/", name))
         nc++;
-    if (join(cand[nc], PATH_MAX, exe, "/../lib64/", SHIM_NAME))
+    if (join(cand[nc], PATH_MAX, exe, "/../lib64/", name))
         nc++;
     DIR *d = join(libdir, sizeof libdir, exe, "/../lib", "") ? opendir(libdir) : NULL;
     if (d) {
@@ -81,7 +105,7 @@ static char *find_shim(char *tried, size_t cap)
         while ((e = readdir(d)) && nc < MAX_CAND)
             if (e->d_name[0] != '.' && strchr(e->d_name, '-') &&
                 join(sub, sizeof sub, libdir, "/", e->d_name) &&
-                join(cand[nc], PATH_MAX, sub, "/", SHIM_NAME))
+                join(cand[nc], PATH_MAX, sub, "/", name))
                 nc++;
         closedir(d);
     }
@@ -94,6 +118,110 @@ static char *find_shim(char *tried, size_t cap)
             used += (size_t)w;
     }
     return NULL;
+}
+
+/* The executable `name` resolves to, as execvp would find it, into out. */
+static bool find_program(const char *name, char *out, size_t cap)
+{
+    if (strchr(name, '/')) {
+        int n = snprintf(out, cap, "%s", name);
+        return n >= 0 && (size_t)n < cap && access(out, X_OK) == 0;
+    }
+    const char *path = getenv("PATH");
+    if (!path)
+        path = "/usr/local/bin:/usr/bin:/bin";
+    while (*path) {
+        const char *colon = strchr(path, ':');
+        size_t len = colon ? (size_t)(colon - path) : strlen(path);
+        int n = snprintf(out, cap, "%.*s/%s", (int)len, len ? path : ".", name);
+        if (n >= 0 && (size_t)n < cap && access(out, X_OK) == 0)
+            return true;
+        path += len + (colon ? 1 : 0);
+    }
+    return false;
+}
+
+/* Reads `len` bytes at `off` of f. */
+static bool read_at(FILE *f, long off, void *buf, size_t len)
+{
+    return fseek(f, off, SEEK_SET) == 0 && fread(buf, 1, len, f) == len;
+}
+
+/* The file offset of virtual address v in a 64-bit ELF's loaded segments. */
+static bool elf_offset(const Elf64_Phdr *ph, size_t nph, uint64_t v, uint64_t *off)
+{
+    for (size_t i = 0; i < nph; i++)
+        if (ph[i].p_type == PT_LOAD && v >= ph[i].p_vaddr && v - ph[i].p_vaddr < ph[i].p_filesz) {
+            *off = ph[i].p_offset + (v - ph[i].p_vaddr);
+            return true;
+        }
+    return false;
+}
+
+/* Whether the program at `path` captures its own accesses: a dynamically
+ * linked 64-bit ELF that needs libemmhooks.so (a sancov build) or libemm.so
+ * (emm_tag_* calls, the mesh interface). Anything unreadable counts as
+ * unmodified. */
+static bool links_emm(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return false;
+    bool found = false;
+    Elf64_Ehdr eh;
+    Elf64_Phdr ph[64];
+    if (!read_at(f, 0, &eh, sizeof eh) || memcmp(eh.e_ident, ELFMAG, SELFMAG) != 0 ||
+        eh.e_ident[EI_CLASS] != ELFCLASS64 || eh.e_phentsize != sizeof(Elf64_Phdr) ||
+        eh.e_phnum == 0 || eh.e_phnum > 64 ||
+        !read_at(f, (long)eh.e_phoff, ph, eh.e_phnum * sizeof *ph))
+        goto out;
+    for (size_t i = 0; i < eh.e_phnum && !found; i++) {
+        if (ph[i].p_type != PT_DYNAMIC)
+            continue;
+        size_t nd = ph[i].p_filesz / sizeof(Elf64_Dyn);
+        Elf64_Dyn *dyn = nd && nd < 4096 ? malloc(nd * sizeof *dyn) : NULL;
+        uint64_t strtab = 0, stroff;
+        if (!dyn || !read_at(f, (long)ph[i].p_offset, dyn, nd * sizeof *dyn)) {
+            free(dyn);
+            goto out;
+        }
+        for (size_t k = 0; k < nd && dyn[k].d_tag != DT_NULL; k++)
+            if (dyn[k].d_tag == DT_STRTAB)
+                strtab = dyn[k].d_un.d_ptr;
+        for (size_t k = 0; k < nd && dyn[k].d_tag != DT_NULL && !found; k++) {
+            char name[64];
+            if (dyn[k].d_tag != DT_NEEDED ||
+                !elf_offset(ph, eh.e_phnum, strtab + dyn[k].d_un.d_val, &stroff) ||
+                fseek(f, (long)stroff, SEEK_SET) != 0 || !fgets(name, sizeof name, f))
+                continue;
+            found = strncmp(name, "libemmhooks.so", 14) == 0 || strncmp(name, "libemm.so", 9) == 0;
+        }
+        free(dyn);
+    }
+out:
+    fclose(f);
+    return found;
+}
+
+/* How the program will run under Valgrind: the tool's directory and the
+ * launcher, or NULL with why not in `why`. */
+static char *valgrind_setup(char *launcher, size_t lcap, char *why, size_t wcap)
+{
+    char tried[4096];
+    char *tool = find_beside(VGTOOL_NAME, tried, sizeof tried);
+    if (!tool) {
+        snprintf(why, wcap, "emm's Valgrind tool is not beside this emm (it is built where "
+                 "Valgrind's tool headers and libraries, Debian package valgrind, are "
+                 "installed); tried %s", tried);
+        return NULL;
+    }
+    if (!find_program("valgrind", launcher, lcap)) {
+        free(tool);
+        snprintf(why, wcap, "valgrind is not on PATH (Debian package valgrind)");
+        return NULL;
+    }
+    *strrchr(tool, '/') = '\0';
+    return tool;
 }
 
 static const char *get_env(const char *name)
@@ -147,28 +275,50 @@ int emm_cmd_run(int argc, char **argv)
     if (emm_session_new(&sc, &probe, &err) != EMM_OK)
         return cli_bad_value("run", &err);
     emm_session_free(probe);
-    char tried[4096];
-    char *shim = find_shim(tried, sizeof tried);
-    if (!shim) {
-        cli_error("run: cannot find %s; tried %s", SHIM_NAME, tried);
-        return EMM_EXIT_FAIL;
+
+    /* Valgrind when asked, or for an unmodified binary under auto. */
+    char launcher[PATH_MAX], program[PATH_MAX], why[8192];
+    char *vgdir = NULL;
+    if (cfg.capture == EMM_CAPTURE_VALGRIND) {
+        if (!(vgdir = valgrind_setup(launcher, sizeof launcher, why, sizeof why))) {
+            cli_error("run: --capture valgrind is unavailable: %s", why);
+            return EMM_EXIT_FAIL;
+        }
+    } else if (cfg.capture == EMM_CAPTURE_AUTO && !cfg.list_sites &&
+               find_program(argv[i], program, sizeof program) && !links_emm(program)) {
+        /* (--list-sites captures nothing: the preloaded shim suffices.) */
+        vgdir = valgrind_setup(launcher, sizeof launcher, why, sizeof why);
     }
 
-    const char *old = getenv("LD_PRELOAD");
-    size_t len = strlen(shim) + (old ? strlen(old) + 1 : 0) + 1;
-    char *preload = malloc(len);
-    if (!preload) {
-        cli_error("run: out of memory");
+    int bad = 0;
+    bool under_valgrind = vgdir != NULL;
+    if (vgdir) {
+        bad |= setenv("VALGRIND_LIB", vgdir, 1);
+        values[EMM_CONFIG_CAPTURE] = "valgrind";
+        free(vgdir);
+    } else {
+        char tried[4096];
+        char *shim = find_beside(SHIM_NAME, tried, sizeof tried);
+        if (!shim) {
+            cli_error("run: cannot find %s; tried %s", SHIM_NAME, tried);
+            return EMM_EXIT_FAIL;
+        }
+        const char *old = getenv("LD_PRELOAD");
+        size_t len = strlen(shim) + (old ? strlen(old) + 1 : 0) + 1;
+        char *preload = malloc(len);
+        if (!preload) {
+            cli_error("run: out of memory");
+            free(shim);
+            return EMM_EXIT_FAIL;
+        }
+        if (old && *old)
+            snprintf(preload, len, "%s:%s", shim, old);
+        else
+            snprintf(preload, len, "%s", shim);
         free(shim);
-        return EMM_EXIT_FAIL;
+        bad |= setenv("LD_PRELOAD", preload, 1);
+        free(preload);
     }
-    if (old && *old)
-        snprintf(preload, len, "%s:%s", shim, old);
-    else
-        snprintf(preload, len, "%s", shim);
-    free(shim);
-    int bad = setenv("LD_PRELOAD", preload, 1);
-    free(preload);
     for (int k = 0; k < EMM_CONFIG_COUNT; k++)
         if (values[k])
             bad |= setenv(emm_config_row_get((emm_config_key)k)->var, values[k], 1);
@@ -177,6 +327,27 @@ int emm_cmd_run(int argc, char **argv)
         return EMM_EXIT_FAIL;
     }
     fflush(NULL);
+    if (under_valgrind) {
+        /* valgrind --tool=emm -q --trace-children=yes PROGRAM ARGS...: exec'd
+         * programs are captured too, as LD_PRELOAD carries the shim for the
+         * other backends. */
+        static const char *const pre[] = {"valgrind", "--tool=emm", "-q", "--trace-children=yes"};
+        size_t np = sizeof pre / sizeof *pre, na = (size_t)(argc - i);
+        char **vargv = calloc(np + na + 1, sizeof *vargv);
+        if (!vargv) {
+            cli_error("run: out of memory");
+            return EMM_EXIT_FAIL;
+        }
+        for (size_t k = 0; k < np; k++)
+            vargv[k] = (char *)pre[k];
+        for (size_t k = 0; k < na; k++)
+            vargv[np + k] = argv[i + (int)k];
+        execv(launcher, vargv);
+        int e = errno;
+        cli_error("run: cannot run '%s': %s", launcher, strerror(e));
+        free(vargv);
+        return e == ENOENT ? 127 : 126;
+    }
     execvp(argv[i], argv + i);
     /* As a shell does: 127 when the program is not found, 126 when it
      * cannot run. */

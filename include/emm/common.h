@@ -44,7 +44,8 @@ typedef enum emm_scalar {
     EMM_F64,
     EMM_I32,
     EMM_U32,
-    EMM_I64
+    EMM_I64,
+    EMM_U16
 } emm_scalar;
 
 /* The most coordinates a layout, a cell or a point of the interface has.

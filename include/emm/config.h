@@ -29,6 +29,7 @@ typedef enum emm_capture {
     EMM_CAPTURE_SANCOV,   /* a build with emm_sancov_executable */
     EMM_CAPTURE_FAULT,    /* page protection, the profiling window only */
     EMM_CAPTURE_API,      /* programs using emm_mesh_* */
+    EMM_CAPTURE_VALGRIND, /* emm's Valgrind tool, the whole run of an unmodified binary */
     EMM_CAPTURE_COUNT
 } emm_capture;
 
@@ -72,6 +73,9 @@ typedef struct emm_tag_rules {
  * (docs in emm_tag_rules_help). On failure err says what is wrong in one
  * line that quotes at most a bounded part of the text. */
 EMM_API emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *err);
+/* A rule as EMM_TAG spells it ("vertices:site=read_mesh,stride=24,xyz=0:f64"),
+ * into out (cap bytes, NUL included; cut when it does not fit). */
+EMM_API void emm_tag_rule_format(const emm_tag_rule *r, char *out, size_t cap);
 /* The grammar, as `emm run --help` prints it. */
 EMM_API void emm_tag_rules_help(FILE *out);
 
@@ -80,6 +84,35 @@ EMM_API void emm_tag_rules_help(FILE *out);
  * name reduced to its unqualified identifier (_ZN4mesh4loadEv -> load).
  * Writes at most cap bytes (NUL included) into out. */
 EMM_API void emm_tag_site_name(const char *symbol, char *out, size_t cap);
+/* A frame's two names for site= (DESIGN.md "The shim", Tagging): `name`,
+ * the function's own (a method's name without its class, a template's
+ * without its arguments), and `qualified`, with its namespaces and classes
+ * ("OpenMesh::PropertyT::resize"; template arguments dropped). `demangled`
+ * is the symbol as the C++ runtime demangles it, or NULL (a C symbol, or no
+ * demangler): the names then come from the symbol as emm_tag_site_name
+ * reads it. */
+EMM_API void emm_tag_site_names(const char *symbol, const char *demangled, char *name,
+                                size_t ncap, char *qualified, size_t qcap);
+/* Whether a rule's site= names a frame: its name, its qualified name, or a
+ * tail of that ("PropertyT::resize"). */
+EMM_API int emm_tag_site_matches(const char *site, const char *name, const char *qualified);
+
+/* An allocation site the shim saw while looking for a rule's blocks. */
+typedef struct emm_tag_site_seen {
+    char name[EMM_TAG_SITE_MAX]; /* the innermost frame of the program's own */
+    uint64_t count;              /* blocks allocated there */
+    uint64_t largest;            /* the largest, in bytes */
+} emm_tag_site_seen;
+
+/* The line that says rule `index` (from 0) matched no allocation, naming
+ * up to three of the sites seen closest to it: names that share most with
+ * its site= first, then blocks that hold a whole number of its records,
+ * then the largest blocks; a site whose blocks are not whole records says
+ * so (a wrong stride). */
+EMM_API void emm_tag_unmatched_message(const emm_tag_rule *r, size_t index,
+                                       const emm_tag_site_seen *seen, size_t nseen, char *out,
+                                       size_t cap);
+
 /* Whether a frame is not a program's allocation site: one of the C
  * library, the C++ runtime, the loader, emm's own libraries, or a standard
  * library template instantiated in the program (std::vector's growth,
@@ -104,6 +137,7 @@ typedef enum emm_config_key {
     EMM_CONFIG_TRACE,
     EMM_CONFIG_TIMELINE,
     EMM_CONFIG_LOG,
+    EMM_CONFIG_LIST_SITES,
     EMM_CONFIG_COUNT
 } emm_config_key;
 
@@ -137,6 +171,7 @@ typedef struct emm_config {
     char trace[EMM_CONFIG_PATH_MAX];        /* EMM_TRACE */
     char timeline[EMM_CONFIG_PATH_MAX];     /* EMM_TIMELINE */
     int log;                      /* EMM_LOG: 0 quiet, 1 summary, 2 verbose */
+    int list_sites;               /* EMM_LIST_SITES: list the candidate arrays, simulate nothing */
     /* Where each value came from — the variable or the option that set it
      * (static strings of the table), NULL for a default — so that every
      * message names what the user typed. */

@@ -71,6 +71,9 @@ typedef struct emm_layout_options {
     uint32_t triangle_bytes; /* bytes of a triangle record; 0 = 28 (thesis) */
     uint64_t local_store;    /* bytes; a larger cell is an error; 0 = no check */
     emm_fetch_kind fetch;    /* only to name a strategy in that error; NONE if unknown */
+    uint32_t vertex_cells;   /* 1: the program keeps vertices only (no triangle array), and
+                                the triangles given are its vertices, each (v, v, v): cells
+                                of vertices, whose triangles take no bytes */
 } emm_layout_options;
 
 /* One cell. Coordinates are in the layout's space (emm_layout_axes); only

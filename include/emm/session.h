@@ -82,6 +82,19 @@ EMM_API emm_status emm_session_new(const emm_session_config *cfg, emm_session **
  * range already tagged is re-tagged (realloc keeps tags right). */
 EMM_API int emm_session_tag(emm_session *s, emm_array_kind kind, const void *base, size_t count,
                             size_t stride, size_t field_offset, emm_scalar type);
+/* emm_session_tag for a block an EMM_TAG rule selected (config->tags.rule[rule],
+ * rule >= 0): `count` is the block's capacity, and the records the mesh has
+ * are those the program writes or indexes (the highest element accessed,
+ * and for vertices the highest index the triangles hold), taken when the
+ * geometry is read. Messages about the array name the rule. */
+EMM_API int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base,
+                                 size_t count, size_t stride, size_t field_offset,
+                                 emm_scalar type, int rule);
+/* The array at `old` moved to `base` and now holds `count` records (realloc):
+ * the same array, its window records and its place kept — the window does
+ * not close. Nothing happens when `old` is not a tagged array. */
+EMM_API emm_session_state emm_session_move(emm_session *s, const void *old, const void *base,
+                                           size_t count);
 /* The array at `base` was freed or moved: its later accesses are not mesh
  * accesses. Call it while the memory is still readable: before the
  * decision, the session copies the array's coordinates or indices when the

@@ -23,7 +23,7 @@ public_layer() {
   case $1 in
     common.h|strategy.h|config.h) echo core ;;
     sim.h|trace.h|layout.h|runner.h) echo simulator ;;
-    mesh.h|profile.h|table.h|synth.h|session.h|replay.h|tag.h) echo runtime ;;
+    mesh.h|profile.h|table.h|synth.h|session.h|replay.h|tag.h|sites.h) echo runtime ;;
     *) echo '' ;;
   esac
 }

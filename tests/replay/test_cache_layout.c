@@ -108,7 +108,7 @@ static size_t scanline(emm_trace_record *out)
 static void reference(const emm_machine *m, const emm_strategy *s, const emm_trace_record *t,
                       size_t n, emm_result *out)
 {
-    emm_layout_options opt = {s->layout, s->cell, 80, 28, 0, EMM_FETCH_NONE};
+    emm_layout_options opt = {s->layout, s->cell, 80, 28, 0, EMM_FETCH_NONE, 0};
     emm_layout *l;
     emm_error err;
     emm_cache c;

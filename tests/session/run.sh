@@ -45,6 +45,12 @@ cp "$emm" "$work/bin/emm" || exit 1
 [ $rc -eq 1 ] || fail "shim missing: exit $rc, not 1"
 grep -q "cannot find libemmshim.so; tried $work/bin/../lib/libemmshim.so" "$work/err" ||
     { fail "shim missing: message"; cat "$work/err"; }
+# Nor is emm's Valgrind tool: --capture valgrind says it is unavailable, in
+# one line, before the program starts.
+"$work/bin/emm" run --strategy cache --capture valgrind -- true 2>"$work/err"; rc=$?
+[ $rc -eq 1 ] || fail "valgrind tool missing: exit $rc, not 1"
+grep -q "^emm: run: --capture valgrind is unavailable: emm's Valgrind tool is not beside this emm" \
+    "$work/err" || { fail "valgrind tool missing: message"; cat "$work/err"; }
 
 # A stand-in shim: any harmless shared library will do for LD_PRELOAD.
 stand=$(ldd "$emm" | awk '/libm\.so/ { print $3; exit }')

@@ -1,0 +1,77 @@
+#!/bin/sh
+# The valgrind capture's cost (issue 14's benchmark; not a test: it times
+# things).
+#
+#   sh bench/valgrind_overhead.sh BUILD [FACES] [PASSES]
+#
+# One program, one input, in one run: examples/smooth.c (a plain C program
+# with its own OBJ loader, tagged by EMM_TAG rules) on a generated mesh of
+# FACES faces (default 100,000), PASSES Laplacian passes (default 10). Wall
+# time, median of 3, as a ratio over the native run, of
+#   emm        emm run --capture valgrind --compare baselines (the whole run
+#              captured, decided, and simulated under the answer, the
+#              contest's finalists, direct reads and the reference cache)
+#   untagged   the same without rules: Valgrind, emm's tool and the shim,
+#              nothing tagged (the instrumentation's own cost)
+#   none       valgrind --tool=none (Valgrind's base)
+#   sancov     the sancov build under emm run (the session's own cost,
+#              natively: what the emm row pays again under Valgrind's JIT)
+#   cachegrind valgrind --tool=cachegrind (its cache simulation on)
+#   lackey     valgrind --tool=lackey --trace-mem=yes (every access printed)
+# Target (issue 14): emm no slower than Cachegrind.
+set -u
+[ $# -ge 1 ] || { echo "usage: sh bench/valgrind_overhead.sh BUILD [FACES] [PASSES]" >&2; exit 2; }
+B=$(cd "$1" && pwd) || exit 1
+FACES=${2:-100000} PASSES=${3:-10}
+EMM=$B/bin/emm PROG=$B/bin/smooth SANCOV=$B/bin/smooth.sancov
+for f in "$EMM" "$PROG" "$SANCOV" "$B/lib/emm/valgrind/emm-amd64-linux"; do
+  [ -e "$f" ] || { echo "valgrind_overhead: $f is not built" >&2; exit 1; }
+done
+command -v valgrind >/dev/null || { echo "valgrind_overhead: valgrind is not installed" >&2; exit 1; }
+mkdir -p "$B/bench" || exit 1
+MESH=$B/bench/smooth$FACES.obj
+if [ ! -s "$MESH" ]; then
+  "$EMM" mesh gen --faces "$FACES" --seed 5 -o "$MESH.tmp.obj" >/dev/null &&
+    mv "$MESH.tmp.obj" "$MESH" || exit 1
+fi
+TMP=$(mktemp -d) || exit 1
+trap 'rm -rf "$TMP"' EXIT
+unset EMM_TAG EMM_REPORT EMM_TRACE EMM_PROFILE_DUMP EMM_PROFILE EMM_CAPTURE EMM_LOG \
+  EMM_STRATEGY EMM_COMPARE EMM_FINALISTS LD_PRELOAD
+TAG='vertices:site=load_mesh,stride=12,xyz=0:f32;triangles:site=load_mesh,stride=12,vidx=0:u32'
+
+now() { date +%s%N; }
+# median3 CMD...: the median wall time of three runs, in seconds.
+median3() {
+  for i in 1 2 3; do
+    t0=$(now)
+    "$@" > "$TMP/out" 2> "$TMP/err" || { cat "$TMP/err" >&2; echo "valgrind_overhead: $* failed" >&2; exit 1; }
+    echo $(( $(now) - t0 ))
+  done | sort -n | sed -n 2p | awk '{ printf "%.3f\n", $1 / 1e9 }'
+}
+
+native=$(median3 "$PROG" "$MESH" "$PASSES") || exit 1
+cp "$TMP/out" "$TMP/native.out"
+emm=$(median3 "$EMM" run --capture valgrind --compare baselines --tag "$TAG" --report "$TMP/r.json" \
+  -- "$PROG" "$MESH" "$PASSES") || exit 1
+cmp -s "$TMP/out" "$TMP/native.out" || echo "valgrind_overhead: output differs under emm run!"
+accesses=$(sed -n 's/^ *"element_accesses": \([0-9]*\),$/\1/p' "$TMP/r.json" | head -1)
+untagged=$(median3 "$EMM" run --capture valgrind -- "$PROG" "$MESH" "$PASSES") || exit 1
+none=$(median3 valgrind --tool=none "$PROG" "$MESH" "$PASSES") || exit 1
+sancov=$(median3 "$EMM" run --capture sancov --compare baselines --tag "$TAG" -- "$SANCOV" "$MESH" \
+  "$PASSES") || exit 1
+cg=$(median3 valgrind --tool=cachegrind --cachegrind-out-file=/dev/null "$PROG" "$MESH" "$PASSES") ||
+  exit 1
+lackey=$(median3 valgrind --tool=lackey --trace-mem=yes --log-file=/dev/null "$PROG" "$MESH" "$PASSES") ||
+  exit 1
+
+ratio() { awk -v a="$1" -v b="$native" 'BEGIN { printf "%.1fx", a / b }'; }
+echo "smooth on $FACES faces, $PASSES passes; median of 3 wall times; ${accesses:-?} element accesses captured"
+printf '  %-44s %8s s\n' "native" "$native"
+printf '  %-44s %8s s  %8s\n' "emm run --capture valgrind --compare baselines" "$emm" "$(ratio "$emm")"
+printf '  %-44s %8s s  %8s\n' "  the same, nothing tagged (the tool alone)" "$untagged" "$(ratio "$untagged")"
+printf '  %-44s %8s s  %8s\n' "  valgrind --tool=none" "$none" "$(ratio "$none")"
+printf '  %-44s %8s s  %8s\n' "  the sancov build under emm run (native)" "$sancov" "$(ratio "$sancov")"
+printf '  %-44s %8s s  %8s\n' "valgrind --tool=cachegrind" "$cg" "$(ratio "$cg")"
+printf '  %-44s %8s s  %8s\n' "valgrind --tool=lackey --trace-mem=yes" "$lackey" "$(ratio "$lackey")"
+awk -v e="$emm" -v c="$cg" 'BEGIN { printf "  emm over Cachegrind: %.2fx (target: at most 1x)\n", e / c }'

@@ -1,0 +1,229 @@
+/* The candidate arrays of a program (emm/sites.h; `emm run --list-sites`).
+ *
+ * Blocks are grouped by call path. A block's records are looked at once,
+ * when it is freed or moved and at exit: the table tries three indices in
+ * 12 bytes (i32/u32), then three coordinates in 12 bytes (f32) or 24 bytes
+ * (f64), over its records up to the last one that is not all zero (the
+ * rest is spare capacity). Integers read as floats are subnormal, floats
+ * read as indices are huge: the tests tell them apart. A site keeps what
+ * its largest block looked like. */
+#include "emm/sites.h"
+
+#include <math.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "emm/config.h"
+#include "parse.h"
+
+#define MAX_SITES 256
+#define MAX_BLOCKS 4096
+#define MAX_STACK 12
+/* Records read per block at most. */
+#define SAMPLE 65536u
+
+struct guess {
+    emm_array_kind kind;
+    bool found;
+    unsigned stride;
+    emm_scalar type;
+    uint64_t records, in_use;
+};
+
+struct site {
+    uint64_t path;
+    char name[EMM_TAG_SITE_MAX]; /* the innermost frame's own name, for the rule */
+    char stack[1024];            /* qualified names, innermost first */
+    uint64_t count, largest, live;
+    struct guess g;
+    uint64_t looked; /* the size of the block g comes from */
+};
+
+struct block {
+    const void *p;
+    uint64_t size;
+    int site;
+};
+
+struct emm_sites {
+    uint64_t min;
+    struct site site[MAX_SITES];
+    int nsites;
+    struct block block[MAX_BLOCKS];
+    int nblocks;
+};
+
+emm_sites *emm_sites_new(uint64_t min_bytes)
+{
+    emm_sites *t = calloc(1, sizeof *t);
+    if (t)
+        t->min = min_bytes;
+    return t;
+}
+
+void emm_sites_free(emm_sites *t)
+{
+    free(t);
+}
+
+void emm_sites_add(emm_sites *t, uint64_t path, const char *const *names, size_t n,
+                   const void *block, uint64_t size)
+{
+    if (size < t->min)
+        return;
+    int i = 0;
+    while (i < t->nsites && t->site[i].path != path)
+        i++;
+    if (i == t->nsites) {
+        if (t->nsites == MAX_SITES)
+            return;
+        struct site *s = &t->site[t->nsites++];
+        memset(s, 0, sizeof *s);
+        s->path = path;
+        snprintf(s->name, sizeof s->name, "%s", n && names[0] ? names[0] : "?");
+        size_t used = 0;
+        for (size_t k = 0; k < n && k < MAX_STACK && used + 1 < sizeof s->stack; k++) {
+            const char *q = names[k] ? names[k] + strlen(names[k]) + 1 : "?";
+            int w = snprintf(s->stack + used, sizeof s->stack - used, "%s%s", k ? " < " : "", q);
+            if (w < 0)
+                break;
+            used += (size_t)w;
+        }
+    }
+    struct site *s = &t->site[i];
+    s->count++;
+    s->live++;
+    if (size > s->largest)
+        s->largest = size;
+    if (t->nblocks < MAX_BLOCKS)
+        t->block[t->nblocks++] = (struct block){block, size, i};
+}
+
+static bool plausible(double x, emm_scalar type)
+{
+    double tiny = type == EMM_F32 ? 1.1754943508222875e-38 : 2.2250738585072014e-308;
+    return isfinite(x) && (x == 0 || fabs(x) >= tiny) && fabs(x) < 1e7;
+}
+
+/* Whether the block reads as records of `stride` bytes with three scalars
+ * of `type` at their start, over its records in use. */
+static bool reads_as(const unsigned char *p, uint64_t size, unsigned stride, emm_scalar type,
+                     struct guess *g)
+{
+    if (size % stride)
+        return false;
+    uint64_t n = size / stride, used = 0;
+    for (uint64_t i = n; i > 0 && !used; i--)
+        for (unsigned b = 0; b < stride; b++)
+            if (p[(i - 1) * stride + b]) {
+                used = i;
+                break;
+            }
+    if (used < 2)
+        return false;
+    uint64_t look = used < SAMPLE ? used : SAMPLE, good = 0;
+    for (uint64_t i = 0; i < look; i++) {
+        const unsigned char *r = p + i * stride;
+        bool ok = true;
+        if (type == EMM_U32) {
+            uint32_t v[3];
+            memcpy(v, r, sizeof v);
+            ok = v[0] < (1u << 26) && v[1] < (1u << 26) && v[2] < (1u << 26) &&
+                 (v[0] != v[1] || v[1] != v[2]);
+        } else {
+            for (int c = 0; c < 3 && ok; c++) {
+                double x;
+                if (type == EMM_F32) {
+                    float f;
+                    memcpy(&f, r + 4 * c, sizeof f);
+                    x = f;
+                } else {
+                    memcpy(&x, r + 8 * c, sizeof x);
+                }
+                ok = plausible(x, type);
+            }
+        }
+        good += ok;
+    }
+    if (good * 100 < look * 98)
+        return false;
+    *g = (struct guess){type == EMM_U32 ? EMM_ARRAY_TRIANGLES : EMM_ARRAY_VERTICES, true, stride,
+                        type, n, used};
+    return true;
+}
+
+static void look_at(emm_sites *t, int b)
+{
+    struct block *k = &t->block[b];
+    struct site *s = &t->site[k->site];
+    /* The largest block that reads as records wins; one that does not
+     * counts only while none did. */
+    if (k->size >= s->looked || !s->g.found) {
+        const unsigned char *p = k->p;
+        struct guess g = {0};
+        bool found = reads_as(p, k->size, 12, EMM_U32, &g) ||
+                     reads_as(p, k->size, 12, EMM_F32, &g) || reads_as(p, k->size, 24, EMM_F64, &g);
+        if (found ? k->size >= s->looked || !s->g.found : !s->g.found && k->size >= s->looked) {
+            s->g = g;
+            s->looked = k->size;
+        }
+    }
+    s->live--;
+    t->block[b] = t->block[--t->nblocks];
+}
+
+void emm_sites_release(emm_sites *t, const void *block)
+{
+    for (int b = 0; b < t->nblocks; b++)
+        if (t->block[b].p == block) {
+            look_at(t, b);
+            return;
+        }
+}
+
+static int by_size(const void *a, const void *b)
+{
+    const struct site *x = a, *y = b;
+    return x->largest < y->largest ? 1 : x->largest > y->largest ? -1 : 0;
+}
+
+void emm_sites_print(emm_sites *t, const char *program, FILE *out)
+{
+    char b1[32], b2[32], b3[32];
+    uint64_t live_at_exit[MAX_SITES] = {0};
+    for (int b = 0; b < t->nblocks; b++)
+        live_at_exit[t->block[b].site]++;
+    while (t->nblocks > 0)
+        look_at(t, t->nblocks - 1);
+    for (int i = 0; i < t->nsites; i++)
+        t->site[i].live = live_at_exit[i];
+    qsort(t->site, (size_t)t->nsites, sizeof *t->site, by_size);
+    fprintf(out, "emm: %s: %d candidate array site%s (blocks of %s bytes or more, by call path, "
+                 "largest first)%s\n",
+            program, t->nsites, t->nsites == 1 ? "" : "s", emm_grouped(t->min, b1),
+            t->nsites ? ":" : "");
+    for (int i = 0; i < t->nsites; i++) {
+        const struct site *s = &t->site[i];
+        fprintf(out, "emm: %3d. %s: %s block%s, the largest %s bytes, %s live at exit\n", i + 1,
+                s->name, emm_grouped(s->count, b1), s->count == 1 ? "" : "s",
+                emm_grouped(s->largest, b2), emm_grouped(s->live, b3));
+        fprintf(out, "emm:      stack: %s\n", s->stack);
+        if (s->g.found) {
+            bool v = s->g.kind == EMM_ARRAY_VERTICES;
+            const char *type = s->g.type == EMM_F32 ? "f32" : s->g.type == EMM_F64 ? "f64" : "u32";
+            fprintf(out, "emm:      records: 3 x %s in %u bytes (%s), %s in use of %s\n", type,
+                    s->g.stride, v ? "coordinates" : "vertex indices",
+                    emm_grouped(s->g.in_use, b1), emm_grouped(s->g.records, b2));
+            fprintf(out, "emm:      rule: %s:site=%s,stride=%u,%s=0:%s\n",
+                    v ? "vertices" : "triangles", s->name, s->g.stride, v ? "xyz" : "vidx", type);
+        } else {
+            fprintf(out, "emm:      records: not three floats or three indices in a row (a record "
+                         "of several fields: take stride and offsets from the program's type)\n");
+            fprintf(out, "emm:      rule: vertices:site=%s,stride=BYTES,xyz=OFFSET:f32|f64, or "
+                         "triangles:site=%s,stride=BYTES,vidx=OFFSET:i32|u32|u16|i64\n",
+                    s->name, s->name);
+        }
+    }
+    fflush(out);
+}
