@@ -617,11 +617,8 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
             s->answer_model = top[0];
         if (in >= 2)
             s->runner_model = top[1];
-        if (s->answer_model != SIZE_MAX && s->answer_model != 0) {
-            s->predicted = s->chosen;
-            s->has_predicted = true;
+        if (session_overruled(s))
             s->chosen = s->mstrat[s->answer_model];
-        }
     }
     /* Every model, the answer first, those that could not be built with
      * only their strategy (the report says why), and without the contest's

@@ -144,8 +144,6 @@ struct emm_session {
     /* At finish, with a contest: the models of the answer and of the
      * runner-up (SIZE_MAX: none) among the finalists. */
     size_t answer_model, runner_model;
-    emm_strategy predicted; /* the window's choice, when a contest changed the answer */
-    bool has_predicted;
     size_t nmodels;      /* models added to the runner (built or skipped) */
     emm_strategy *mstrat; /* their strategies, nmodels */
     emm_error *merr;     /* why each could not be built (status != EMM_OK), nmodels */
@@ -191,6 +189,13 @@ struct emm_session {
         uint64_t cycles;
     } stall_lines[SESSION_STALL_LINES];
 };
+
+/* The window's choice (model 0) when the run's contest answered otherwise,
+ * else NULL (and NULL until the session's finish). */
+static inline const emm_strategy *session_overruled(const emm_session *s)
+{
+    return s->answer_model != SIZE_MAX && s->answer_model != 0 ? &s->mstrat[0] : NULL;
+}
 
 /* Live, or gone with its fields kept for the decision. */
 static inline bool session_usable(const session_array *a)

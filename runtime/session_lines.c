@@ -117,7 +117,7 @@ void session_print_stall_lines(const emm_session *s, FILE *out)
     /* The stalls were counted on the window's choice (model 0); when the
      * run's contest answered otherwise they are not the answer's: say how
      * to see the answer's instead of naming another strategy's lines. */
-    if (s->has_predicted) {
+    if (session_overruled(s)) {
         char name[64];
         emm_strategy_format(&s->chosen, name, sizeof name);
         fprintf(out, "emm:   the answer's DMA stalls by source line: emm annotate %s --strategy %s\n",
@@ -137,7 +137,8 @@ void session_write_stall_lines(json_writer *w, const emm_session *s)
     if (!has_pcs(s) || !s->stall_lines_done)
         return;
     char name[64];
-    emm_strategy_format(s->has_predicted ? &s->predicted : &s->chosen, name, sizeof name);
+    const emm_strategy *pred = session_overruled(s);
+    emm_strategy_format(pred ? pred : &s->chosen, name, sizeof name);
     json_key(w, "stall_lines_strategy");
     json_string(w, name);
     json_key(w, "stall_lines");

@@ -259,8 +259,9 @@ static void report_extra(json_writer *w, void *ctx)
     /* The window's own choice, and the run's contest that confirmed or
      * replaced it (docs/report.md "decision"). */
     json_key(w, "predicted");
-    if (s->has_predicted || (s->has_chosen && s->source != FROM_CONFIG)) {
-        emm_strategy_format(s->has_predicted ? &s->predicted : &s->chosen, name, sizeof name);
+    const emm_strategy *overruled = session_overruled(s);
+    if (overruled || (s->has_chosen && s->source != FROM_CONFIG)) {
+        emm_strategy_format(overruled ? overruled : &s->chosen, name, sizeof name);
         json_string(w, name);
     } else {
         json_null(w);
@@ -509,8 +510,9 @@ void session_print_summary(const emm_session *s, FILE *out, const emm_result *re
                     emm_grouped(runner->total, num), fabs(d) * 100, d >= 0 ? "slower" : "faster");
         }
         /* What the window alone predicted, against the run's answer. */
-        const emm_result *pred = s->has_predicted ? find_result(res, nres, &s->predicted) : NULL;
-        if (s->contest && s->answer_model != SIZE_MAX && !s->has_predicted)
+        const emm_strategy *overruled = session_overruled(s);
+        const emm_result *pred = overruled ? find_result(res, nres, overruled) : NULL;
+        if (s->contest && s->answer_model != SIZE_MAX && !overruled)
             fprintf(out, "emm:   the window predicted it too (%s)\n", how_predicted(s));
         else if (pred && pred != chosen && chosen->total) {
             emm_strategy_format(&pred->strategy, name, sizeof name);
