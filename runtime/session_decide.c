@@ -131,6 +131,10 @@ static emm_status read_geometry(emm_session *s, emm_error *err)
                         s->program);
     session_array *v = &s->arrays[gv];
     session_origin(s, v, vo, sizeof vo);
+    if (!session_readable(s, v) || (gt >= 0 && !session_readable(s, &s->arrays[gt])))
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "%s: the tagged arrays' contents never reached the session's process",
+                        s->program);
     uint64_t nv = in_use(v), nt = 0;
     int64_t highest = -1;
     if (gt >= 0) {
@@ -141,7 +145,7 @@ static emm_status read_geometry(emm_session *s, emm_error *err)
         if (!s->tri)
             return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
         for (uint64_t i = 0; i < nt; i++) {
-            const unsigned char *p = session_field_at(t, i);
+            const unsigned char *p = session_field_at(s, t, i);
             for (int c = 0; c < 3; c++) {
                 int64_t x = read_index(p + (size_t)c * session_scalar_bytes(t->type), t->type);
                 if (x < 0 || (uint64_t)x >= v->count || x > INT32_MAX) {
@@ -180,7 +184,7 @@ static emm_status read_geometry(emm_session *s, emm_error *err)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
     static const char axis[] = "xyz";
     for (uint64_t i = 0; i < nv; i++) {
-        const unsigned char *p = session_field_at(v, i);
+        const unsigned char *p = session_field_at(s, v, i);
         for (int c = 0; c < 3; c++) {
             double x = read_coord(p + (size_t)c * session_scalar_bytes(v->type), v->type);
             if (!plausible(x, v->type))
