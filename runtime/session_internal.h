@@ -263,6 +263,9 @@ emm_session_state session_remote_iteration(emm_session *s);
 emm_status session_remote_decide(emm_session *s, emm_error *err);
 emm_status session_remote_finish(emm_session *s, FILE *summary, emm_error *err);
 void session_remote_forked(emm_session *s);
+/* The first frame a proxy sends (its start), whole: for the wire's fuzz
+ * harness, which serves it and then its input. */
+emm_status session_wire_start(const emm_session_config *sc, unsigned char **frame, size_t *len);
 void session_remote_free(emm_session *s);
 
 /* Who described array a, for messages: "EMM_TAG rule 2 (triangles:...)" or

@@ -322,11 +322,60 @@ static emm_status spawn(const char *path, int *fd, emm_error *err)
     return EMM_OK;
 }
 
+/* The start's payload: the versions, the config's bytes, its source names
+ * (pointers: they travel as strings) and the program's name. */
+static bool start_payload(const emm_session_config *sc, const char *program, unsigned char **out,
+                          size_t *len)
+{
+    emm_config cfg;
+    if (sc->config)
+        cfg = *sc->config;
+    else
+        emm_config_init(&cfg);
+    size_t bytes = sizeof(struct wire_new) + sizeof cfg + strlen(program) + 1;
+    for (int k = 0; k < EMM_CONFIG_COUNT; k++)
+        bytes += (cfg.source[k] ? strlen(cfg.source[k]) : 0) + 1;
+    unsigned char *msg = malloc(bytes), *p = msg;
+    if (!msg)
+        return false;
+    struct wire_new w = {SESSION_WIRE_VERSION, sizeof cfg, sc->capture, sc->table_only};
+    memcpy(p, &w, sizeof w);
+    p += sizeof w;
+    memcpy(p, &cfg, sizeof cfg);
+    p += sizeof cfg;
+    for (int k = 0; k < EMM_CONFIG_COUNT; k++) {
+        size_t l = cfg.source[k] ? strlen(cfg.source[k]) : 0;
+        memcpy(p, cfg.source[k] ? cfg.source[k] : "", l + 1);
+        p += l + 1;
+    }
+    memcpy(p, program, strlen(program) + 1);
+    *out = msg;
+    *len = bytes;
+    return true;
+}
+
+emm_status session_wire_start(const emm_session_config *sc, unsigned char **frame, size_t *len)
+{
+    unsigned char *msg;
+    size_t bytes;
+    if (!start_payload(sc, sc->program ? sc->program : "program", &msg, &bytes))
+        return EMM_ERR_NOMEM;
+    struct frame f = {.op = OP_NEW, .wait = 1, .len = bytes};
+    unsigned char *out = malloc(sizeof f + bytes);
+    if (out) {
+        memcpy(out, &f, sizeof f);
+        memcpy(out + sizeof f, msg, bytes);
+        *frame = out;
+        *len = sizeof f + bytes;
+    }
+    free(msg);
+    return out ? EMM_OK : EMM_ERR_NOMEM;
+}
+
 emm_status session_remote_new(const emm_session_config *sc, emm_session **out, emm_error *err)
 {
     emm_session *s = calloc(1, sizeof *s);
     struct session_remote *r = calloc(1, sizeof *r);
-    emm_config cfg;
     if (!s || !r) {
         free(s);
         free(r);
@@ -339,30 +388,12 @@ emm_status session_remote_new(const emm_session_config *sc, emm_session **out, e
     emm_status st = spawn(sc->server, &r->fd, err);
     if (st != EMM_OK)
         goto fail;
-    if (sc->config)
-        cfg = *sc->config;
-    else
-        emm_config_init(&cfg);
-    /* The source names are pointers: they travel as strings after it. */
-    size_t bytes = sizeof(struct wire_new) + sizeof cfg + strlen(r->program) + 1;
-    for (int k = 0; k < EMM_CONFIG_COUNT; k++)
-        bytes += (cfg.source[k] ? strlen(cfg.source[k]) : 0) + 1;
-    char *msg = malloc(bytes), *p = msg;
-    if (!msg) {
+    unsigned char *msg;
+    size_t bytes;
+    if (!start_payload(sc, r->program, &msg, &bytes)) {
         st = emm_fail(err, EMM_ERR_NOMEM, "session: out of memory");
         goto fail;
     }
-    struct wire_new w = {SESSION_WIRE_VERSION, sizeof cfg, sc->capture, sc->table_only};
-    memcpy(p, &w, sizeof w);
-    p += sizeof w;
-    memcpy(p, &cfg, sizeof cfg);
-    p += sizeof cfg;
-    for (int k = 0; k < EMM_CONFIG_COUNT; k++) {
-        size_t l = cfg.source[k] ? strlen(cfg.source[k]) : 0;
-        memcpy(p, cfg.source[k] ? cfg.source[k] : "", l + 1);
-        p += l + 1;
-    }
-    memcpy(p, r->program, strlen(r->program) + 1);
     st = status_call(r, OP_NEW, msg, bytes, err);
     free(msg);
     if (st != EMM_OK)
@@ -510,17 +541,36 @@ static void drop_message(struct message *m)
     free(m);
 }
 
+/* A frame's bytes, in memory that grows as they arrive: a header that
+ * claims more than comes costs no more than what came. */
+static bool recv_data(int fd, struct message *m)
+{
+    uint64_t have = 0, cap = 0;
+    while (have < m->f.len) {
+        if (have == cap) {
+            cap = cap ? 2 * cap : 65536;
+            if (cap > m->f.len)
+                cap = m->f.len;
+            unsigned char *d = realloc(m->data, cap);
+            if (!d)
+                return false;
+            m->data = d;
+        }
+        if (!recv_all(fd, m->data + have, cap - have))
+            return false;
+        have = cap;
+    }
+    return true;
+}
+
 static void *reader(void *arg)
 {
     struct server *v = arg;
     for (;;) {
         struct message *m = calloc(1, sizeof *m);
         if (!m || !recv_all(v->fd, &m->f, sizeof m->f) || m->f.len > FRAME_MAX ||
-            (m->f.len && !(m->data = malloc(m->f.len))) ||
-            (m->f.len && !recv_all(v->fd, m->data, m->f.len))) {
-            if (m)
-                free(m->data);
-            free(m);
+            !recv_data(v->fd, m)) {
+            drop_message(m);
             break;
         }
         pthread_mutex_lock(&v->lock);
