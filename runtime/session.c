@@ -159,8 +159,9 @@ static void drop_slot(emm_session *s, int i, bool keep)
 {
     session_array *a = &s->arrays[i];
     const unsigned char *bytes = session_bytes(s, a);
-    if ((s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE) && (a->refs > 0 || keep) &&
-        !a->snap && bytes) {
+    if ((s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE ||
+         s->phase == PHASE_DEFERRED) &&
+        (a->refs > 0 || keep) && !a->snap && bytes) {
         size_t sb = 3 * session_scalar_bytes(a->type);
         a->snap = malloc(a->count * sb);
         for (uint64_t k = 0; a->snap && k < a->count; k++)
@@ -334,7 +335,7 @@ size_t emm_session_ranges(const emm_session *s, uint64_t *lo, uint64_t *hi, size
     size_t n = 0;
     if (s->remote)
         return session_remote_ranges(s, lo, hi, cap);
-    if (s->phase == PHASE_FAILED || s->phase == PHASE_DONE)
+    if (s->phase == PHASE_FAILED || s->phase == PHASE_DONE || s->phase == PHASE_DEFERRED)
         return 0;
     for (int i = 0; i < s->narrays; i++) {
         const session_array *a = &s->arrays[i];
@@ -575,7 +576,7 @@ emm_status emm_session_decide(emm_session *s, emm_error *err)
 {
     if (s->remote)
         return session_remote_decide(s, err);
-    if (s->phase == PHASE_SIMULATING || s->phase == PHASE_DONE)
+    if (s->phase == PHASE_SIMULATING || s->phase == PHASE_DONE || s->phase == PHASE_DEFERRED)
         return EMM_OK;
     if (s->phase == PHASE_FAILED) {
         if (err)
@@ -583,6 +584,25 @@ emm_status emm_session_decide(emm_session *s, emm_error *err)
         return s->failure.status;
     }
     emm_status st = session_decide(s, &s->failure);
+    if (st == EMM_ERR_MESH && s->geometry_failed && !s->deferred) {
+        /* The arrays do not hold a mesh yet (a loader that renumbers its
+         * faces after the first reads, a block still being filled): keep
+         * the window and read them again at the end. */
+        s->deferred = true;
+        s->deferred_why = s->failure;
+        free(s->tri);
+        free(s->xyz);
+        s->tri = NULL;
+        s->xyz = NULL;
+        memset(&s->info.geometry, 0, sizeof s->info.geometry);
+        s->vertex_only = false;
+        for (int i = 0; i < s->narrays; i++) { /* copies of now: read again later */
+            free(s->arrays[i].view);
+            s->arrays[i].view = NULL;
+        }
+        s->phase = PHASE_DEFERRED;
+        return EMM_OK;
+    }
     for (int i = 0; i < s->narrays; i++) {
         free(s->arrays[i].snap);
         s->arrays[i].snap = NULL;
@@ -619,6 +639,8 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
         return session_remote_finish(s, summary, err);
     if (s->phase == PHASE_DONE)
         return EMM_OK;
+    if (s->phase == PHASE_DEFERRED)
+        s->phase = PHASE_DECIDE;
     if (s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE)
         emm_session_decide(s, NULL);
     if (s->phase == PHASE_FAILED) {

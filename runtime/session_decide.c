@@ -441,7 +441,12 @@ out:
 emm_status session_decide(emm_session *s, emm_error *err)
 {
     emm_status st;
-    if ((st = read_geometry(s, err)) != EMM_OK || (st = freeze_arrays(s, err)) != EMM_OK)
+    s->geometry_failed = false;
+    if ((st = read_geometry(s, err)) != EMM_OK) {
+        s->geometry_failed = true;
+        return st;
+    }
+    if ((st = freeze_arrays(s, err)) != EMM_OK)
         return st;
     if (!(s->layouts = emm_model_share_new()))
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", s->program);

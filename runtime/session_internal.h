@@ -30,7 +30,18 @@
 /* Arrays the session keeps at once (live or still referenced by the window). */
 #define SESSION_MAX_ARRAYS 16
 
-enum session_phase { PHASE_PROFILING, PHASE_DECIDE, PHASE_SIMULATING, PHASE_FAILED, PHASE_DONE };
+/* PHASE_DEFERRED: the geometry did not check out when the window closed
+ * (an array the program had yet to finish): the window is kept, nothing
+ * more is captured, and the geometry is read again at finish, from the
+ * arrays as they are then or as they were when freed. */
+enum session_phase {
+    PHASE_PROFILING,
+    PHASE_DECIDE,
+    PHASE_DEFERRED,
+    PHASE_SIMULATING,
+    PHASE_FAILED,
+    PHASE_DONE
+};
 
 enum decision_source { FROM_NONE, FROM_CONFIG, FROM_TABLE, FROM_CHECKED, FROM_SIMULATION };
 
@@ -97,6 +108,9 @@ struct emm_session {
 
     enum session_phase phase;
     emm_error failure;   /* why the session stepped aside (PHASE_FAILED) */
+    bool geometry_failed; /* the last decision failed reading the geometry */
+    bool deferred;       /* the decision waited for the program's end (PHASE_DEFERRED) */
+    emm_error deferred_why; /* what the geometry was when the window closed */
 
     session_array arrays[SESSION_MAX_ARRAYS];
     int narrays;
@@ -293,7 +307,7 @@ emm_status session_decide(emm_session *s, emm_error *err);
  * the decision. */
 static inline bool session_window_only(const emm_session *s)
 {
-    return s->capture == EMM_CAPTURE_FAULT;
+    return s->capture == EMM_CAPTURE_FAULT || s->deferred;
 }
 
 /* The bytes of the traced mesh's records. */

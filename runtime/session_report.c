@@ -334,6 +334,8 @@ static void report_extra(json_writer *w, void *ctx)
         json_double(w, 1.0);
     json_key(w, "loader_writes");
     json_u64(w, s->loader_writes);
+    json_key(w, "geometry_read");
+    json_string(w, s->deferred ? "end" : "decision");
     json_end_object(w);
     /* The traced mesh: its elements and the bytes of its records, against
      * which the DMA bytes say how often cells were fetched again. */
@@ -541,7 +543,13 @@ void session_print_summary(const emm_session *s, FILE *out, const emm_result *re
     }
     char elems[32];
     emm_grouped(s->elements, elems);
-    if (session_window_only(s))
+    if (s->deferred)
+        fprintf(out, "emm:   simulated: the profiling window only, %s accesses, %s element "
+                     "accesses: when it closed the arrays held no mesh yet (%s); read again "
+                     "at the program's end they did, and the layouts are that mesh's; the "
+                     "rest of the run was not captured\n",
+                emm_grouped(s->accesses, num), elems, s->deferred_why.message);
+    else if (session_window_only(s))
         fprintf(out, "emm:   simulated: the profiling window only, %s accesses, %s element "
                      "accesses (the %s capture stops at the decision; its share of the run is "
                      "unknown); the valgrind capture or an instrumented build (sancov) "

@@ -127,7 +127,13 @@ EMM_API emm_session_state emm_session_iteration(emm_session *s);
 /* Reads the geometry from the tagged arrays, profiles the window, decides
  * (or takes the configured strategy), builds the models and replays the
  * window through them. A failure (e.g. no vertex array was tagged) is
- * returned; the session then stays quiet and finish reports why. */
+ * returned; the session then stays quiet and finish reports why. A
+ * geometry that does not check out (an index outside the vertices, a
+ * coordinate that is none) is no failure yet: the program may have to
+ * finish its arrays (renumber its faces). The session keeps the window,
+ * captures nothing more (no ranges) and reads the arrays again at finish,
+ * as they are then or as they were freed; the summary and the report
+ * (coverage.geometry_read "end") say so, or why it failed again. */
 EMM_API emm_status emm_session_decide(emm_session *s, emm_error *err);
 
 /* Ends the session: decides if the window never filled, writes the summary

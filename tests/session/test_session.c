@@ -686,8 +686,10 @@ static void test_bad_config(void)
     CHECKF(has(err.message, "EMM_TABLE"), "%s", err.message);
 }
 
-/* Wrong vertex indices (a rule with the wrong offset): the session reports
- * it and steps aside; no report is written. */
+/* Wrong vertex indices (a rule with the wrong offset): the decision waits
+ * for the end (the arrays may be unfinished), capturing nothing more; read
+ * again at finish they are still wrong, so the session reports it and
+ * steps aside; no report is written. */
 static void test_bad_geometry(void)
 {
     emm_error err;
@@ -703,8 +705,9 @@ static void test_bad_geometry(void)
     for (size_t i = 0; i < WINDOW; i++)
         a[i] = (emm_raw_access){vbase + ((i * 7919 + 1) % nv) * VSTRIDE + 8, 8, 0, 0};
     CHECK(emm_session_access(s, a, WINDOW) == EMM_SESSION_DECIDE);
-    CHECK(emm_session_decide(s, &err) == EMM_ERR_MESH);
-    CHECKF(has(err.message, "vertex index"), "%s", err.message);
+    CHECK(emm_session_decide(s, &err) == EMM_OK);
+    uint64_t lo[4], hi[4];
+    CHECK(emm_session_ranges(s, lo, hi, 4) == 0);
     CHECK(emm_session_access(s, a, 1) == EMM_SESSION_OFF);
     FILE *sum = tmpfile();
     CHECK(emm_session_finish(s, sum, &err) == EMM_ERR_MESH);
