@@ -370,8 +370,9 @@ int emm_tag_site_is_library(const char *symbol, const char *object)
 {
     static const char *const prefixes[] = {"_ZNSt", "_ZNKSt", "_ZSt", "_Znw", "_Zna",
                                            "_ZN9__gnu_cxx", "_ZNK9__gnu_cxx", "__libc_"};
+    /* The shim is vgpreload_emm-amd64-linux.so when Valgrind preloads it. */
     static const char *const libs[] = {"libc.so", "libstdc++.so", "libgcc_s.so", "ld-linux",
-                                       "libemmshim.so", "libunwind.so"};
+                                       "libemmshim.so", "libunwind.so", "vgpreload_"};
     if (symbol)
         for (size_t i = 0; i < sizeof prefixes / sizeof *prefixes; i++)
             if (strncmp(symbol, prefixes[i], strlen(prefixes[i])) == 0)

@@ -55,6 +55,8 @@ emm_status emm_session_new(const emm_session_config *sc, emm_session **out, emm_
     emm_status st;
     emm_error e;
     *out = NULL;
+    if (sc->server)
+        return session_remote_new(sc, out, err);
     emm_session *s = calloc(1, sizeof *s);
     if (!s)
         return emm_fail(err, EMM_ERR_NOMEM, "session: out of memory");
@@ -156,16 +158,19 @@ static bool valid_field(emm_array_kind kind, emm_tag_shape shape, emm_scalar typ
 static void drop_slot(emm_session *s, int i, bool keep)
 {
     session_array *a = &s->arrays[i];
+    const unsigned char *bytes = session_bytes(s, a);
     if ((s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE) && (a->refs > 0 || keep) &&
-        !a->snap) {
+        !a->snap && bytes) {
         size_t sb = session_scalar_bytes(a->type);
         unsigned ns = session_scalars(a);
         unsigned char *snap = malloc(a->count * ns * sb);
         for (uint64_t k = 0; snap && k < a->count; k++)
             for (unsigned c = 0; c < ns; c++)
-                memcpy(snap + (k * ns + c) * sb, session_scalar_at(a, k, c), sb);
+                memcpy(snap + (k * ns + c) * sb, session_scalar_at(s, a, k, c), sb);
         a->snap = snap;
     }
+    free(a->view);
+    a->view = NULL;
     a->live = false;
     if (s->last == i)
         s->last = -1;
@@ -201,6 +206,8 @@ static void drop_overlaps(emm_session *s, uint64_t lo, uint64_t hi, int keep)
 int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, size_t count,
                          size_t stride, size_t field_offset, emm_scalar type, int rule)
 {
+    if (s->remote)
+        return session_remote_tag(s, kind, base, count, stride, field_offset, type, rule);
     uint64_t lo = (uint64_t)(uintptr_t)base, span;
     /* A rule's shape: a column-major block's `count` entries are three
      * columns of count / 3. */
@@ -267,6 +274,8 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
     a->live = true;
     a->refs = 0;
     a->snap = NULL;
+    free(a->view);
+    a->view = NULL;
     a->trace_index = tidx;
     a->rule = rule;
     a->top = 0;
@@ -282,6 +291,8 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
 emm_session_state emm_session_move(emm_session *s, const void *old, const void *base,
                                    size_t count)
 {
+    if (s->remote)
+        return session_remote_move(s, old, base, count);
     uint64_t from = (uint64_t)(uintptr_t)old, lo = (uint64_t)(uintptr_t)base, span;
     for (int i = 0; i < s->narrays; i++) {
         session_array *a = &s->arrays[i];
@@ -303,6 +314,8 @@ emm_session_state emm_session_move(emm_session *s, const void *old, const void *
         if (a->plane)
             a->plane = count * a->stride;
         a->moves++;
+        free(a->view); /* of the old block: the program sends the new one when needed */
+        a->view = NULL;
         if (a->trace_index >= 0 && a->count > s->tarrays[a->trace_index].count)
             a->count = s->tarrays[a->trace_index].count; /* later elements are not in the trace */
         if (a->top > a->count)
@@ -315,6 +328,8 @@ emm_session_state emm_session_move(emm_session *s, const void *old, const void *
 
 emm_session_state emm_session_untag(emm_session *s, const void *base)
 {
+    if (s->remote)
+        return session_remote_untag(s, base);
     uint64_t lo = (uint64_t)(uintptr_t)base;
     for (int i = 0; i < s->narrays; i++) {
         session_array *a = &s->arrays[i];
@@ -338,6 +353,8 @@ emm_session_state emm_session_untag(emm_session *s, const void *base)
 size_t emm_session_ranges(const emm_session *s, uint64_t *lo, uint64_t *hi, size_t cap)
 {
     size_t n = 0;
+    if (s->remote)
+        return session_remote_ranges(s, lo, hi, cap);
     if (s->phase == PHASE_FAILED || s->phase == PHASE_DONE)
         return 0;
     for (int i = 0; i < s->narrays; i++) {
@@ -544,6 +561,8 @@ static void flush_chunk(emm_session *s)
 
 emm_session_state emm_session_access(emm_session *s, const emm_raw_access *a, size_t n)
 {
+    if (s->remote)
+        return session_remote_access(s, a, n);
     if (s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE) {
         window_add(s, a, n);
         return public_state(s);
@@ -574,6 +593,8 @@ emm_session_state emm_session_access(emm_session *s, const emm_raw_access *a, si
 
 emm_session_state emm_session_iteration(emm_session *s)
 {
+    if (s->remote)
+        return session_remote_iteration(s);
     s->iterations++;
     window_full_check(s);
     return public_state(s);
@@ -581,6 +602,8 @@ emm_session_state emm_session_iteration(emm_session *s)
 
 emm_status emm_session_decide(emm_session *s, emm_error *err)
 {
+    if (s->remote)
+        return session_remote_decide(s, err);
     if (s->phase == PHASE_SIMULATING || s->phase == PHASE_DONE)
         return EMM_OK;
     if (s->phase == PHASE_FAILED) {
@@ -621,6 +644,8 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
 {
     emm_status first = EMM_OK;
     emm_error e;
+    if (s->remote)
+        return session_remote_finish(s, summary, err);
     if (s->phase == PHASE_DONE)
         return EMM_OK;
     if (s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE)
@@ -728,18 +753,31 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
     return first;
 }
 
+void emm_session_forked(emm_session *s)
+{
+    if (s && s->remote)
+        session_remote_forked(s);
+}
+
 void emm_session_free(emm_session *s)
 {
     if (!s)
         return;
+    if (s->remote) {
+        session_remote_free(s);
+        return;
+    }
     contest_free(s->contest);
     session_lines_free(s);
     emm_runner_free(s->runner);
     emm_model_share_unref(s->layouts);
     if (s->trace)
         emm_trace_writer_abort(s->trace);
-    for (int i = 0; i < s->narrays; i++)
+    for (int i = 0; i < s->narrays; i++) {
         free(s->arrays[i].snap);
+        free(s->arrays[i].view);
+    }
+    free(s->modules);
     emm_machine_free(s->machine);
     emm_table_free(s->table);
     free(s->window);

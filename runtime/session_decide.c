@@ -120,13 +120,13 @@ static void shrink_to(session_array *a, uint64_t count)
 /* Reads the three coordinates of record i of array a into p: a vertex's
  * (corner < 0), or a soup's corner (0..2); a value that cannot be a
  * coordinate refuses the array in one line (`origin` names it). */
-static emm_status read_position(const emm_session *s, const char *origin, const session_array *a,
+static emm_status read_position(emm_session *s, const char *origin, session_array *a,
                                 uint64_t i, int corner, double *p, emm_error *err)
 {
     static const char axis[] = "xyz";
     unsigned first = corner < 0 ? 0 : 3 * (unsigned)corner;
     for (unsigned c = 0; c < 3; c++) {
-        p[c] = read_coord(session_scalar_at(a, i, first + c), a->type);
+        p[c] = read_coord(session_scalar_at(s, a, i, first + c), a->type);
         if (plausible(p[c], a->type))
             continue;
         char shape[96], what[64];
@@ -159,6 +159,10 @@ static emm_status read_soup(emm_session *s, session_array *t, emm_error *err)
 {
     char to[512];
     session_origin(s, t, to, sizeof to);
+    if (!session_readable(s, t))
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "%s: the tagged arrays' contents never reached the session's process",
+                        s->program);
     uint64_t nt = in_use(t);
     if (nt > INT32_MAX / 3)
         return emm_fail(err, EMM_ERR_RANGE, "%s: %s: the soup has %llu triangles (at most %d)",
@@ -235,6 +239,10 @@ static emm_status read_geometry(emm_session *s, emm_error *err)
                         s->program);
     session_array *v = &s->arrays[gv];
     session_origin(s, v, vo, sizeof vo);
+    if (!session_readable(s, v) || (gt >= 0 && !session_readable(s, &s->arrays[gt])))
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "%s: the tagged arrays' contents never reached the session's process",
+                        s->program);
     uint64_t nv = in_use(v), nt = 0;
     int64_t highest = -1;
     if (gt >= 0) {
@@ -246,7 +254,7 @@ static emm_status read_geometry(emm_session *s, emm_error *err)
             return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
         for (uint64_t i = 0; i < nt; i++) {
             for (unsigned c = 0; c < 3; c++) {
-                int64_t x = read_index(session_scalar_at(t, i, c), t->type);
+                int64_t x = read_index(session_scalar_at(s, t, i, c), t->type);
                 if (x < 0 || (uint64_t)x >= v->count || x > INT32_MAX) {
                     /* Blame the array that changed, when one did. */
                     const char *why = v->moves || t->moves

@@ -75,9 +75,23 @@ typedef struct session_array {
                             capacity), or -1 for an emm_tag_* call */
     uint64_t top;        /* 1 + the highest element accessed since it was tagged */
     unsigned moves;      /* reallocations since it was tagged */
+    unsigned char *view; /* a session serving another process (session_remote.c): a copy
+                            of [base, end) as the program last sent it, owned; else NULL */
 } session_array;
 
 struct emm_session {
+    /* A proxy for a session in another process (session_remote.c): every
+     * entry point forwards to it and nothing below is used. */
+    struct session_remote *remote;
+    /* A session serving another process: the tagged arrays are readable only
+     * through their views, and the program's objects are those it sent. */
+    bool foreign;
+    emm_trace_module *modules; /* malloc'ed, one block */
+    uint32_t nmodules;
+    /* ...and asks the program for them, inside a call it waits on */
+    void (*pull)(emm_session *s, session_array *a);
+    void (*pull_modules)(emm_session *s);
+    void *pull_ctx;
     emm_config cfg;      /* the settings, parsed (a copy) */
     char *program;
     emm_capture capture;
@@ -235,23 +249,61 @@ static inline uint64_t session_array_end(const session_array *a)
     return a->base + (a->plane ? 3 * a->plane : a->count * a->stride);
 }
 
-/* The address of record i's first scalar, in the program's memory or in
- * the slot's snapshot (which holds each record's scalars in a row). */
-static inline const unsigned char *session_field_at(const session_array *a, uint64_t i)
+/* The array's bytes: the program's memory, or the copy a program in another
+ * process sent (NULL when it sent none). */
+static inline const unsigned char *session_bytes(emm_session *s, session_array *a)
+{
+    if (!a->view && s->foreign && s->pull)
+        s->pull(s, a);
+    if (a->view)
+        return a->view;
+    return s->foreign ? NULL : (const unsigned char *)(uintptr_t)a->base;
+}
+
+/* The address of record i's first scalar, in the program's memory (or the
+ * copy of it) or in the slot's snapshot (which holds each record's scalars
+ * in a row). The caller makes sure the array is readable
+ * (session_readable). */
+static inline const unsigned char *session_field_at(emm_session *s, session_array *a, uint64_t i)
 {
     if (a->snap)
         return a->snap + i * session_scalars(a) * session_scalar_bytes(a->type);
-    return (const unsigned char *)(uintptr_t)(a->base + i * a->stride + a->field);
+    return session_bytes(s, a) + i * a->stride + a->field;
 }
 
 /* The address of scalar c (< session_scalars(a)) of record i: in a row, or
  * for a column-major array in column c. */
-static inline const unsigned char *session_scalar_at(const session_array *a, uint64_t i,
-                                                     unsigned c)
+static inline const unsigned char *session_scalar_at(emm_session *s, session_array *a,
+                                                     uint64_t i, unsigned c)
 {
     uint64_t step = a->plane && !a->snap ? a->plane : session_scalar_bytes(a->type);
-    return session_field_at(a, i) + c * step;
+    return session_field_at(s, a, i) + c * step;
 }
+
+/* Whether the array's fields can be read: a snapshot, or its bytes. */
+static inline bool session_readable(emm_session *s, session_array *a)
+{
+    return a->snap || session_bytes(s, a);
+}
+
+/* session_remote.c: the proxy's side of each entry point. */
+struct session_remote;
+emm_status session_remote_new(const emm_session_config *sc, emm_session **out, emm_error *err);
+int session_remote_tag(emm_session *s, emm_array_kind kind, const void *base, size_t count,
+                       size_t stride, size_t field_offset, emm_scalar type, int rule);
+emm_session_state session_remote_move(emm_session *s, const void *old, const void *base,
+                                      size_t count);
+emm_session_state session_remote_untag(emm_session *s, const void *base);
+size_t session_remote_ranges(const emm_session *s, uint64_t *lo, uint64_t *hi, size_t cap);
+emm_session_state session_remote_access(emm_session *s, const emm_raw_access *a, size_t n);
+emm_session_state session_remote_iteration(emm_session *s);
+emm_status session_remote_decide(emm_session *s, emm_error *err);
+emm_status session_remote_finish(emm_session *s, FILE *summary, emm_error *err);
+void session_remote_forked(emm_session *s);
+/* The first frame a proxy sends (its start), whole: for the wire's fuzz
+ * harness, which serves it and then its input. */
+emm_status session_wire_start(const emm_session_config *sc, unsigned char **frame, size_t *len);
+void session_remote_free(emm_session *s);
 
 /* Who described array a, for messages: "EMM_TAG rule 2 (triangles:...)" or
  * "the emm_tag_triangles call". */

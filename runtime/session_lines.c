@@ -31,13 +31,29 @@ static bool has_pcs(const emm_session *s)
     return s->capture == EMM_CAPTURE_SANCOV || s->capture == EMM_CAPTURE_VALGRIND;
 }
 
+/* The program's loaded objects: this process's, or those a program in
+ * another process sent (s->modules, borrowed: *owned is false). */
+static bool program_modules(emm_session *s, emm_trace_module **mods, uint32_t *n, bool *owned)
+{
+    *owned = !s->foreign;
+    if (s->foreign) {
+        if (s->pull_modules)
+            s->pull_modules(s);
+        *mods = s->modules;
+        *n = s->nmodules;
+        return s->modules != NULL;
+    }
+    return emm_process_modules(mods, n, NULL) == EMM_OK;
+}
+
 void session_outputs_start(emm_session *s)
 {
     emm_trace_module *mods = NULL;
     uint32_t nmods = 0;
+    bool owned = false;
     if (s->cfg.trace[0]) {
         emm_trace_options o = {0, has_pcs(s), NULL, 0};
-        if (has_pcs(s) && emm_process_modules(&mods, &nmods, NULL) == EMM_OK) {
+        if (has_pcs(s) && program_modules(s, &mods, &nmods, &owned)) {
             o.modules = mods;
             o.nmodules = nmods;
         }
@@ -46,7 +62,8 @@ void session_outputs_start(emm_session *s)
             s->trace_failed = true;
             s->trace = NULL;
         }
-        free(mods);
+        if (owned)
+            free(mods);
     }
     emm_model *chosen = s->has_chosen ? emm_runner_model(s->runner, 0) : NULL;
     if (s->cfg.timeline[0] && chosen) {
@@ -83,8 +100,9 @@ void session_stall_lines(emm_session *s)
     s->stall_lines_done = true;
     emm_trace_module *mods = NULL;
     uint32_t nmods = 0;
+    bool owned = false;
     s->stall_total = emm_annotation_total(s->annotation)->cycles[EMM_BUCKET_DMA_STALL];
-    if (emm_process_modules(&mods, &nmods, NULL) != EMM_OK)
+    if (!program_modules(s, &mods, &nmods, &owned))
         return;
     const emm_annotate_row *rows;
     if (emm_annotation_resolve(s->annotation, mods, nmods, EMM_BUCKET_DMA_STALL, NULL) == EMM_OK) {
@@ -100,7 +118,8 @@ void session_stall_lines(emm_session *s)
             l->cycles = rows[i].cycles[EMM_BUCKET_DMA_STALL];
         }
     }
-    free(mods);
+    if (owned)
+        free(mods);
 }
 
 /* A path's last component: the summary names lines as a compiler would. */

@@ -853,6 +853,8 @@ static void fork_child(void)
     shim.finished = true;
     finishing = 1;
     shim_tbuf.n = 0;
+    if (shim.session)
+        emm_session_forked(shim.session);
     if (shim.ops->fork_child)
         shim.ops->fork_child();
     shim_leave();
@@ -899,6 +901,20 @@ static const struct shim_capture_ops *pick_capture(void)
     return order[sizeof order / sizeof *order - 1];
 }
 
+/* emm-session beside this library as the loader loaded it (for the
+ * valgrind capture, the tool's directory), when it is there. */
+static bool session_server(char *out, size_t cap)
+{
+    Dl_info info;
+    if (!dladdr((void *)session_server, &info) || !info.dli_fname)
+        return false;
+    const char *slash = strrchr(info.dli_fname, '/');
+    if (!slash)
+        return false;
+    int n = snprintf(out, cap, "%.*s/emm-session", (int)(slash - info.dli_fname), info.dli_fname);
+    return n > 0 && (size_t)n < cap && access(out, X_OK) == 0;
+}
+
 static const char *get_env(const char *name)
 {
     return getenv(name);
@@ -937,14 +953,29 @@ __attribute__((constructor(101))) static void shim_init(void)
         return;
     }
     shim.ops = pick_capture();
+    /* Under Valgrind the session runs natively in a process of its own
+     * (emm-session, beside the tool's preload, which is this library), or
+     * here when that cannot start. */
+    char server[4096];
     emm_session_config sc = {&shim.config, shim.ops->kind, program_invocation_short_name, 0,
-                             {0, helper_start, NULL}};
-    if (emm_session_new(&sc, &shim.session, &err) != EMM_OK) {
+                             {0, helper_start, NULL}, NULL};
+    if (shim.ops->kind == EMM_CAPTURE_VALGRIND && session_server(server, sizeof server))
+        sc.server = server;
+    emm_status st = emm_session_new(&sc, &shim.session, &err);
+    if (st != EMM_OK && sc.server) {
+        if (shim.config.log >= 2)
+            shim_log("the session runs in the program: %s", err.message);
+        sc.server = NULL;
+        st = emm_session_new(&sc, &shim.session, &err);
+    }
+    if (st != EMM_OK) {
         shim.session = NULL;
         step_aside(err.message);
         shim_leave();
         return;
     }
+    if (sc.server && shim.config.log >= 2)
+        shim_log("the session runs natively in its own process, %s", sc.server);
     if (shim.ops->init && !shim.ops->init(msg, sizeof msg)) {
         emm_session_free(shim.session);
         shim.session = NULL;

@@ -50,9 +50,11 @@ static void usage(FILE *out)
             "tree and install), and <bindir>/../lib64 and <bindir>/../lib/<multiarch>/.\n"
             "\n"
             "--capture valgrind runs PROGRAM under `valgrind --tool=emm` (the whole run of an\n"
-            "unmodified binary, threads exact; the capture about as fast as Cachegrind, the\n"
-            "session's simulation slower than natively, since it runs under Valgrind too),\n"
-            "with VALGRIND_LIB set to the tool's directory, <libdir>/emm/valgrind/. --capture\n"
+            "unmodified binary, threads exact), with VALGRIND_LIB set to the tool's directory,\n"
+            "<libdir>/emm/valgrind/. The session (profile, decision, simulation) runs\n"
+            "natively beside the program in a process of its own, emm-session from that\n"
+            "directory, which Valgrind does not trace (in the program, slower, when it is\n"
+            "missing; --verbose says which). Its summary goes to the program's stderr. --capture\n"
             "auto does the same for a binary that neither links emm's coverage hooks\n"
             "(emm_sancov_executable) nor calls emm, when valgrind is on PATH and the tool\n"
             "was built; otherwise it preloads the shim, which picks sancov, api or fault.\n"
@@ -270,7 +272,7 @@ int emm_cmd_run(int argc, char **argv)
      * samples), as the shim will start it. */
     if (emm_config_from_env(&cfg, get_env, (long)getpid(), given, &err) != EMM_OK)
         return cli_bad_value("run", &err);
-    emm_session_config sc = {&cfg, cfg.capture, argv[i], 0, {1, NULL, NULL}};
+    emm_session_config sc = {&cfg, cfg.capture, argv[i], 0, {1, NULL, NULL}, NULL};
     emm_session *probe;
     if (emm_session_new(&sc, &probe, &err) != EMM_OK)
         return cli_bad_value("run", &err);
@@ -330,8 +332,10 @@ int emm_cmd_run(int argc, char **argv)
     if (under_valgrind) {
         /* valgrind --tool=emm -q --trace-children=yes PROGRAM ARGS...: exec'd
          * programs are captured too, as LD_PRELOAD carries the shim for the
-         * other backends. */
-        static const char *const pre[] = {"valgrind", "--tool=emm", "-q", "--trace-children=yes"};
+         * other backends; not the session's own process, which runs
+         * natively beside the program (runtime/session_remote.c). */
+        static const char *const pre[] = {"valgrind", "--tool=emm", "-q", "--trace-children=yes",
+                                          "--trace-children-skip=*/emm-session"};
         size_t np = sizeof pre / sizeof *pre, na = (size_t)(argc - i);
         char **vargv = calloc(np + na + 1, sizeof *vargv);
         if (!vargv) {

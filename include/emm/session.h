@@ -43,6 +43,11 @@ typedef struct emm_session_config {
                                * to it (for tests and experiments with a table of one's own) */
     emm_threads threads;      /* the session's helper threads: how many (0: the online CPUs)
                                * and the hook that marks them (libemmshim.so's own) */
+    const char *server;       /* NULL: the session runs in this process. Else the path of
+                               * emm-session: the session runs there, a native process of its
+                               * own, and this handle forwards every call to it (the valgrind
+                               * capture, whose program runs under Valgrind). Its summary goes
+                               * to this process's stderr. */
 } emm_session_config;
 
 /* One captured access, as the capture backends record it: the address, the
@@ -144,6 +149,17 @@ EMM_API emm_status emm_session_decide(emm_session *s, emm_error *err);
 EMM_API emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err);
 
 EMM_API void emm_session_free(emm_session *s);
+
+/* In a child the program forked: the session is the parent's. A session in
+ * another process (config.server) lets go of its connection; every later
+ * call does nothing. Call it before anything else in the child. */
+EMM_API void emm_session_forked(emm_session *s);
+
+/* emm-session's body: serves one program's session over the socket `fd`
+ * (the other end is a handle made with config.server) until the program
+ * closes it. Returns when the program has gone; the session's outputs were
+ * written at its finish. */
+EMM_API emm_status emm_session_serve(int fd, emm_error *err);
 
 #ifdef __cplusplus
 }

@@ -116,6 +116,12 @@ int main(void)
     /* A C symbol, no demangler. */
     names("read_mesh.isra.0", NULL, "read_mesh", "read_mesh");
 
+    /* The shim's own frames are no site, under Valgrind too (its preload). */
+    CHECK(emm_tag_site_is_library("shim_rules_match", "/x/lib/libemmshim.so"));
+    CHECK(emm_tag_site_is_library("shim_rules_match",
+                                  "/x/lib/emm/valgrind/vgpreload_emm-amd64-linux.so"));
+    CHECK(!emm_tag_site_is_library("load_mesh", "/x/bin/smooth"));
+    CHECK(emm_tag_site_is_library("_ZNSt6vectorIiSaIiEE7reserveEm", "/x/bin/app"));
     CHECK(emm_tag_site_matches("reserve", "reserve", "OpenMesh::PropertyT::reserve"));
     CHECK(emm_tag_site_matches("PropertyT::reserve", "reserve", "OpenMesh::PropertyT::reserve"));
     CHECK(emm_tag_site_matches("OpenMesh::PropertyT::reserve", "reserve",

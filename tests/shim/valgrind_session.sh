@@ -1,0 +1,61 @@
+# The valgrind capture's session runs natively in its own process
+# (emm-session, beside the tool): the program's stdout and exit status are
+# its own, and it answers as the session inside the program does, which is
+# what runs when emm-session is not there (here: a VALGRIND_LIB without it).
+#   sh valgrind_session.sh SHIM WORKDIR EMM PROGRAM MESH
+. "$(dirname "$0")/lib.sh"
+unset EMM_STRATEGY
+EMM=$1; shift
+TOOLDIR=$(dirname "$EMM")/../lib/emm/valgrind
+[ -x "$TOOLDIR/emm-session" ] || fail "$TOOLDIR/emm-session is not built"
+TAG='vertices:site=load_mesh,stride=12,xyz=0:f32;triangles:site=load_mesh,stride=12,vidx=0:u32'
+EMM_TAG=$TAG; export EMM_TAG
+env -u LD_PRELOAD "$@" > "$WORK/native.out"; native_rc=$?
+
+# Its own process.
+"$EMM" run --capture valgrind --verbose --report "$WORK/own.json" -- "$@" \
+  > "$WORK/own.out" 2> "$WORK/own.err"; rc=$?
+[ $rc = $native_rc ] || { cat "$WORK/own.err" >&2; fail "exit status $rc, $native_rc natively"; }
+cmp -s "$WORK/native.out" "$WORK/own.out" || { cat "$WORK/own.err" >&2; fail "stdout differs"; }
+grep -q 'the session runs natively in its own process, .*/emm-session' "$WORK/own.err" ||
+  { cat "$WORK/own.err" >&2; fail "the session did not run in its own process"; }
+grep -q '^emm: answer: ' "$WORK/own.err" || { cat "$WORK/own.err" >&2; fail "no answer"; }
+
+# In the program: the tool's directory without emm-session.
+mkdir -p "$WORK/lib" || fail "mkdir"
+for f in "$TOOLDIR"/*; do
+  [ "$(basename "$f")" = emm-session ] || ln -s "$(readlink -f "$f")" "$WORK/lib/$(basename "$f")"
+done
+EMM_LOG=2 EMM_CAPTURE=valgrind EMM_REPORT="$WORK/inside.json" VALGRIND_LIB="$WORK/lib" \
+  valgrind --tool=emm -q "$@" > "$WORK/inside.out" 2> "$WORK/inside.err"; rc=$?
+[ $rc = $native_rc ] || { cat "$WORK/inside.err" >&2; fail "exit status $rc in the program, $native_rc natively"; }
+cmp -s "$WORK/native.out" "$WORK/inside.out" || fail "stdout differs with the session in the program"
+grep -q 'the session runs natively' "$WORK/inside.err" && fail "emm-session ran though it is not there"
+grep -q '^emm: answer: ' "$WORK/inside.err" || { cat "$WORK/inside.err" >&2; fail "no answer in the program"; }
+
+# The same answer, records and transfers. (Cycles differ: in the program the
+# session's own calls into the C library count as the program's work.)
+python3 - "$WORK/own.json" "$WORK/inside.json" <<'PY' || fail "the two sessions answer differently"
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+same = lambda r: (r['strategy'], r['accesses'], r.get('dma'), r.get('emm'))
+checks = [
+    ('strategy', a['strategy'], b['strategy']),
+    ('pattern', a['pattern'], b['pattern']),
+    ('coverage', a['coverage'], b['coverage']),
+    ('mesh', a['mesh'], b['mesh']),
+    ('decision.predicted', a['decision']['predicted'], b['decision']['predicted']),
+    ('results', [same(r) for r in a['results']], [same(r) for r in b['results']]),
+]
+bad = [name for name, x, y in checks if x != y]
+for name in bad:
+    print('differs:', name, file=sys.stderr)
+sys.exit(1 if bad else 0)
+PY
+
+# Started by hand, it says what it is for.
+"$TOOLDIR/emm-session" > "$WORK/hand.out" 2> "$WORK/hand.err"; rc=$?
+[ $rc = 2 ] || fail "emm-session by hand: exit status $rc, not 2"
+[ "$(wc -l < "$WORK/hand.err")" = 1 ] && grep -q 'libemmshim.so starts it' "$WORK/hand.err" ||
+  fail "emm-session by hand: not one line saying what it is"
+echo "valgrind_session: ok"
