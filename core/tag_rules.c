@@ -21,7 +21,7 @@
  * least one record): the shim's fast path skips the unwinding for the small
  * blocks that make up most allocations. */
 #define DEFAULT_MIN 4096u
-static bool parse_field(const char *v, size_t len, bool vertices, uint32_t *offset,
+static bool parse_field(const char *v, size_t len, bool coordinates, uint32_t *offset,
                         emm_scalar *type)
 {
     char buf[64];
@@ -37,17 +37,17 @@ static bool parse_field(const char *v, size_t len, bool vertices, uint32_t *offs
     if (!emm_parse_u64(buf, &off) || off > UINT32_MAX)
         return false;
     const char *t = colon + 1;
-    if (vertices && strcmp(t, "f32") == 0)
+    if (coordinates && strcmp(t, "f32") == 0)
         *type = EMM_F32;
-    else if (vertices && strcmp(t, "f64") == 0)
+    else if (coordinates && strcmp(t, "f64") == 0)
         *type = EMM_F64;
-    else if (!vertices && strcmp(t, "i32") == 0)
+    else if (!coordinates && strcmp(t, "i32") == 0)
         *type = EMM_I32;
-    else if (!vertices && strcmp(t, "u32") == 0)
+    else if (!coordinates && strcmp(t, "u32") == 0)
         *type = EMM_U32;
-    else if (!vertices && strcmp(t, "i64") == 0)
+    else if (!coordinates && strcmp(t, "i64") == 0)
         *type = EMM_I64;
-    else if (!vertices && strcmp(t, "u16") == 0)
+    else if (!coordinates && strcmp(t, "u16") == 0)
         *type = EMM_U16;
     else
         return false;
@@ -65,6 +65,34 @@ static bool is_key(const char *p, size_t kl, const char *key)
     return kl == strlen(key) && memcmp(p, key, kl) == 0;
 }
 
+/* The bytes a block must be a whole number of: a record, three column
+ * entries, or with n= the whole block. */
+static uint64_t rule_unit(const emm_tag_rule *r)
+{
+    if (r->shape != EMM_TAG_COLUMNS)
+        return r->stride;
+    return 3 * (uint64_t)r->stride * (r->n ? r->n : 1);
+}
+
+static uint64_t default_min(const emm_tag_rule *r)
+{
+    uint64_t u = rule_unit(r);
+    return u > DEFAULT_MIN ? u : DEFAULT_MIN;
+}
+
+int emm_tag_rule_fits(const emm_tag_rule *r, uint64_t size)
+{
+    uint64_t u = rule_unit(r);
+    return size > 0 && (r->shape == EMM_TAG_COLUMNS && r->n ? size == u : size % u == 0);
+}
+
+/* The scalars a record (an entry) holds from its offset: three in a row,
+ * one of a column, a soup's nine. */
+static unsigned rule_scalars(const emm_tag_rule *r)
+{
+    return r->shape == EMM_TAG_SOUP ? 9 : r->shape == EMM_TAG_COLUMNS ? 1 : 3;
+}
+
 /* One rule, text[0..len). */
 static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_error *err)
 {
@@ -72,17 +100,27 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
     memset(r, 0, sizeof *r);
     const char *colon = memchr(text, ':', len);
     if (!colon)
-        return emm_fail(err, EMM_ERR_INVALID, "rule '%s' has no KIND: (vertices: or triangles:)",
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "rule '%s' has no KIND: (vertices:, triangles: or soup:)",
                         emm_clip(text, len, q));
     size_t klen = (size_t)(colon - text);
-    if (is_key(text, klen, "vertices"))
+    if (is_key(text, klen, "vertices")) {
         r->kind = EMM_ARRAY_VERTICES;
-    else if (is_key(text, klen, "triangles"))
+    } else if (is_key(text, klen, "triangles")) {
         r->kind = EMM_ARRAY_TRIANGLES;
-    else
-        return emm_fail(err, EMM_ERR_INVALID, "unknown kind '%s' (expected vertices or triangles)",
+    } else if (is_key(text, klen, "soup")) {
+        r->kind = EMM_ARRAY_TRIANGLES;
+        r->shape = EMM_TAG_SOUP;
+    } else {
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "unknown kind '%s' (expected vertices, triangles or soup)",
                         emm_clip(text, klen, q));
-    bool vertices = r->kind == EMM_ARRAY_VERTICES;
+    }
+    bool vertices = r->kind == EMM_ARRAY_VERTICES, soup = r->shape == EMM_TAG_SOUP;
+    const char *field = soup ? "corners" : vertices ? "xyz" : "vidx";
+    const char *field_help = soup ? "corners=OFFSET:f32|f64"
+                             : vertices ? "xyz=OFFSET:f32|f64"
+                                        : "vidx=OFFSET:i32|u32|u16|i64";
     bool have_min = false, have_field = false;
     const char *p = colon + 1, *end = text + len;
     while (p < end) {
@@ -96,7 +134,8 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
         const char *v = eq + 1;
         char num[32] = "";
         uint64_t x = 0;
-        bool numeric = is_key(p, kl, "min") || is_key(p, kl, "nth") || is_key(p, kl, "stride");
+        bool numeric = is_key(p, kl, "min") || is_key(p, kl, "nth") ||
+                       is_key(p, kl, "stride") || (is_key(p, kl, "n") && !soup);
         if (numeric) {
             if (vl == 0 || vl >= sizeof num)
                 return emm_fail(err, EMM_ERR_INVALID, "'%s' needs a number", emm_clip(p, plen, q));
@@ -126,39 +165,58 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
                 return emm_fail(err, EMM_ERR_INVALID, "'%s' is not a record size in bytes",
                                 emm_clip(p, plen, q));
             r->stride = (uint32_t)x;
-        } else if (is_key(p, kl, "xyz") && vertices) {
-            if (!parse_field(v, vl, true, &r->offset, &r->type))
-                return emm_fail(err, EMM_ERR_INVALID, "'%s': expected xyz=OFFSET:f32|f64",
+        } else if (is_key(p, kl, "order") && !soup) {
+            if (vl == 7 && memcmp(v, "records", 7) == 0)
+                r->shape = EMM_TAG_RECORDS;
+            else if (vl == 7 && memcmp(v, "columns", 7) == 0)
+                r->shape = EMM_TAG_COLUMNS;
+            else
+                return emm_fail(err, EMM_ERR_INVALID, "'%s': expected order=records|columns",
                                 emm_clip(p, plen, q));
-            have_field = true;
-        } else if (is_key(p, kl, "vidx") && !vertices) {
-            if (!parse_field(v, vl, false, &r->offset, &r->type))
-                return emm_fail(err, EMM_ERR_INVALID, "'%s': expected vidx=OFFSET:i32|u32|u16|i64",
+        } else if (is_key(p, kl, "n") && !soup) {
+            if (!emm_parse_u64(num, &x) || x == 0)
+                return emm_fail(err, EMM_ERR_INVALID, "'%s' is not a count of records from 1",
                                 emm_clip(p, plen, q));
+            r->n = x;
+        } else if (is_key(p, kl, field)) {
+            if (!parse_field(v, vl, vertices || soup, &r->offset, &r->type))
+                return emm_fail(err, EMM_ERR_INVALID, "'%s': expected %s", emm_clip(p, plen, q),
+                                field_help);
             have_field = true;
         } else {
             return emm_fail(err, EMM_ERR_INVALID, "unknown key in '%s' (%s rules take %s)",
-                            emm_clip(p, plen, q), vertices ? "vertices" : "triangles",
-                            vertices ? "site, min, nth, stride, xyz"
-                                     : "site, min, nth, stride, vidx");
+                            emm_clip(p, plen, q), soup ? "soup" : vertices ? "vertices" : "triangles",
+                            soup       ? "site, min, nth, stride, corners"
+                            : vertices ? "site, min, nth, stride, order, n, xyz"
+                                       : "site, min, nth, stride, order, n, vidx");
         }
         p = comma ? comma + 1 : end;
     }
+    if (!have_field)
+        return emm_fail(err, EMM_ERR_INVALID, "rule '%s' needs %s", emm_clip(text, len, q),
+                        field_help);
+    bool columns = r->shape == EMM_TAG_COLUMNS;
+    if (r->n && !columns)
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "rule '%s': n= counts the entries of a column: it needs order=columns",
+                        emm_clip(text, len, q));
+    /* A column's entries are its scalars, unless stride= says otherwise. */
+    if (r->stride == 0 && columns)
+        r->stride = (uint32_t)scalar_size(r->type);
     if (r->stride == 0)
         return emm_fail(err, EMM_ERR_INVALID, "rule '%s' needs stride=BYTES", emm_clip(text, len, q));
-    if (!have_field)
+    if ((uint64_t)r->offset + rule_scalars(r) * scalar_size(r->type) > r->stride)
         return emm_fail(err, EMM_ERR_INVALID,
-                        vertices ? "rule '%s' needs xyz=OFFSET:f32|f64"
-                                 : "rule '%s' needs vidx=OFFSET:i32|u32|u16|i64",
+                        soup      ? "rule '%s': the nine corner coordinates do not fit in stride bytes"
+                        : columns ? "rule '%s': a column's scalar does not fit in stride bytes"
+                                  : "rule '%s': the three fields do not fit in stride bytes",
                         emm_clip(text, len, q));
-    if ((uint64_t)r->offset + 3 * scalar_size(r->type) > r->stride)
-        return emm_fail(err, EMM_ERR_INVALID,
-                        "rule '%s': the three fields do not fit in stride bytes",
-                        emm_clip(text, len, q));
+    if (r->n > UINT64_MAX / 3 / r->stride)
+        return emm_fail(err, EMM_ERR_INVALID, "rule '%s': n= is too large", emm_clip(text, len, q));
     if (!have_min)
-        r->min = r->stride > DEFAULT_MIN ? r->stride : DEFAULT_MIN;
-    if (r->min < r->stride)
-        r->min = r->stride;
+        r->min = default_min(r);
+    if (r->min < rule_unit(r))
+        r->min = rule_unit(r);
     return EMM_OK;
 }
 
@@ -202,32 +260,50 @@ static const char *scalar_name(emm_scalar t)
 
 void emm_tag_rule_format(const emm_tag_rule *r, char *out, size_t cap)
 {
-    bool vertices = r->kind == EMM_ARRAY_VERTICES;
-    char site[EMM_TAG_SITE_MAX + 8] = "", nth[32] = "", min[32] = "";
+    bool vertices = r->kind == EMM_ARRAY_VERTICES, soup = r->shape == EMM_TAG_SOUP;
+    char site[EMM_TAG_SITE_MAX + 8] = "", nth[32] = "", min[32] = "", order[48] = "";
     if (r->site[0])
         snprintf(site, sizeof site, "site=%s,", r->site);
     if (r->nth)
         snprintf(nth, sizeof nth, "nth=%llu,", (unsigned long long)r->nth);
-    uint64_t def = r->stride > DEFAULT_MIN ? r->stride : DEFAULT_MIN;
-    if (r->min != def)
+    if (r->min != default_min(r))
         snprintf(min, sizeof min, "min=%llu,", (unsigned long long)r->min);
-    snprintf(out, cap, "%s:%s%s%sstride=%u,%s=%u:%s", vertices ? "vertices" : "triangles", site,
-             min, nth, r->stride, vertices ? "xyz" : "vidx", r->offset, scalar_name(r->type));
+    if (r->shape == EMM_TAG_COLUMNS && r->n)
+        snprintf(order, sizeof order, "order=columns,n=%llu,", (unsigned long long)r->n);
+    else if (r->shape == EMM_TAG_COLUMNS)
+        snprintf(order, sizeof order, "order=columns,");
+    snprintf(out, cap, "%s:%s%s%s%sstride=%u,%s=%u:%s",
+             soup ? "soup" : vertices ? "vertices" : "triangles", site, min, nth, order,
+             r->stride, soup ? "corners" : vertices ? "xyz" : "vidx", r->offset,
+             scalar_name(r->type));
 }
 
 void emm_tag_rules_help(FILE *out)
 {
     fprintf(out,
-            "EMM_TAG rules are split by ';', each KIND:key=value,... with KIND vertices or\n"
-            "triangles. Selectors: site=FUNCTION (the function that makes the allocation,\n"
-            "looking past allocator and C++ standard-library frames such as std::vector's),\n"
-            "min=BYTES (K/M/G; default max(stride, 4K)), nth=N (the Nth block the other\n"
-            "selectors select, from 1). Record: stride=BYTES (required), xyz=OFFSET:f32|f64\n"
-            "(vertices), vidx=OFFSET:i32|u32|u16|i64 (triangles). Count = block size / stride;\n"
-            "a block must be a whole number of records. A rule with site= follows the first\n"
-            "allocation call in that function it selects (a growing std::vector reallocates\n"
-            "from that same call); the function's other allocations go to later rules, so\n"
-            "list the rules in the order the program allocates the arrays.\n");
+            "EMM_TAG rules are split by ';', each KIND:key=value,... with KIND vertices,\n"
+            "triangles or soup. Selectors: site=FUNCTION (the function that makes the\n"
+            "allocation, looking past allocator and C++ standard-library frames such as\n"
+            "std::vector's), min=BYTES (K/M/G; default max(one record, 4K)), nth=N (the Nth\n"
+            "block the other selectors select, from 1). Record: stride=BYTES (required;\n"
+            "optional with order=columns), xyz=OFFSET:f32|f64 (vertices),\n"
+            "vidx=OFFSET:i32|u32|u16|i64 (triangles). Count = block size / stride; a block\n"
+            "must be a whole number of records. A rule with site= follows the first\n"
+            "allocation call in that function it selects (a growing std::vector\n"
+            "reallocates from that same call); the function's other allocations go to\n"
+            "later rules, so list the rules in the order the program allocates the arrays.\n"
+            "Column-major (libigl/Eigen V and F): order=columns (default order=records)\n"
+            "says the block holds n x's, then n y's, then n z's (for triangles n first\n"
+            "corners, then n second, then n third), each entry stride bytes (default: the\n"
+            "scalar's size) with its scalar at OFFSET; an access to any column is that\n"
+            "element's. n=N (optional) says how many: a block that is not 3*N*stride bytes\n"
+            "is not tagged. E.g. vertices:site=load,order=columns,xyz=0:f64;\n"
+            "triangles:site=load,order=columns,vidx=0:i32. x, y and z in three separate\n"
+            "blocks are not supported.\n"
+            "Triangle soup (STL facets): soup:stride=BYTES,corners=OFFSET:f32|f64, each\n"
+            "record a triangle whose three corners are nine coordinates in a row at OFFSET\n"
+            "(binary STL: soup:stride=50,corners=12:f32); corners at exactly the same\n"
+            "position are one vertex. An access anywhere in a record is its triangle's.\n");
 }
 
 /* ---- call sites ------------------------------------------------------------ */
@@ -389,6 +465,22 @@ static size_t common(const char *a, const char *b)
     return best;
 }
 
+/* What is wrong with a block of `size` bytes for rule r, as ", not whole
+ * records", or "" when it fits. */
+static const char *misfit(const emm_tag_rule *r, uint64_t size, char *buf, size_t cap)
+{
+    if (emm_tag_rule_fits(r, size))
+        return "";
+    if (r->shape != EMM_TAG_COLUMNS)
+        return ", not whole records";
+    if (r->n)
+        snprintf(buf, cap, ", not 3 columns of n=%llu entries of %u bytes (%llu bytes)",
+                 (unsigned long long)r->n, r->stride, (unsigned long long)rule_unit(r));
+    else
+        snprintf(buf, cap, ", not 3 columns of whole %u-byte entries", r->stride);
+    return buf;
+}
+
 void emm_tag_unmatched_message(const emm_tag_rule *r, size_t index,
                                const emm_tag_site_seen *seen, size_t nseen, char *out,
                                size_t cap)
@@ -407,13 +499,14 @@ void emm_tag_unmatched_message(const emm_tag_rule *r, size_t index,
         return;
     }
     bool taken[64] = {false};
+    char why[96];
     for (int k = 0; k < 3 && (size_t)k < nseen; k++) {
         size_t best = SIZE_MAX;
         long best_score = -1;
         for (size_t i = 0; i < nseen && i < 64; i++) {
             if (taken[i])
                 continue;
-            bool whole = seen[i].largest % r->stride == 0;
+            bool whole = emm_tag_rule_fits(r, seen[i].largest);
             long name = (long)(r->site[0] ? common(r->site, seen[i].name) : 0);
             long score = (name < 255 ? name : 255) * (1L << 40) + (whole ? 1L << 32 : 0) +
                          (long)(seen[i].largest >> 8 < (1u << 31) ? seen[i].largest >> 8
@@ -430,7 +523,7 @@ void emm_tag_unmatched_message(const emm_tag_rule *r, size_t index,
                      k == 0 ? "; sites seen, closest first: " : ", ", seen[best].name,
                      (unsigned long long)seen[best].count, seen[best].count == 1 ? "" : "s",
                      (unsigned long long)seen[best].largest,
-                     seen[best].largest % r->stride ? ", not whole records" : "");
+                     misfit(r, seen[best].largest, why, sizeof why));
         if (w < 0 || (size_t)w >= cap - used)
             return;
         used += (size_t)w;

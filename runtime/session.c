@@ -140,9 +140,9 @@ static emm_session_state public_state(const emm_session *s)
 
 /* ---- tagged arrays ------------------------------------------------------- */
 
-static bool valid_field(emm_array_kind kind, emm_scalar type)
+static bool valid_field(emm_array_kind kind, emm_tag_shape shape, emm_scalar type)
 {
-    if (kind == EMM_ARRAY_VERTICES)
+    if (kind == EMM_ARRAY_VERTICES || shape == EMM_TAG_SOUP)
         return type == EMM_F32 || type == EMM_F64;
     if (kind == EMM_ARRAY_TRIANGLES)
         return type == EMM_I32 || type == EMM_U32 || type == EMM_I64 || type == EMM_U16;
@@ -162,10 +162,13 @@ static void drop_slot(emm_session *s, int i, bool keep)
     if ((s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE ||
          s->phase == PHASE_DEFERRED) &&
         (a->refs > 0 || keep) && !a->snap && bytes) {
-        size_t sb = 3 * session_scalar_bytes(a->type);
-        a->snap = malloc(a->count * sb);
-        for (uint64_t k = 0; a->snap && k < a->count; k++)
-            memcpy(a->snap + k * sb, bytes + k * a->stride + a->field, sb);
+        size_t sb = session_scalar_bytes(a->type);
+        unsigned ns = session_scalars(a);
+        unsigned char *snap = malloc(a->count * ns * sb);
+        for (uint64_t k = 0; snap && k < a->count; k++)
+            for (unsigned c = 0; c < ns; c++)
+                memcpy(snap + (k * ns + c) * sb, session_scalar_at(s, a, k, c), sb);
+        a->snap = snap;
     }
     free(a->view);
     a->view = NULL;
@@ -207,10 +210,21 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
     if (s->remote)
         return session_remote_tag(s, kind, base, count, stride, field_offset, type, rule);
     uint64_t lo = (uint64_t)(uintptr_t)base, span;
+    /* A rule's shape: a column-major block's `count` entries are three
+     * columns of count / 3. */
+    emm_tag_shape shape =
+        rule >= 0 && (size_t)rule < s->cfg.tags.n ? s->cfg.tags.rule[rule].shape : EMM_TAG_RECORDS;
+    uint64_t plane = 0;
+    if (shape == EMM_TAG_COLUMNS) {
+        count /= 3;
+        plane = (uint64_t)count * stride;
+    }
+    unsigned field_scalars = shape == EMM_TAG_SOUP ? 9 : shape == EMM_TAG_COLUMNS ? 1 : 3;
     if (s->phase == PHASE_FAILED || s->phase == PHASE_DONE || !base || count == 0 ||
-        stride == 0 || !valid_field(kind, type) || field_offset > stride ||
-        3 * session_scalar_bytes(type) > stride - field_offset ||
-        __builtin_mul_overflow((uint64_t)count, (uint64_t)stride, &span) ||
+        stride == 0 || (plane && stride > UINT32_MAX / 3) || !valid_field(kind, shape, type) ||
+        field_offset > stride ||
+        field_scalars * session_scalar_bytes(type) > stride - field_offset ||
+        __builtin_mul_overflow((uint64_t)count, (uint64_t)stride * (plane ? 3 : 1), &span) ||
         lo > UINT64_MAX - span)
         return -1;
     drop_overlaps(s, lo, lo + span, -1);
@@ -229,7 +243,7 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
         for (int i = 0; i < s->narrays && tidx < 0; i++) {
             session_array *a = &s->arrays[i];
             if (a->live || a->trace_index < 0 || a->kind != kind || a->stride != stride ||
-                a->field != field_offset || a->type != type)
+                a->field != field_offset || a->type != type || a->shape != shape)
                 continue;
             bool bound = false;
             for (int j = 0; j < s->narrays; j++)
@@ -256,6 +270,8 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
     a->stride = stride;
     a->field = field_offset;
     a->type = type;
+    a->shape = shape;
+    a->plane = plane;
     a->live = true;
     a->refs = 0;
     a->snap = NULL;
@@ -268,7 +284,7 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
     s->tagged_records += count;
     if (tidx >= 0 && a->count > s->tarrays[tidx].count) {
         a->count = s->tarrays[tidx].count; /* later elements are not in the trace */
-        a->end = lo + a->count * stride;
+        a->end = session_array_end(a);
     }
     return slot;
 }
@@ -283,7 +299,10 @@ emm_session_state emm_session_move(emm_session *s, const void *old, const void *
         session_array *a = &s->arrays[i];
         if (!a->live || a->base != from)
             continue;
-        if (!base || count == 0 || __builtin_mul_overflow((uint64_t)count, a->stride, &span) ||
+        if (a->shape == EMM_TAG_COLUMNS)
+            count /= 3; /* entries: three columns */
+        if (!base || count == 0 ||
+            __builtin_mul_overflow((uint64_t)count, session_record_bytes(a), &span) ||
             lo > UINT64_MAX - span) {
             drop_slot(s, i, false);
             break;
@@ -293,6 +312,8 @@ emm_session_state emm_session_move(emm_session *s, const void *old, const void *
             s->tagged_records += count - a->count;
         a->base = lo;
         a->count = count;
+        if (a->plane)
+            a->plane = count * a->stride;
         a->moves++;
         free(a->view); /* of the old block: the program sends the new one when needed */
         a->view = NULL;
@@ -300,7 +321,7 @@ emm_session_state emm_session_move(emm_session *s, const void *old, const void *
             a->count = s->tarrays[a->trace_index].count; /* later elements are not in the trace */
         if (a->top > a->count)
             a->top = a->count;
-        a->end = lo + a->count * a->stride;
+        a->end = session_array_end(a);
         break;
     }
     return public_state(s);
@@ -377,11 +398,19 @@ static inline bool convert(emm_session *s, const emm_raw_access *raw, emm_trace_
     if (i < 0 || bytes == 0)
         return false;
     session_array *a = &s->arrays[i];
-    uint64_t rel = raw->addr - a->base;
+    uint64_t rel = raw->addr - a->base, column = 0;
+    if (a->plane) {
+        /* Column-major: the same element in each of the three columns,
+         * its x, y, z entries one record of the trace. */
+        column = rel / a->plane;
+        rel -= column * a->plane;
+    }
     r->element = rel / a->stride;
+    if (r->element >= a->count)
+        return false; /* a column's entries past the records in use */
     if (r->element >= a->top)
         a->top = r->element + 1;
-    r->offset = (uint32_t)(rel - r->element * a->stride);
+    r->offset = (uint32_t)(rel - r->element * a->stride + column * a->stride);
     r->array = (uint32_t)i;
     /* A trace record stays within one record of its array (trace.h): a
      * wider access, which only a tag with a stride smaller than the

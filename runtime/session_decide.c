@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "error.h"
+#include "parse.h"
 
 static double read_coord(const unsigned char *p, emm_scalar t)
 {
@@ -112,8 +113,113 @@ static void shrink_to(session_array *a, uint64_t count)
 {
     if (count < a->count && !a->snap) {
         a->count = count;
-        a->end = a->base + count * a->stride;
+        a->end = session_array_end(a);
     }
+}
+
+/* Reads the three coordinates of record i of array a into p: a vertex's
+ * (corner < 0), or a soup's corner (0..2); a value that cannot be a
+ * coordinate refuses the array in one line (`origin` names it). */
+static emm_status read_position(emm_session *s, const char *origin, session_array *a,
+                                uint64_t i, int corner, double *p, emm_error *err)
+{
+    static const char axis[] = "xyz";
+    unsigned first = corner < 0 ? 0 : 3 * (unsigned)corner;
+    for (unsigned c = 0; c < 3; c++) {
+        p[c] = read_coord(session_scalar_at(s, a, i, first + c), a->type);
+        if (plausible(p[c], a->type))
+            continue;
+        char shape[96], what[64];
+        if (a->plane)
+            snprintf(shape, sizeof shape, "3 columns of %llu entries of %llu bytes",
+                     (unsigned long long)a->count, (unsigned long long)a->stride);
+        else
+            snprintf(shape, sizeof shape, "%llu records of %llu bytes",
+                     (unsigned long long)a->count, (unsigned long long)a->stride);
+        if (corner < 0)
+            snprintf(what, sizeof what, "vertex %llu", (unsigned long long)i);
+        else
+            snprintf(what, sizeof what, "triangle %llu's corner %d", (unsigned long long)i,
+                     corner + 1);
+        return emm_fail(err, EMM_ERR_MESH,
+                        "%s: %s: the block at 0x%llx (%s) is refused: %s has %c = %g, not a "
+                        "coordinate (is stride or %s's offset or type wrong?)",
+                        s->program, origin, (unsigned long long)a->base, shape, what, axis[c],
+                        p[c], a->shape == EMM_TAG_SOUP ? "corners" : "xyz");
+    }
+    return EMM_OK;
+}
+
+/* A triangle soup (an EMM_TAG soup: rule): each record is a triangle whose
+ * three corners are its own coordinates, as STL facets are. The geometry's
+ * vertices are the corners, those at exactly the same position (-0 and 0
+ * alike) one vertex: the layouts then see the connectivity an indexed mesh
+ * of the same surface has. */
+static emm_status read_soup(emm_session *s, session_array *t, emm_error *err)
+{
+    char to[512];
+    session_origin(s, t, to, sizeof to);
+    if (!session_readable(s, t))
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "%s: the tagged arrays' contents never reached the session's process",
+                        s->program);
+    uint64_t nt = in_use(t);
+    if (nt > INT32_MAX / 3)
+        return emm_fail(err, EMM_ERR_RANGE, "%s: %s: the soup has %llu triangles (at most %d)",
+                        s->program, to, (unsigned long long)nt, INT32_MAX / 3);
+    size_t corners = (size_t)(3 * nt), cap = 16;
+    while (cap < 2 * corners)
+        cap *= 2;
+    int32_t *slot = malloc(cap * sizeof *slot);
+    s->xyz = malloc(3 * (corners ? corners : 1) * sizeof *s->xyz);
+    s->tri = malloc((corners ? corners : 1) * sizeof *s->tri);
+    if (!slot || !s->xyz || !s->tri) {
+        free(slot);
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
+    }
+    memset(slot, 0xff, cap * sizeof *slot); /* -1: empty */
+    uint64_t nv = 0;
+    for (uint64_t i = 0; i < nt; i++)
+        for (int k = 0; k < 3; k++) {
+            double p[3];
+            emm_status st = read_position(s, to, t, i, k, p, err);
+            if (st != EMM_OK) {
+                free(slot);
+                return st;
+            }
+            uint64_t h = 14695981039346656037ull;
+            for (int c = 0; c < 3; c++) {
+                if (p[c] == 0)
+                    p[c] = 0; /* -0 is 0 */
+                uint64_t bits;
+                memcpy(&bits, &p[c], sizeof bits);
+                h = (h ^ bits) * 1099511628211ull;
+                h ^= h >> 31;
+            }
+            size_t at = (size_t)h & (cap - 1);
+            while (slot[at] >= 0 && memcmp(s->xyz + 3 * (size_t)slot[at], p, sizeof p) != 0)
+                at = (at + 1) & (cap - 1);
+            if (slot[at] < 0) {
+                slot[at] = (int32_t)nv;
+                memcpy(s->xyz + 3 * nv, p, sizeof p);
+                nv++;
+            }
+            s->tri[3 * i + (uint64_t)k] = slot[at];
+        }
+    free(slot);
+    shrink_to(t, nt);
+    s->soup = true;
+    s->info.geometry.nv = nv;
+    s->info.geometry.xyz = s->xyz;
+    s->info.geometry.nt = nt;
+    s->info.geometry.tri = s->tri;
+    char a[32], b[32], c[32];
+    size_t used = strlen(s->pick_note);
+    snprintf(s->pick_note + used, sizeof s->pick_note - used,
+             "%sthe mesh is a triangle soup (%s): %s triangles, their %s corners %s vertices "
+             "(corners at the same position are one vertex)",
+             used ? "; " : "", to, emm_grouped(nt, a), emm_grouped(3 * nt, b), emm_grouped(nv, c));
+    return EMM_OK;
 }
 
 /* "Freeze the data": copies the positions and the triangles' vertex indices
@@ -124,6 +230,8 @@ static emm_status read_geometry(emm_session *s, emm_error *err)
 {
     int gv = mesh_array(s, EMM_ARRAY_VERTICES), gt = mesh_array(s, EMM_ARRAY_TRIANGLES);
     char vo[512], to[512];
+    if (gt >= 0 && s->arrays[gt].shape == EMM_TAG_SOUP)
+        return read_soup(s, &s->arrays[gt], err);
     if (gv < 0)
         return emm_fail(err, EMM_ERR_INVALID,
                         "%s: no vertex array was tagged (emm_tag_vertices or an EMM_TAG "
@@ -145,9 +253,8 @@ static emm_status read_geometry(emm_session *s, emm_error *err)
         if (!s->tri)
             return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
         for (uint64_t i = 0; i < nt; i++) {
-            const unsigned char *p = session_field_at(s, t, i);
-            for (int c = 0; c < 3; c++) {
-                int64_t x = read_index(p + (size_t)c * session_scalar_bytes(t->type), t->type);
+            for (unsigned c = 0; c < 3; c++) {
+                int64_t x = read_index(session_scalar_at(s, t, i, c), t->type);
                 if (x < 0 || (uint64_t)x >= v->count || x > INT32_MAX) {
                     /* Blame the array that changed, when one did. */
                     const char *why = v->moves || t->moves
@@ -182,21 +289,10 @@ static emm_status read_geometry(emm_session *s, emm_error *err)
     s->xyz = malloc(3 * (nv ? nv : 1) * sizeof *s->xyz);
     if (!s->xyz)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
-    static const char axis[] = "xyz";
     for (uint64_t i = 0; i < nv; i++) {
-        const unsigned char *p = session_field_at(s, v, i);
-        for (int c = 0; c < 3; c++) {
-            double x = read_coord(p + (size_t)c * session_scalar_bytes(v->type), v->type);
-            if (!plausible(x, v->type))
-                return emm_fail(err, EMM_ERR_MESH,
-                                "%s: %s: the block at 0x%llx (%llu records of %llu bytes) is "
-                                "refused: vertex %llu has %c = %g, not a coordinate (is stride "
-                                "or xyz's offset or type wrong?)",
-                                s->program, vo, (unsigned long long)v->base,
-                                (unsigned long long)v->count, (unsigned long long)v->stride,
-                                (unsigned long long)i, axis[c], x);
-            s->xyz[3 * i + (uint64_t)c] = x;
-        }
+        emm_status st = read_position(s, vo, v, i, -1, s->xyz + 3 * i, err);
+        if (st != EMM_OK)
+            return st;
     }
     shrink_to(v, nv);
     s->info.geometry.nv = nv;
@@ -226,7 +322,9 @@ static emm_status freeze_arrays(emm_session *s, emm_error *err)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", s->program);
     for (int i = 0; i < s->narrays; i++) {
         session_array *a = &s->arrays[i];
-        uint64_t limit = a->kind == EMM_ARRAY_VERTICES ? s->info.geometry.nv
+        /* A soup's vertices are its corners: a vertex array beside it is
+         * other data. */
+        uint64_t limit = a->kind == EMM_ARRAY_VERTICES ? (s->soup ? 0 : s->info.geometry.nv)
                          : s->vertex_only           ? 0
                                                     : s->info.geometry.nt;
         a->trace_index = -1;
@@ -234,7 +332,8 @@ static emm_status freeze_arrays(emm_session *s, emm_error *err)
             continue;
         a->trace_index = (int32_t)s->ntarrays;
         s->tarrays[s->ntarrays++] = (emm_trace_array){
-            .kind = a->kind, .record_size = (uint32_t)a->stride, .count = a->count, .base = a->base};
+            .kind = a->kind, .record_size = (uint32_t)session_record_bytes(a), .count = a->count,
+            .base = a->base};
     }
     s->info.version = 1;
     s->info.narrays = s->ntarrays;

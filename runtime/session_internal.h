@@ -73,6 +73,10 @@ typedef struct session_array {
     uint64_t base, end;  /* [base, end) */
     uint64_t count, stride, field;
     emm_scalar type;
+    emm_tag_shape shape; /* records, columns or a soup (its EMM_TAG rule's; records for an
+                            emm_tag_* call) */
+    uint64_t plane;      /* columns: the bytes from the x column to the y column (the
+                            block's capacity of entries times stride); 0 otherwise */
     bool live;           /* tagged now */
     unsigned char *snap; /* the fields, copied when the array went away before the
                             decision while the window named it; else NULL */
@@ -148,7 +152,9 @@ struct emm_session {
     uint32_t ntarrays;
     double *xyz;
     int32_t *tri;
-    char pick_note[1024]; /* which of a rule's several arrays is the mesh, or "" */
+    char pick_note[1024]; /* which of a rule's several arrays is the mesh, what a soup's
+                             corners made, or "" */
+    bool soup;           /* the triangles are a soup's: the vertices are their corners */
     bool vertex_only;    /* no triangle array: the geometry's triangles are the vertices,
                             each (v, v, v), and the layouts cut cells of vertices */
     emm_trace_info info;
@@ -236,6 +242,27 @@ static inline size_t session_scalar_bytes(emm_scalar t)
     return t == EMM_U16 ? 2 : t == EMM_F32 || t == EMM_I32 || t == EMM_U32 ? 4 : 8;
 }
 
+/* The scalars a record holds at its field: three (coordinates, indices),
+ * or a soup's nine corner coordinates. */
+static inline unsigned session_scalars(const session_array *a)
+{
+    return a->shape == EMM_TAG_SOUP ? 9 : 3;
+}
+
+/* The bytes of one trace record of the array: a column-major array's
+ * three entries of an element (x, y, z) count as one record. */
+static inline uint64_t session_record_bytes(const session_array *a)
+{
+    return a->plane ? 3 * a->stride : a->stride;
+}
+
+/* One past the array's last byte: a column-major array's columns stay
+ * where they are, whatever count of records is in use. */
+static inline uint64_t session_array_end(const session_array *a)
+{
+    return a->base + (a->plane ? 3 * a->plane : a->count * a->stride);
+}
+
 /* The array's bytes: the program's memory, or the copy a program in another
  * process sent (NULL when it sent none). */
 static inline const unsigned char *session_bytes(emm_session *s, session_array *a)
@@ -247,14 +274,24 @@ static inline const unsigned char *session_bytes(emm_session *s, session_array *
     return s->foreign ? NULL : (const unsigned char *)(uintptr_t)a->base;
 }
 
-/* The address of record i's three scalars, in the program's memory (or the
- * copy of it) or in the slot's snapshot. The caller makes sure the array
- * is readable (session_readable). */
+/* The address of record i's first scalar, in the program's memory (or the
+ * copy of it) or in the slot's snapshot (which holds each record's scalars
+ * in a row). The caller makes sure the array is readable
+ * (session_readable). */
 static inline const unsigned char *session_field_at(emm_session *s, session_array *a, uint64_t i)
 {
     if (a->snap)
-        return a->snap + i * 3 * session_scalar_bytes(a->type);
+        return a->snap + i * session_scalars(a) * session_scalar_bytes(a->type);
     return session_bytes(s, a) + i * a->stride + a->field;
+}
+
+/* The address of scalar c (< session_scalars(a)) of record i: in a row, or
+ * for a column-major array in column c. */
+static inline const unsigned char *session_scalar_at(emm_session *s, session_array *a,
+                                                     uint64_t i, unsigned c)
+{
+    uint64_t step = a->plane && !a->snap ? a->plane : session_scalar_bytes(a->type);
+    return session_field_at(s, a, i) + c * step;
 }
 
 /* Whether the array's fields can be read: a snapshot, or its bytes. */

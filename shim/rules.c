@@ -243,9 +243,9 @@ int shim_rules_match(size_t size, const char **site)
             for (int k = 0; k <= f; k++)
                 path = (path ^ ip[k]) * 1099511628211ull;
             path |= 1;
-            /* Not the array, or a wrong stride: never tagged; the line at
-             * exit names the site's blocks that are not whole records. */
-            if (size % r->stride != 0)
+            /* Not the array, or a wrong stride (or n=): never tagged; the
+             * line at exit names the site's blocks that do not fit. */
+            if (!emm_tag_rule_fits(r, size))
                 continue;
             /* A rule follows the first call path it selects; the site's
              * other allocations are left to the later rules. */
@@ -255,7 +255,7 @@ int shim_rules_match(size_t size, const char **site)
                 expect != path)
                 continue;
             *site = name[f];
-        } else if (size % r->stride != 0) {
+        } else if (!emm_tag_rule_fits(r, size)) {
             continue;
         }
         if (r->nth && __atomic_add_fetch(&seen[i], 1, __ATOMIC_RELAXED) != r->nth)

@@ -52,16 +52,32 @@ EMM_API const char *emm_compare_name(emm_compare c);
 #define EMM_TAG_RULES_MAX 16
 #define EMM_TAG_SITE_MAX 128
 
+/* How a rule's block holds its records. */
+typedef enum emm_tag_shape {
+    EMM_TAG_RECORDS = 0, /* records of `stride` bytes, the three scalars in a row at `offset`
+                            (x y z x y z ...) */
+    EMM_TAG_COLUMNS,     /* order=columns: three columns of n entries of `stride` bytes, the
+                            block's first third the x's (or first corners), then the y's, then
+                            the z's (Eigen's column-major V and F); a scalar at `offset` in each
+                            entry */
+    EMM_TAG_SOUP         /* soup: triangle records of `stride` bytes holding their three
+                            corners inline, nine coordinates in a row at `offset` (STL facets) */
+} emm_tag_shape;
+
 /* One rule: which allocations are a mesh array (site, min, nth) and where
  * the coordinates or vertex indices sit in each record. */
 typedef struct emm_tag_rule {
-    emm_array_kind kind;          /* VERTICES or TRIANGLES */
+    emm_array_kind kind;          /* VERTICES or TRIANGLES (a soup's records are triangles) */
+    emm_tag_shape shape;
     char site[EMM_TAG_SITE_MAX];  /* a function on the allocation's stack; "" for any */
-    uint64_t min;                 /* the smallest block selected, in bytes (>= stride) */
+    uint64_t min;                 /* the smallest block selected, in bytes (>= one record) */
     uint64_t nth;                 /* only the nth block the other selectors select; 0: all */
-    uint32_t stride;              /* bytes per record */
-    uint32_t offset;              /* where the three scalars start in a record */
-    emm_scalar type;              /* f32|f64 for vertices, i32|u32|i64 for triangles */
+    uint64_t n;                   /* order=columns: entries per column (the block is then
+                                     3 * n * stride bytes); 0: the block's size says */
+    uint32_t stride;              /* bytes per record (per column entry for order=columns) */
+    uint32_t offset;              /* where the scalars start in a record (an entry) */
+    emm_scalar type;              /* f32|f64 for vertices and soups, i32|u32|u16|i64 for
+                                     triangles */
 } emm_tag_rule;
 
 typedef struct emm_tag_rules {
@@ -78,6 +94,12 @@ EMM_API emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm
 EMM_API void emm_tag_rule_format(const emm_tag_rule *r, char *out, size_t cap);
 /* The grammar, as `emm run --help` prints it. */
 EMM_API void emm_tag_rules_help(FILE *out);
+/* Whether a block of `size` bytes is what rule r describes: a whole number
+ * of records, or for order=columns three equal columns of whole entries (of
+ * n entries each when the rule gives n=). A block that is not is never
+ * tagged; the line at exit for a rule that matched nothing says why
+ * (emm_tag_unmatched_message). */
+EMM_API int emm_tag_rule_fits(const emm_tag_rule *r, uint64_t size);
 
 /* A function's name as a rule's site= spells it, from its symbol: compiler
  * clone suffixes (.constprop.0, .isra.0, .part.0, .cold) dropped, and a C++

@@ -1,7 +1,7 @@
 /* EMM_TAG's names and messages (core/tag_rules.c): the names a frame
  * answers to (a method of a class template by its own name, issue 14),
  * site= matching, a rule written back as it is spelled, u16 indices, and
- * the line a rule that matched nothing gets. */
+ * the line a rule that matched nothing gets; column-major and soup rules. */
 #include <string.h>
 
 #include "check.h"
@@ -13,6 +13,95 @@ static void names(const char *sym, const char *dm, const char *want_name, const 
     emm_tag_site_names(sym, dm, n, sizeof n, q, sizeof q);
     CHECKF(strcmp(n, want_name) == 0, "%s: name '%s', want '%s'", sym, n, want_name);
     CHECKF(strcmp(q, want_qual) == 0, "%s: qualified '%s', want '%s'", sym, q, want_qual);
+}
+
+/* text parses, is written back as `want` (NULL: as text), and that parses
+ * to the same rule. */
+static void round_trip(const char *text, const char *want, emm_tag_rule *out)
+{
+    emm_tag_rules rs, again;
+    emm_error err;
+    char back[256];
+    if (emm_tag_rules_parse(text, &rs, &err) != EMM_OK) {
+        CHECKF(0, "%s: %s", text, err.message);
+        return;
+    }
+    emm_tag_rule_format(&rs.rule[0], back, sizeof back);
+    CHECKF(strcmp(back, want ? want : text) == 0, "%s: written back as %s", text, back);
+    REQUIRE(emm_tag_rules_parse(back, &again, &err) == EMM_OK);
+    CHECKF(memcmp(&rs, &again, sizeof rs) == 0, "%s: %s parses to another rule", text, back);
+    *out = rs.rule[0];
+}
+
+/* text is refused with a message holding `want`. */
+static void refused(const char *text, const char *want)
+{
+    emm_tag_rules rs;
+    emm_error err;
+    CHECKF(emm_tag_rules_parse(text, &rs, &err) != EMM_OK, "%s: accepted", text);
+    CHECKF(strstr(err.message, want) != NULL, "%s: '%s' lacks '%s'", text, err.message, want);
+}
+
+/* Issue 14 item 5: column-major blocks (order=columns, n=) and triangle
+ * soups (soup:, corners=), parsed, written back, and the blocks they fit. */
+static void shapes(void)
+{
+    emm_tag_rule r = {0};
+    /* Eigen's V: the stride defaults to the scalar's size. */
+    round_trip("vertices:site=load,order=columns,xyz=0:f64",
+               "vertices:site=load,order=columns,stride=8,xyz=0:f64", &r);
+    CHECK(r.kind == EMM_ARRAY_VERTICES && r.shape == EMM_TAG_COLUMNS && r.stride == 8 &&
+          r.n == 0 && r.min == 4096);
+    CHECK(emm_tag_rule_fits(&r, 3 * 8 * 1000));
+    CHECK(!emm_tag_rule_fits(&r, 3 * 8 * 1000 + 8)); /* not three equal columns */
+    CHECK(!emm_tag_rule_fits(&r, 0));
+    /* Eigen's F with its count: only a block of exactly 3 * n entries. */
+    round_trip("triangles:order=columns,n=2000,vidx=0:i32",
+               "triangles:order=columns,n=2000,stride=4,vidx=0:i32", &r);
+    CHECK(r.kind == EMM_ARRAY_TRIANGLES && r.shape == EMM_TAG_COLUMNS && r.n == 2000 &&
+          r.min == 24000);
+    CHECK(emm_tag_rule_fits(&r, 24000));
+    CHECK(!emm_tag_rule_fits(&r, 48000) && !emm_tag_rule_fits(&r, 23988));
+    /* Columns of wider entries, the scalar inside each. */
+    round_trip("vertices:order=columns,stride=16,xyz=8:f32",
+               "vertices:order=columns,stride=16,xyz=8:f32", &r);
+    round_trip("vertices:order=records,stride=12,xyz=0:f32", "vertices:stride=12,xyz=0:f32", &r);
+    CHECK(r.shape == EMM_TAG_RECORDS);
+    /* Binary STL: 50-byte facets, the corners after the normal. */
+    round_trip("soup:site=read_stl,stride=50,corners=12:f32", NULL, &r);
+    CHECK(r.kind == EMM_ARRAY_TRIANGLES && r.shape == EMM_TAG_SOUP && r.offset == 12 &&
+          r.type == EMM_F32);
+    CHECK(emm_tag_rule_fits(&r, 50 * 100) && !emm_tag_rule_fits(&r, 50 * 100 + 2));
+    round_trip("soup:min=1M,stride=72,corners=0:f64", "soup:min=1048576,stride=72,corners=0:f64", &r);
+
+    refused("vertices:order=rows,stride=12,xyz=0:f32", "order=records|columns");
+    refused("vertices:stride=12,n=10,xyz=0:f32", "needs order=columns");
+    refused("vertices:order=columns,n=0,xyz=0:f32", "count of records");
+    refused("vertices:order=columns,stride=4,xyz=0:f64", "does not fit");
+    refused("vertices:order=columns,n=18446744073709551615,xyz=0:f64", "too large");
+    refused("soup:stride=50,corners=12:u32", "corners=OFFSET:f32|f64");
+    refused("soup:stride=47,corners=12:f32", "nine corner coordinates do not fit");
+    refused("soup:stride=50,xyz=12:f32", "soup rules take site, min, nth, stride, corners");
+    refused("soup:stride=50,order=columns,corners=12:f32", "unknown key");
+    refused("soup:corners=12:f32", "needs stride=");
+    refused("triangles:order=columns,corners=0:f32", "unknown key");
+    refused("triangles:order=columns", "needs vidx=");
+    refused("points:stride=12,xyz=0:f32", "vertices, triangles or soup");
+
+    /* The line for a column-major rule that matched nothing names the
+     * blocks that are not its three columns. */
+    emm_tag_rules rs;
+    emm_error err;
+    REQUIRE(emm_tag_rules_parse("vertices:site=load_mesh,order=columns,n=999,xyz=0:f64", &rs,
+                                &err) == EMM_OK);
+    emm_tag_site_seen seen = {"load_mesh", 2, 242424};
+    char line[1024];
+    emm_tag_unmatched_message(&rs.rule[0], 0, &seen, 1, line, sizeof line);
+    CHECKF(strstr(line, "EMM_TAG rule 1 (vertices:site=load_mesh,order=columns,n=999,stride=8,"
+                        "xyz=0:f64) matched no allocation; sites seen, closest first: load_mesh "
+                        "(2 blocks, up to 242424 bytes, not 3 columns of n=999 entries of 8 "
+                        "bytes (23976 bytes))") == line,
+           "%s", line);
 }
 
 int main(void)
@@ -75,5 +164,7 @@ int main(void)
            line);
     emm_tag_unmatched_message(&again.rule[0], 0, NULL, 0, line, sizeof line);
     CHECKF(strstr(line, "no allocation of 4096 bytes or more was seen"), "%s", line);
+
+    shapes();
     return check_done();
 }

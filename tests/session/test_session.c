@@ -4,8 +4,8 @@
  * from a table written here, that the totals cover window and rest (equal
  * to emm_replay of the same records), that EMM_TRACE replays to the same
  * numbers and holds the same records, the CSV, a window that never fills,
- * novelty, iteration windows, bad geometry, bad configuration, and reports
- * that are whole or absent. */
+ * novelty, iteration windows, bad geometry, bad configuration, reports
+ * that are whole or absent, and the column-major and soup shapes. */
 #include <errno.h>
 #include <math.h>
 #include <pthread.h>
@@ -757,6 +757,125 @@ static void test_tags(void)
     emm_session_free(s);
 }
 
+/* The records of the trace at `path` into out (at most cap), returning how
+ * many; its first two arrays, and its geometry when it is small. */
+static size_t read_records(const char *path, emm_trace_record *out, size_t cap,
+                           emm_trace_array *arrays, uint32_t *narrays, double *xyz, int32_t *tri,
+                           uint64_t *gnv, uint64_t *gnt)
+{
+    emm_error err;
+    emm_trace_reader *r;
+    REQUIRE(emm_trace_reader_open(path, &r, &err) == EMM_OK);
+    const emm_trace_info *info = emm_trace_reader_info(r);
+    *narrays = info->narrays;
+    for (uint32_t i = 0; i < info->narrays && i < 2; i++)
+        arrays[i] = info->arrays[i];
+    *gnv = info->geometry.nv;
+    *gnt = info->geometry.nt;
+    if (*gnv <= 8 && *gnt <= 8) {
+        memcpy(xyz, info->geometry.xyz, 3 * *gnv * sizeof *xyz);
+        memcpy(tri, info->geometry.tri, 3 * *gnt * sizeof *tri);
+    }
+    size_t n = 0, got;
+    while (n < cap && emm_trace_read(r, out + n, cap - n, &got, &err) == EMM_OK && got)
+        n += got;
+    emm_trace_reader_close(r);
+    return n;
+}
+
+/* Issue 14 item 5 through the API, as the shim drives it for a rule: a
+ * column-major block (order=columns) whose x, y and z columns are one
+ * element each, the trace record's offset naming the column; and a
+ * triangle soup (soup:) whose records are triangles, any byte of one that
+ * triangle's, its corners the geometry's vertices merged by position. */
+static void test_shapes(void)
+{
+    emm_error err;
+    emm_session *s;
+    emm_trace_record rec[16];
+    emm_trace_array arr[2];
+    uint32_t narr;
+    double xyz[24];
+    int32_t tri[24];
+    uint64_t gnv, gnt;
+
+    /* A square of two triangles, V and F column-major (libigl's). */
+    static double V[12] = {0, 1, 1, 0, /* x */ 0, 0, 1, 1, /* y */ 5, 6, 7, 8 /* z */};
+    static int32_t F[6] = {0, 0, /* first corners */ 1, 2, /* second */ 2, 3 /* third */};
+    emm_session_config c = base_config();
+    set_strategy("direct");
+    REQUIRE(emm_tag_rules_parse("vertices:order=columns,xyz=0:f64;"
+                                "triangles:order=columns,vidx=0:i32",
+                                &tcfg.tags, &err) == EMM_OK);
+    strcpy(tcfg.trace, "shapes.emmt");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    /* The shim hands a rule's block over as entries of `stride` bytes. */
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, V, 12, 8, 0, EMM_F64, 0) >= 0);
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_TRIANGLES, F, 6, 4, 0, EMM_I32, 1) >= 0);
+    uint64_t lo[4], hi[4];
+    CHECK(emm_session_ranges(s, lo, hi, 4) == 2 && lo[0] == (uintptr_t)V &&
+          hi[0] == (uintptr_t)(V + 12));
+    emm_raw_access a[] = {
+        {(uintptr_t)&V[4 + 2], 8, 0, 0}, /* vertex 2's y */
+        {(uintptr_t)&V[8 + 3], 8, 0, 0}, /* vertex 3's z */
+        {(uintptr_t)&V[1], 8, 0, 0},     /* vertex 1's x */
+        {(uintptr_t)&F[4 + 1], 4, 0, 0}, /* triangle 1's third corner */
+    };
+    emm_session_access(s, a, 4);
+    CHECKF(emm_session_decide(s, &err) == EMM_OK, "%s", err.message);
+    CHECKF(emm_session_finish(s, NULL, &err) == EMM_OK, "%s", err.message);
+    emm_session_free(s);
+    size_t n = read_records("shapes.emmt", rec, 16, arr, &narr, xyz, tri, &gnv, &gnt);
+    REQUIRE(n == 4 && narr == 2);
+    CHECK(arr[0].record_size == 24 && arr[0].count == 4 && arr[1].record_size == 12);
+    CHECK(rec[0].array == 0 && rec[0].element == 2 && rec[0].offset == 8);
+    CHECK(rec[1].array == 0 && rec[1].element == 3 && rec[1].offset == 16);
+    CHECK(rec[2].array == 0 && rec[2].element == 1 && rec[2].offset == 0);
+    CHECK(rec[3].array == 1 && rec[3].element == 1 && rec[3].offset == 8);
+    REQUIRE(gnv == 4 && gnt == 2);
+    for (int v = 0; v < 4; v++)
+        CHECKF(xyz[3 * v] == V[v] && xyz[3 * v + 1] == V[4 + v] && xyz[3 * v + 2] == V[8 + v],
+               "vertex %d: %g %g %g", v, xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]);
+    CHECK(tri[0] == 0 && tri[1] == 1 && tri[2] == 2 && tri[3] == 0 && tri[4] == 2 && tri[5] == 3);
+
+    /* The same square as a soup of 40-byte records: an id, then three
+     * corners of three floats; -0 and 0 are one position. */
+    struct facet {
+        int32_t id;
+        float c[3][3];
+    };
+    static struct facet soup[2] = {{7, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}},
+                                   {8, {{0, 0, 0}, {1, 1, -0.0f}, {0, 1, 0}}}};
+    c = base_config();
+    set_strategy("direct");
+    REQUIRE(emm_tag_rules_parse("soup:stride=40,corners=4:f32", &tcfg.tags, &err) == EMM_OK);
+    strcpy(tcfg.trace, "soup.emmt");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_TRIANGLES, soup, 2, 40, 4, EMM_F32, 0) >= 0);
+    emm_raw_access b[] = {
+        {(uintptr_t)&soup[1].id, 4, 0, 0},      /* triangle 1, not a corner */
+        {(uintptr_t)&soup[0].c[2][1], 4, 0, 0}, /* triangle 0's third corner's y */
+    };
+    emm_session_access(s, b, 2);
+    CHECKF(emm_session_decide(s, &err) == EMM_OK, "%s", err.message);
+    CHECKF(emm_session_finish(s, NULL, &err) == EMM_OK, "%s", err.message);
+    emm_session_free(s);
+    n = read_records("soup.emmt", rec, 16, arr, &narr, xyz, tri, &gnv, &gnt);
+    REQUIRE(n == 2 && narr == 1);
+    CHECK(arr[0].kind == EMM_ARRAY_TRIANGLES && arr[0].record_size == 40 && arr[0].count == 2);
+    CHECK(rec[0].element == 1 && rec[0].offset == 0);
+    CHECK(rec[1].element == 0 && rec[1].offset == 32);
+    REQUIRE(gnv == 4 && gnt == 2);
+    for (int t = 0; t < 2; t++)
+        for (int k = 0; k < 3; k++)
+            for (int d = 0; d < 3; d++)
+                CHECKF(xyz[3 * tri[3 * t + k] + d] == soup[t].c[k][d],
+                       "triangle %d corner %d: %g, not %g", t, k, xyz[3 * tri[3 * t + k] + d],
+                       (double)soup[t].c[k][d]);
+    CHECK(tri[3] == tri[0] && tri[4] == tri[2]); /* the shared edge's corners are shared */
+    memset(&tcfg.tags, 0, sizeof tcfg.tags);
+}
+
 int main(void)
 {
     setup();
@@ -772,6 +891,7 @@ int main(void)
     test_bad_config();
     test_bad_geometry();
     test_tags();
+    test_shapes();
     free(recs);
     free(vmem);
     free(tmem);
