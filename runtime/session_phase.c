@@ -129,7 +129,7 @@ static void evaluate(emm_session *s)
     emm_window_decision wd;
     emm_decide_options opt = {0, 0, &s->threads};
     if (decide_features_shared(s->table, s->machine, &s->info, s->probe, s->pn, f, n, s->program,
-                               &opt, s->layouts, &wd, &e) == EMM_OK) {
+                               &opt, s->layouts, s->decisions, &wd, &e) == EMM_OK) {
         p->has_best = true;
         p->best = wd.strategy;
         if (memcmp(&wd.strategy, &s->chosen, sizeof wd.strategy) != 0) {
