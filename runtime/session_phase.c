@@ -71,8 +71,10 @@ static void close_phase(emm_session *s, program_phase *p)
         return;
     p->chosen_span = model_total(s, 0) - p->chosen_at;
     p->best_span = model_total(s, p->model);
-    /* The phase's model runs on; the next phase measures from its own
-     * detection. Keep it from costing more: nothing else reads it. */
+    /* The next phase measures from its own detection, and nothing else
+     * reads this model (it is no model of the report's): it stops here
+     * instead of running on to the end of the run. */
+    emm_runner_retire(s->runner, p->model);
 }
 
 void session_phases_close(emm_session *s)
