@@ -470,38 +470,48 @@ emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
                              const emm_trace_record *recs, size_t n, const emm_threads *threads,
                              emm_sweep **out, emm_error *err)
 {
-    return sweep_records_shared(m, info, recs, n, threads, NULL, out, err);
+    return sweep_records_shared(m, info, recs, n, threads, NULL, false, out, err);
 }
 
 emm_status sweep_records_shared(const emm_machine *m, const emm_trace_info *info,
                                 const emm_trace_record *recs, size_t n,
                                 const emm_threads *threads, emm_model_share *share,
-                                emm_sweep **out, emm_error *err)
+                                bool offered_only, emm_sweep **out, emm_error *err)
 {
     *out = NULL;
     size_t count = emm_strategy_sweep(NULL, 0);
     emm_sweep *sw = calloc(1, sizeof *sw);
-    emm_strategy *s = calloc(count, sizeof *s);
+    emm_strategy *s = calloc(count, sizeof *s), *ran = calloc(count, sizeof *ran);
     emm_error *skipped = calloc(count, sizeof *skipped);
+    size_t *model_of = calloc(count, sizeof *model_of), nrun = 0;
     emm_runner *run = NULL;
     emm_status st = EMM_OK;
     if (sw) {
         sw->result = calloc(count, sizeof *sw->result);
         sw->ran = calloc(count, sizeof *sw->ran);
     }
-    if (!sw || !s || !skipped || !sw->result || !sw->ran) {
+    if (!sw || !s || !ran || !skipped || !model_of || !sw->result || !sw->ran) {
         st = emm_fail(err, EMM_ERR_NOMEM, "strategy sweep: out of memory");
         goto out;
     }
     emm_strategy_sweep(s, count);
     sw->count = count;
+    /* Strategies the machine does not offer are not simulated when only the
+     * offered ones are asked for (they stay ran = 0). */
+    for (size_t i = 0; i < count; i++) {
+        model_of[i] = SIZE_MAX;
+        if (!offered_only || emm_machine_offers(m, &s[i])) {
+            model_of[i] = nrun;
+            ran[nrun++] = s[i];
+        }
+    }
     if ((st = emm_runner_new_shared(threads, share, &run, err)) != EMM_OK ||
-        (st = emm_runner_add(run, m, s, count, info, skipped, err)) != EMM_OK)
+        (st = emm_runner_add(run, m, ran, nrun, info, skipped, err)) != EMM_OK)
         goto out;
     emm_runner_run(run, recs, n);
     uint64_t best = UINT64_MAX;
     for (size_t i = 0; i < count; i++) {
-        emm_model *model = emm_runner_model(run, i);
+        emm_model *model = model_of[i] == SIZE_MAX ? NULL : emm_runner_model(run, model_of[i]);
         sw->result[i].strategy = s[i];
         if (s[i].kind == EMM_STRATEGY_CACHE && s[i].layout == EMM_LAYOUT_ORIGINAL)
             sw->cache = i;
@@ -521,6 +531,8 @@ emm_status sweep_records_shared(const emm_machine *m, const emm_trace_info *info
 out:
     emm_runner_free(run);
     free(s);
+    free(ran);
+    free(model_of);
     free(skipped);
     if (st == EMM_OK)
         *out = sw;
@@ -823,7 +835,7 @@ static emm_status synth_sweep(decide_cache *c, const emm_machine *m, const emm_t
     emm_status st = emm_synth_records(mesh, so, arrays, name, &syn, &ns, err);
     if (st != EMM_OK)
         return st;
-    emm_status sst = sweep_records_shared(m, info, syn, ns, threads, share, S, e);
+    emm_status sst = sweep_records_shared(m, info, syn, ns, threads, share, true, S, e);
     free(syn);
     if (sst != EMM_ERR_NOMEM && (x = cache_add(c, CACHED_SWEEP, so, 0, m, arrays))) {
         x->st = sst;
@@ -984,7 +996,7 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
         return EMM_OK;
     if (st != EMM_OK)
         return st;
-    if (!S || sweep_records_shared(m, info, recs, n, threads, share, &W, &e) != EMM_OK) {
+    if (!S || sweep_records_shared(m, info, recs, n, threads, share, true, &W, &e) != EMM_OK) {
         st = e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
         goto done;
     }
@@ -1096,7 +1108,7 @@ emm_status decide_features_shared(const emm_table *t, const emm_machine *m,
             return st;
     }
     emm_sweep *sw = NULL;
-    st = sweep_records_shared(m, info, recs, n, threads, share, &sw, err);
+    st = sweep_records_shared(m, info, recs, n, threads, share, false, &sw, err);
     if (st == EMM_OK) {
         out->simulated = 1;
         out->how = EMM_DECIDED_WINDOW;

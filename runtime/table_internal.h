@@ -8,13 +8,18 @@
 #ifndef EMM_RUNTIME_TABLE_INTERNAL_H
 #define EMM_RUNTIME_TABLE_INTERNAL_H
 
+#include <stdbool.h>
+
 #include "emm/table.h"
 #include "share.h"
 
+/* emm_sweep_records with the share's layouts; offered_only: the strategies
+ * the machine does not offer are not simulated (ran = 0), for a caller
+ * that reads only the offered ones. */
 emm_status sweep_records_shared(const emm_machine *m, const emm_trace_info *info,
                                 const emm_trace_record *recs, size_t n,
                                 const emm_threads *threads, emm_model_share *share,
-                                emm_sweep **out, emm_error *err);
+                                bool offered_only, emm_sweep **out, emm_error *err);
 
 /* What a session's decisions over one trace share (runtime/table.c): the
  * geometry as a mesh, and each canonical traversal's profile and sweep,
