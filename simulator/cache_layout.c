@@ -26,6 +26,7 @@
 #include "model.h"
 
 #define NO_ARRAY UINT32_MAX
+#define NO_TRI UINT32_MAX
 
 typedef struct cache_layout_model {
     struct emm_model base;
@@ -37,12 +38,24 @@ typedef struct cache_layout_model {
     uint32_t *vcopy_cell;      /* by ascending cell */
     uint64_t *vcopy_addr;
     uint64_t *vhome_addr;      /* the home copy (an unused vertex's own record) */
+    uint32_t *tri_v;           /* triangle t's three vertices */
+    uint64_t *tri_vaddr;       /* and their copies in t's cell (every vertex of a triangle
+                                  has one there: layout.c, fill_vertices) */
     uint32_t cur_cell;         /* cell of the most recent triangle access */
+    uint32_t cur_tri;          /* that triangle, or NO_TRI */
     emm_cache cache;
 } cache_layout_model;
 
 static inline uint64_t vertex_addr(const cache_layout_model *m, uint64_t v)
 {
+    /* A vertex of the triangle just accessed: its copy in that triangle's
+     * cell, read off the triangle (warm) instead of the vertex's copies. */
+    if (m->cur_tri != NO_TRI) {
+        const uint32_t *tv = m->tri_v + 3 * (size_t)m->cur_tri;
+        for (int k = 0; k < 3; k++)
+            if (tv[k] == v)
+                return m->tri_vaddr[3 * (size_t)m->cur_tri + (size_t)k];
+    }
     uint32_t i = m->vcopy_start[v], end = m->vcopy_start[v + 1], cell = m->cur_cell;
     /* A vertex has copies in a handful of cells, sorted by cell. */
     for (; i < end && m->vcopy_cell[i] <= cell; i++)
@@ -60,6 +73,7 @@ static void cl_run(emm_model *model, const emm_trace_record *recs, size_t n)
         uint64_t addr;
         if (r->array == tarray) {
             m->cur_cell = m->tri_cell[r->element];
+            m->cur_tri = (uint32_t)r->element;
             addr = m->tri_addr[r->element] + r->offset;
         } else if (r->array == varray) {
             addr = vertex_addr(m, r->element) + r->offset;
@@ -74,6 +88,7 @@ static void cl_reset(emm_model *model)
 {
     cache_layout_model *m = (cache_layout_model *)model;
     m->cur_cell = EMM_LAYOUT_NONE;
+    m->cur_tri = NO_TRI;
     emm_cache_reset(&m->cache);
 }
 
@@ -202,12 +217,14 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
     }
     m->tri_addr = malloc(nt * sizeof *m->tri_addr);
     m->tri_cell = malloc(nt * sizeof *m->tri_cell);
+    m->tri_v = malloc(3 * nt * sizeof *m->tri_v);
+    m->tri_vaddr = malloc(3 * nt * sizeof *m->tri_vaddr);
     m->vcopy_start = malloc((nv + 1) * sizeof *m->vcopy_start);
     m->vcopy_cell = malloc((ncopies ? ncopies : 1) * sizeof *m->vcopy_cell);
     m->vcopy_addr = malloc((ncopies ? ncopies : 1) * sizeof *m->vcopy_addr);
     m->vhome_addr = malloc(nv * sizeof *m->vhome_addr);
-    if (!m->tri_addr || !m->tri_cell || !m->vcopy_start || !m->vcopy_cell || !m->vcopy_addr ||
-        !m->vhome_addr || ncopies > UINT32_MAX) {
+    if (!m->tri_addr || !m->tri_cell || !m->tri_v || !m->tri_vaddr || !m->vcopy_start ||
+        !m->vcopy_cell || !m->vcopy_addr || !m->vhome_addr || ncopies > UINT32_MAX) {
         st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the layout's addresses", name);
         goto fail;
     }
@@ -216,6 +233,12 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
     for (size_t t = 0; t < nt; t++) {
         m->tri_addr[t] = base + emm_layout_triangle_address(l, (uint32_t)t, 0);
         m->tri_cell[t] = emm_layout_triangle_index(l, (uint32_t)t).cell;
+        for (int c = 0; c < 3; c++) {
+            uint32_t v = (uint32_t)g->tri[3 * t + (size_t)c];
+            m->tri_v[3 * t + (size_t)c] = v;
+            m->tri_vaddr[3 * t + (size_t)c] =
+                base + emm_layout_vertex_address(l, v, m->tri_cell[t], 0);
+        }
     }
     uint32_t k = 0;
     for (size_t v = 0; v < nv; v++) {
