@@ -39,8 +39,8 @@ typedef struct cache_layout_model {
     uint64_t *vcopy_addr;
     uint64_t *vhome_addr;      /* the home copy (an unused vertex's own record) */
     uint32_t *tri_v;           /* triangle t's three vertices */
-    uint64_t *tri_vaddr;       /* and their copies in t's cell (every vertex of a triangle
-                                  has one there: layout.c, fill_vertices) */
+    uint64_t *tri_vaddr;       /* and the addresses vertex_addr finds for them right after
+                                  an access to t */
     uint32_t cur_cell;         /* cell of the most recent triangle access */
     uint32_t cur_tri;          /* that triangle, or NO_TRI */
     emm_cache cache;
@@ -48,8 +48,9 @@ typedef struct cache_layout_model {
 
 static inline uint64_t vertex_addr(const cache_layout_model *m, uint64_t v)
 {
-    /* A vertex of the triangle just accessed: its copy in that triangle's
-     * cell, read off the triangle (warm) instead of the vertex's copies. */
+    /* A vertex of the triangle just accessed: the address the search below
+     * finds, computed once per triangle at construction and read off the
+     * triangle (warm) instead of the vertex's copies (cold). */
     if (m->cur_tri != NO_TRI) {
         const uint32_t *tv = m->tri_v + 3 * (size_t)m->cur_tri;
         for (int k = 0; k < 3; k++)
@@ -233,12 +234,6 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
     for (size_t t = 0; t < nt; t++) {
         m->tri_addr[t] = base + emm_layout_triangle_address(l, (uint32_t)t, 0);
         m->tri_cell[t] = emm_layout_triangle_index(l, (uint32_t)t).cell;
-        for (int c = 0; c < 3; c++) {
-            uint32_t v = (uint32_t)g->tri[3 * t + (size_t)c];
-            m->tri_v[3 * t + (size_t)c] = v;
-            m->tri_vaddr[3 * t + (size_t)c] =
-                base + emm_layout_vertex_address(l, v, m->tri_cell[t], 0);
-        }
     }
     uint32_t k = 0;
     for (size_t v = 0; v < nv; v++) {
@@ -252,6 +247,17 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
         m->vhome_addr[v] = base + emm_layout_vertex_address(l, (uint32_t)v, EMM_LAYOUT_NONE, 0);
     }
     m->vcopy_start[nv] = k;
+    /* What vertex_addr gives each vertex of each triangle right after that
+     * triangle's access (the copies' search, done once here). */
+    for (size_t t = 0; t < nt; t++) {
+        m->cur_tri = NO_TRI;
+        m->cur_cell = m->tri_cell[t];
+        for (int c = 0; c < 3; c++) {
+            uint32_t v = (uint32_t)g->tri[3 * t + (size_t)c];
+            m->tri_v[3 * t + (size_t)c] = v;
+            m->tri_vaddr[3 * t + (size_t)c] = vertex_addr(m, v);
+        }
+    }
     emm_model_share_release(share, l);
     l = NULL;
 
@@ -260,6 +266,7 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
     if ((st = emm_cache_init(&m->cache, p, err)) != EMM_OK)
         goto fail;
     m->cur_cell = EMM_LAYOUT_NONE;
+    m->cur_tri = NO_TRI;
     *out = &m->base;
     return EMM_OK;
 fail:
