@@ -20,41 +20,66 @@
 
 /* ---- exact ------------------------------------------------------------ */
 
-typedef double (*row_fn)(const double *x, const double *y, size_t n, double px, double py);
+/* Row i of Eq. 5.1 is Σ_{k<i} ‖(x_k, y_k) − p_i‖, summed in a fixed order:
+ * the terms go round L lanes (two accumulators of L/2 lanes each: the
+ * square root is the bottleneck, so independent chains keep the unit busy)
+ * over whole blocks of L, the lanes are added pairwise, then the tail's
+ * terms one by one. A row's accumulators after block b are the same for
+ * every row of the same point that reaches b, so the rows of a point that
+ * recurs (a vertex read again by each of its triangles) are one
+ * computation: each occurrence carries the previous one's accumulators on
+ * from its block boundary and adds only its own tail. The results are bit
+ * for bit those of computing every row from scratch, for a fraction of the
+ * square roots. */
+typedef struct row_kernel {
+    size_t lanes; /* L: the block length, and the accumulators' lanes */
+    /* Adds the blocks [k0, k1) (multiples of L) to the accumulators acc[L]. */
+    void (*blocks)(const double *x, const double *y, size_t k0, size_t k1, double px, double py,
+                   double *acc);
+    /* The row's sum: the accumulators reduced, then the terms [k0, n). */
+    double (*finish)(const double *x, const double *y, size_t k0, size_t n, double px, double py,
+                     const double *acc);
+} row_kernel;
 
-/* Σ_{k<n} ‖(x_k, y_k) − p‖, two lanes and two accumulators: the square root
- * is the bottleneck, so independent chains keep the unit busy. */
-static double row_sse2(const double *x, const double *y, size_t n, double px, double py)
+/* SSE2: two accumulators of two lanes (baseline x86-64). */
+static void blocks_sse2(const double *x, const double *y, size_t k0, size_t k1, double px,
+                        double py, double *acc)
 {
-    __m128d a0 = _mm_setzero_pd(), a1 = _mm_setzero_pd();
+    __m128d a0 = _mm_loadu_pd(acc), a1 = _mm_loadu_pd(acc + 2);
     __m128d X = _mm_set1_pd(px), Y = _mm_set1_pd(py);
-    size_t k = 0;
-    for (; k + 4 <= n; k += 4) {
+    for (size_t k = k0; k < k1; k += 4) {
         __m128d dx = _mm_sub_pd(_mm_loadu_pd(x + k), X), dy = _mm_sub_pd(_mm_loadu_pd(y + k), Y);
         a0 = _mm_add_pd(a0, _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy))));
         dx = _mm_sub_pd(_mm_loadu_pd(x + k + 2), X);
         dy = _mm_sub_pd(_mm_loadu_pd(y + k + 2), Y);
         a1 = _mm_add_pd(a1, _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy))));
     }
+    _mm_storeu_pd(acc, a0);
+    _mm_storeu_pd(acc + 2, a1);
+}
+
+static double finish_sse2(const double *x, const double *y, size_t k0, size_t n, double px,
+                          double py, const double *acc)
+{
     double lanes[2];
-    _mm_storeu_pd(lanes, _mm_add_pd(a0, a1));
+    _mm_storeu_pd(lanes, _mm_add_pd(_mm_loadu_pd(acc), _mm_loadu_pd(acc + 2)));
     double s = lanes[0] + lanes[1];
-    for (; k < n; k++) {
+    for (size_t k = k0; k < n; k++) {
         double dx = x[k] - px, dy = y[k] - py;
         s += sqrt(dx * dx + dy * dy);
     }
     return s;
 }
 
-/* The same with four lanes, for processors that have AVX2 (the build
- * targets baseline x86-64, so this is chosen at run time). */
-__attribute__((target("avx2"))) static double row_avx2(const double *x, const double *y,
-                                                        size_t n, double px, double py)
+/* The same with two accumulators of four lanes, for processors that have
+ * AVX2 (the build targets baseline x86-64, so this is chosen at run time). */
+__attribute__((target("avx2"))) static void blocks_avx2(const double *x, const double *y,
+                                                         size_t k0, size_t k1, double px,
+                                                         double py, double *acc)
 {
-    __m256d a0 = _mm256_setzero_pd(), a1 = _mm256_setzero_pd();
+    __m256d a0 = _mm256_loadu_pd(acc), a1 = _mm256_loadu_pd(acc + 4);
     __m256d X = _mm256_set1_pd(px), Y = _mm256_set1_pd(py);
-    size_t k = 0;
-    for (; k + 8 <= n; k += 8) {
+    for (size_t k = k0; k < k1; k += 8) {
         __m256d dx = _mm256_sub_pd(_mm256_loadu_pd(x + k), X);
         __m256d dy = _mm256_sub_pd(_mm256_loadu_pd(y + k), Y);
         a0 = _mm256_add_pd(a0, _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx),
@@ -64,45 +89,131 @@ __attribute__((target("avx2"))) static double row_avx2(const double *x, const do
         a1 = _mm256_add_pd(a1, _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx),
                                                              _mm256_mul_pd(dy, dy))));
     }
+    _mm256_storeu_pd(acc, a0);
+    _mm256_storeu_pd(acc + 4, a1);
+}
+
+__attribute__((target("avx2"))) static double finish_avx2(const double *x, const double *y,
+                                                           size_t k0, size_t n, double px,
+                                                           double py, const double *acc)
+{
     double lanes[4];
-    _mm256_storeu_pd(lanes, _mm256_add_pd(a0, a1));
+    _mm256_storeu_pd(lanes, _mm256_add_pd(_mm256_loadu_pd(acc), _mm256_loadu_pd(acc + 4)));
     double s = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
-    for (; k < n; k++) {
+    for (size_t k = k0; k < n; k++) {
         double dx = x[k] - px, dy = y[k] - py;
         s += sqrt(dx * dx + dy * dy);
     }
     return s;
 }
 
-static row_fn pick_row(void)
+static const row_kernel kernel_sse2 = {4, blocks_sse2, finish_sse2};
+static const row_kernel kernel_avx2 = {8, blocks_avx2, finish_avx2};
+
+static const row_kernel *pick_kernel(void)
 {
     __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") ? row_avx2 : row_sse2;
+    return __builtin_cpu_supports("avx2") ? &kernel_avx2 : &kernel_sse2;
 }
 
+/* The rows of one point: i, next[i], next[next[i]], ... (ascending). */
+static void point_rows(const row_kernel *kr, const double *x, const double *y, const int32_t *next,
+                       size_t i, double *D)
+{
+    double acc[8] = {0};
+    double px = x[i], py = y[i];
+    size_t done = 0; /* blocks added so far, in terms */
+    for (int64_t r = (int64_t)i; r >= 0; r = next[r]) {
+        size_t row = (size_t)r, whole = row - row % kr->lanes;
+        if (whole > done) {
+            kr->blocks(x, y, done, whole, px, py, acc);
+            done = whole;
+        }
+        D[row] = kr->finish(x, y, done, row, px, py, acc);
+    }
+}
+
+/* Points per item of the pool's work: the items go from the last points
+ * (the longest rows) to the first, so the threads finish together. */
+#define EXACT_ITEM 16u
+
 struct exact_job {
+    const row_kernel *kr;
     const double *x, *y;
+    const int32_t *next;
+    const int32_t *heads; /* the first row of each distinct point, ascending */
+    size_t nheads;
     double *D;
-    size_t lo, hi;
-    row_fn row;
 };
 
 static void exact_run(void *ctx, size_t k)
 {
-    struct exact_job *j = (struct exact_job *)ctx + k;
-    for (size_t i = j->lo; i < j->hi; i++)
-        j->D[i] = j->row(j->x, j->y, i, j->x[i], j->y[i]);
+    const struct exact_job *j = ctx;
+    size_t items = (j->nheads + EXACT_ITEM - 1) / EXACT_ITEM;
+    size_t item = items - 1 - k, lo = item * EXACT_ITEM;
+    size_t hi = lo + EXACT_ITEM < j->nheads ? lo + EXACT_ITEM : j->nheads;
+    for (size_t h = hi; h-- > lo;)
+        point_rows(j->kr, j->x, j->y, j->next, (size_t)j->heads[h], j->D);
 }
 
 /* Too short to be worth a thread. */
 #define EXACT_THREAD_MIN 2048u
 
+static uint64_t point_hash(double x, double y)
+{
+    uint64_t a, b;
+    memcpy(&a, &x, sizeof a);
+    memcpy(&b, &y, sizeof b);
+    uint64_t h = a * 0x9E3779B97F4A7C15u ^ (b + 0x632BE59BD9B4E019u + (a << 6) + (a >> 2));
+    h ^= h >> 31;
+    h *= 0xD6E8FEB86659FD93u;
+    return h ^ (h >> 32);
+}
+
+/* Links each row to the next row of the same point (bitwise the same
+ * coordinates) in next[], -1 after the last, and lists each point's first
+ * row in heads[]; returns the number of points. `slot` has cap entries (a
+ * power of two above n). */
+static size_t group_points(const double *x, const double *y, size_t n, int32_t *next,
+                           int32_t *heads, int32_t *slot, int32_t *last, size_t cap)
+{
+    size_t nheads = 0;
+    for (size_t s = 0; s < cap; s++)
+        slot[s] = -1;
+    for (size_t i = 0; i < n; i++) {
+        next[i] = -1;
+        size_t s = (size_t)point_hash(x[i], y[i]) & (cap - 1);
+        for (;;) {
+            int32_t h = slot[s];
+            if (h < 0) {
+                slot[s] = (int32_t)nheads;
+                heads[nheads] = (int32_t)i;
+                last[nheads++] = (int32_t)i;
+                break;
+            }
+            size_t f = (size_t)heads[h];
+            if (memcmp(&x[f], &x[i], sizeof x[i]) == 0 && memcmp(&y[f], &y[i], sizeof y[i]) == 0) {
+                next[last[h]] = (int32_t)i;
+                last[h] = (int32_t)i;
+                break;
+            }
+            s = (s + 1) & (cap - 1);
+        }
+    }
+    return nheads;
+}
+
 void emm_profile_exact(const double *xy, size_t n, double *D, const emm_threads *threads)
 {
     if (n == 0)
         return;
-    double *x = malloc(2 * n * sizeof *x);
-    if (!x) {
+    size_t cap = 16;
+    while (cap < 2 * n)
+        cap *= 2;
+    double *x = n <= INT32_MAX ? malloc(2 * n * sizeof *x) : NULL;
+    int32_t *ints = x ? malloc((3 * n + cap) * sizeof *ints) : NULL;
+    if (!ints) {
+        free(x);
         /* No room for the split copy: the scalar loop on the caller's array. */
         for (size_t i = 0; i < n; i++) {
             double s = 0;
@@ -119,13 +230,14 @@ void emm_profile_exact(const double *xy, size_t n, double *D, const emm_threads 
         x[i] = xy[2 * i];
         y[i] = xy[2 * i + 1];
     }
-    row_fn row = pick_row();
-    /* Row i costs i: the split at n/√2 halves the work. */
-    size_t mid = n < EXACT_THREAD_MIN ? n : (size_t)((double)n * 0.70710678118654752);
-    struct exact_job jobs[2] = {{x, y, D, 0, mid, row}, {x, y, D, mid, n, row}};
-    emm_pool *pool = mid < n ? emm_pool_new(threads, 2) : NULL;
-    emm_pool_for(pool, mid < n ? 2 : 1, exact_run, jobs);
+    int32_t *next = ints, *heads = ints + n, *last = ints + 2 * n, *slot = ints + 3 * n;
+    size_t nheads = group_points(x, y, n, next, heads, slot, last, cap);
+    struct exact_job job = {pick_kernel(), x, y, next, heads, nheads, D};
+    size_t items = (nheads + EXACT_ITEM - 1) / EXACT_ITEM;
+    emm_pool *pool = n >= EXACT_THREAD_MIN ? emm_pool_new(threads, 2) : NULL;
+    emm_pool_for(pool, items, exact_run, &job);
     emm_pool_free(pool);
+    free(ints);
     free(x);
 }
 
@@ -642,12 +754,56 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* Sorts v[0..n) ascending. The profile's values are non-negative: their
+ * bit patterns sort as unsigned integers, so a radix sort gives the same
+ * order as qsort, several times faster; short runs are sorted by insertion
+ * (the running median's nine values), anything else by qsort. */
+static void sort_doubles(double *v, size_t n)
+{
+    if (n <= 16) {
+        for (size_t i = 1; i < n; i++) {
+            double x = v[i];
+            size_t j = i;
+            for (; j > 0 && v[j - 1] > x; j--)
+                v[j] = v[j - 1];
+            v[j] = x;
+        }
+        return;
+    }
+    bool plain = true;
+    for (size_t i = 0; i < n && plain; i++)
+        plain = v[i] >= 0 && !signbit(v[i]);
+    uint64_t *a = plain ? malloc(2 * n * sizeof *a) : NULL;
+    if (!a) {
+        qsort(v, n, sizeof *v, cmp_double);
+        return;
+    }
+    uint64_t *b = a + n;
+    memcpy(a, v, n * sizeof *a);
+    for (int shift = 0; shift < 64; shift += 8) {
+        size_t count[257] = {0};
+        for (size_t i = 0; i < n; i++)
+            count[((a[i] >> shift) & 0xff) + 1]++;
+        if (count[((a[0] >> shift) & 0xff) + 1] == n)
+            continue; /* every key has this byte: the pass would not move anything */
+        for (int d = 0; d < 256; d++)
+            count[d + 1] += count[d];
+        for (size_t i = 0; i < n; i++)
+            b[count[(a[i] >> shift) & 0xff]++] = a[i];
+        uint64_t *t = a;
+        a = b;
+        b = t;
+    }
+    memcpy(v, a, n * sizeof *v);
+    free(a < b ? a : b);
+}
+
 /* The q-quantile of v[0..n) (reorders v). */
 static double quantile(double *v, size_t n, double q)
 {
     if (n == 0)
         return 0;
-    qsort(v, n, sizeof *v, cmp_double);
+    sort_doubles(v, n);
     size_t k = (size_t)(q * (double)(n - 1) + 0.5);
     return v[k < n ? k : n - 1];
 }

@@ -411,7 +411,7 @@ static emm_status choose(emm_session *s, emm_error *err)
     emm_decide_options opt = {0, 0, &s->threads};
     emm_status st = decide_features_shared(s->table, s->machine, &s->info, s->window + s->wskip,
                                            s->wn - s->wskip, s->features, s->nD, s->program, &opt,
-                                           s->layouts, &wd, err);
+                                           s->layouts, s->decisions, &wd, err);
     if (st != EMM_OK)
         return st;
     s->chosen = wd.strategy;
@@ -550,6 +550,8 @@ emm_status session_decide(emm_session *s, emm_error *err)
     if (!(s->layouts = emm_model_share_new()))
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", s->program);
     emm_model_share_keep(s->layouts);
+    if (!(s->decisions = decide_cache_new()))
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", s->program);
     if ((st = profile_window(s, err)) != EMM_OK)
         return st;
     if (s->cfg.has_strategy) {

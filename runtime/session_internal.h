@@ -173,6 +173,8 @@ struct emm_session {
                             then the contest's other candidates */
     emm_model_share *layouts; /* every layout built for this mesh, kept: the decision's
                                  sweeps, the models and the probes build each once */
+    decide_cache *decisions; /* the canonical traversals' profiles and sweeps over this
+                                mesh: the window's decision and the phases' compute each once */
     contest *contest;    /* the run's confirmation of the choice, or NULL (docs/profile.md
                             "The contest") */
     /* At finish, with a contest: the models of the answer and of the

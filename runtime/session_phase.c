@@ -71,8 +71,10 @@ static void close_phase(emm_session *s, program_phase *p)
         return;
     p->chosen_span = model_total(s, 0) - p->chosen_at;
     p->best_span = model_total(s, p->model);
-    /* The phase's model runs on; the next phase measures from its own
-     * detection. Keep it from costing more: nothing else reads it. */
+    /* The next phase measures from its own detection, and nothing else
+     * reads this model (it is no model of the report's): it stops here
+     * instead of running on to the end of the run. */
+    emm_runner_retire(s->runner, p->model);
 }
 
 void session_phases_close(emm_session *s)
@@ -129,7 +131,7 @@ static void evaluate(emm_session *s)
     emm_window_decision wd;
     emm_decide_options opt = {0, 0, &s->threads};
     if (decide_features_shared(s->table, s->machine, &s->info, s->probe, s->pn, f, n, s->program,
-                               &opt, s->layouts, &wd, &e) == EMM_OK) {
+                               &opt, s->layouts, s->decisions, &wd, &e) == EMM_OK) {
         p->has_best = true;
         p->best = wd.strategy;
         if (memcmp(&wd.strategy, &s->chosen, sizeof wd.strategy) != 0) {

@@ -470,38 +470,48 @@ emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
                              const emm_trace_record *recs, size_t n, const emm_threads *threads,
                              emm_sweep **out, emm_error *err)
 {
-    return sweep_records_shared(m, info, recs, n, threads, NULL, out, err);
+    return sweep_records_shared(m, info, recs, n, threads, NULL, false, out, err);
 }
 
 emm_status sweep_records_shared(const emm_machine *m, const emm_trace_info *info,
                                 const emm_trace_record *recs, size_t n,
                                 const emm_threads *threads, emm_model_share *share,
-                                emm_sweep **out, emm_error *err)
+                                bool offered_only, emm_sweep **out, emm_error *err)
 {
     *out = NULL;
     size_t count = emm_strategy_sweep(NULL, 0);
     emm_sweep *sw = calloc(1, sizeof *sw);
-    emm_strategy *s = calloc(count, sizeof *s);
+    emm_strategy *s = calloc(count, sizeof *s), *ran = calloc(count, sizeof *ran);
     emm_error *skipped = calloc(count, sizeof *skipped);
+    size_t *model_of = calloc(count, sizeof *model_of), nrun = 0;
     emm_runner *run = NULL;
     emm_status st = EMM_OK;
     if (sw) {
         sw->result = calloc(count, sizeof *sw->result);
         sw->ran = calloc(count, sizeof *sw->ran);
     }
-    if (!sw || !s || !skipped || !sw->result || !sw->ran) {
+    if (!sw || !s || !ran || !skipped || !model_of || !sw->result || !sw->ran) {
         st = emm_fail(err, EMM_ERR_NOMEM, "strategy sweep: out of memory");
         goto out;
     }
     emm_strategy_sweep(s, count);
     sw->count = count;
+    /* Strategies the machine does not offer are not simulated when only the
+     * offered ones are asked for (they stay ran = 0). */
+    for (size_t i = 0; i < count; i++) {
+        model_of[i] = SIZE_MAX;
+        if (!offered_only || emm_machine_offers(m, &s[i])) {
+            model_of[i] = nrun;
+            ran[nrun++] = s[i];
+        }
+    }
     if ((st = emm_runner_new_shared(threads, share, &run, err)) != EMM_OK ||
-        (st = emm_runner_add(run, m, s, count, info, skipped, err)) != EMM_OK)
+        (st = emm_runner_add(run, m, ran, nrun, info, skipped, err)) != EMM_OK)
         goto out;
     emm_runner_run(run, recs, n);
     uint64_t best = UINT64_MAX;
     for (size_t i = 0; i < count; i++) {
-        emm_model *model = emm_runner_model(run, i);
+        emm_model *model = model_of[i] == SIZE_MAX ? NULL : emm_runner_model(run, model_of[i]);
         sw->result[i].strategy = s[i];
         if (s[i].kind == EMM_STRATEGY_CACHE && s[i].layout == EMM_LAYOUT_ORIGINAL)
             sw->cache = i;
@@ -521,6 +531,8 @@ emm_status sweep_records_shared(const emm_machine *m, const emm_trace_info *info
 out:
     emm_runner_free(run);
     free(s);
+    free(ran);
+    free(model_of);
     free(skipped);
     if (st == EMM_OK)
         *out = sw;
@@ -640,24 +652,224 @@ static emm_status records_features(const emm_trace_info *info, const emm_trace_r
     return st;
 }
 
-/* The canonical traversal of recipe over this mesh, against the program's
- * arrays: a region grows from where the program's did (its first
- * triangle). EMM_ERR_INVALID for a recipe that names no traversal. */
-static emm_status synth_over(const emm_mesh *mesh, const struct synth_arrays *arrays,
-                             const char *recipe, const emm_trace_record *recs, size_t n,
-                             uint64_t visits, const char *name, emm_trace_record **syn,
-                             size_t *ns, emm_error *err)
+/* The options of the canonical traversal of recipe over this mesh: a
+ * region grows from where the program's did (its first triangle).
+ * EMM_ERR_INVALID for a recipe that names no traversal. */
+static emm_status synth_options(const emm_mesh *mesh, const struct synth_arrays *arrays,
+                                const char *recipe, const emm_trace_record *recs, size_t n,
+                                uint64_t visits, emm_synth_options *so, emm_error *err)
 {
-    emm_synth_options so = {.seed = EMM_DECIDE_SYNTH_SEED};
-    if (emm_synth_recipe_parse(recipe, &so, err) != EMM_OK)
+    *so = (emm_synth_options){.seed = EMM_DECIDE_SYNTH_SEED};
+    if (emm_synth_recipe_parse(recipe, so, err) != EMM_OK)
         return EMM_ERR_INVALID;
-    for (size_t i = 0; i < n && !so.has_start; i++)
+    for (size_t i = 0; i < n && !so->has_start; i++)
         if (recs[i].array == arrays->tri && recs[i].element < emm_mesh_triangle_count(mesh)) {
-            so.has_start = 1;
-            so.start = (uint32_t)recs[i].element;
+            so->has_start = 1;
+            so->start = (uint32_t)recs[i].element;
         }
-    so.visits = visits;
-    return emm_synth_records(mesh, &so, arrays, name, syn, ns, err);
+    so->visits = visits;
+    return EMM_OK;
+}
+
+/* ---- what a session's decisions share --------------------------------------- */
+
+/* A canonical traversal's profile or sweep depends on the traversal (its
+ * options), the mesh, the arrays and, for a sweep, the machine — not on
+ * the window, once its start is known — so a session's decisions (the
+ * window's, then each phase's) compute each once. */
+enum cached_kind { CACHED_FEATURES, CACHED_SWEEP };
+
+typedef struct cached {
+    enum cached_kind kind;
+    emm_synth_options so;    /* start cleared where the pattern has none (synth_order) */
+    uint64_t window;         /* features: the profile's window */
+    const emm_machine *m;    /* sweep: the machine */
+    struct synth_arrays arrays;
+    emm_status st;           /* never EMM_ERR_NOMEM: that is not kept */
+    emm_error e;             /* why, when st != EMM_OK */
+    double g[EMM_FEATURES];  /* features */
+    emm_sweep *sw;           /* sweep, when st == EMM_OK */
+} cached;
+
+struct decide_cache {
+    const emm_trace_info *info; /* the trace the entries are of (the first asked about) */
+    emm_mesh *mesh;             /* its geometry as a mesh, or NULL (not built yet) */
+    emm_status mesh_st;         /* EMM_OK until building it failed */
+    cached *e;
+    size_t n, cap;
+};
+
+decide_cache *decide_cache_new(void)
+{
+    return calloc(1, sizeof(decide_cache));
+}
+
+void decide_cache_free(decide_cache *c)
+{
+    if (!c)
+        return;
+    for (size_t i = 0; i < c->n; i++)
+        emm_sweep_free(c->e[i].sw);
+    free(c->e);
+    emm_mesh_free(c->mesh);
+    free(c);
+}
+
+/* The cache for decisions over `info`, or NULL (none, or one of another
+ * trace: then nothing is shared). */
+static decide_cache *cache_for(decide_cache *c, const emm_trace_info *info)
+{
+    if (c && !c->info)
+        c->info = info;
+    return c && c->info == info ? c : NULL;
+}
+
+static bool same_options(const emm_synth_options *a, const emm_synth_options *b)
+{
+    return a->pattern == b->pattern && a->seed == b->seed && a->visits == b->visits &&
+           a->length == b->length && a->corner_seed == b->corner_seed && a->work == b->work &&
+           a->has_start == b->has_start && a->start == b->start;
+}
+
+static bool same_arrays(const struct synth_arrays *a, const struct synth_arrays *b)
+{
+    return a->tri == b->tri && a->tri_offset == b->tri_offset && a->tri_bytes == b->tri_bytes &&
+           a->vert == b->vert && a->vert_offset == b->vert_offset && a->vert_bytes == b->vert_bytes;
+}
+
+/* The entry of this kind and key, or NULL. */
+static cached *cache_find(decide_cache *c, enum cached_kind kind, const emm_synth_options *so,
+                          uint64_t window, const emm_machine *m, const struct synth_arrays *arrays)
+{
+    emm_synth_options key = *so;
+    if (key.pattern != EMM_PATTERN_REGION)
+        key.has_start = 0, key.start = 0;
+    for (size_t i = 0; c && i < c->n; i++) {
+        cached *x = &c->e[i];
+        if (x->kind == kind && same_options(&x->so, &key) && x->window == window && x->m == m &&
+            same_arrays(&x->arrays, arrays))
+            return x;
+    }
+    return NULL;
+}
+
+/* A new entry (its result to be filled in), or NULL when there is no cache
+ * or no memory for one (the result is then not kept: only slower). */
+static cached *cache_add(decide_cache *c, enum cached_kind kind, const emm_synth_options *so,
+                         uint64_t window, const emm_machine *m, const struct synth_arrays *arrays)
+{
+    if (!c)
+        return NULL;
+    if (c->n == c->cap) {
+        size_t cap = c->cap ? 2 * c->cap : 8;
+        cached *e = realloc(c->e, cap * sizeof *e);
+        if (!e)
+            return NULL;
+        c->e = e;
+        c->cap = cap;
+    }
+    cached *x = &c->e[c->n++];
+    memset(x, 0, sizeof *x);
+    x->kind = kind;
+    x->so = *so;
+    if (x->so.pattern != EMM_PATTERN_REGION)
+        x->so.has_start = 0, x->so.start = 0;
+    x->window = window;
+    x->m = m;
+    x->arrays = *arrays;
+    return x;
+}
+
+/* The features of the traversal `so` over the mesh, profiled with a window
+ * of `window` element accesses (records_features). */
+static emm_status synth_features(decide_cache *c, const emm_mesh *mesh,
+                                 const emm_trace_info *info, const struct synth_arrays *arrays,
+                                 const emm_synth_options *so, uint64_t window, const char *name,
+                                 const emm_threads *threads, double g[EMM_FEATURES],
+                                 emm_error *err)
+{
+    cached *x = cache_find(c, CACHED_FEATURES, so, window, NULL, arrays);
+    if (x) {
+        memcpy(g, x->g, sizeof x->g);
+        if (x->st != EMM_OK && err)
+            *err = x->e;
+        return x->st;
+    }
+    emm_trace_record *syn = NULL;
+    size_t ns = 0, np;
+    emm_status st = emm_synth_records(mesh, so, arrays, name, &syn, &ns, err);
+    if (st == EMM_OK)
+        st = records_features(info, syn, ns, window, name, threads, g, &np, NULL, err);
+    free(syn);
+    if (st != EMM_ERR_NOMEM && (x = cache_add(c, CACHED_FEATURES, so, window, NULL, arrays))) {
+        x->st = st;
+        if (st == EMM_OK)
+            memcpy(x->g, g, sizeof x->g);
+        else if (err)
+            x->e = *err;
+    }
+    return st;
+}
+
+/* The sweep of the traversal `so` over the mesh on machine m: *S, owned by
+ * the cache when there is one (*owned false), or NULL with *e saying why
+ * it could not be swept. Returns the synthesis's errors. */
+static emm_status synth_sweep(decide_cache *c, const emm_machine *m, const emm_trace_info *info,
+                              const emm_mesh *mesh, const struct synth_arrays *arrays,
+                              const emm_synth_options *so, const char *name,
+                              const emm_threads *threads, emm_model_share *share, emm_sweep **S,
+                              bool *owned, emm_error *e, emm_error *err)
+{
+    *S = NULL;
+    *owned = false;
+    cached *x = cache_find(c, CACHED_SWEEP, so, 0, m, arrays);
+    if (x) {
+        if (x->st == EMM_OK)
+            *S = x->sw;
+        else
+            *e = x->e;
+        return EMM_OK;
+    }
+    emm_trace_record *syn = NULL;
+    size_t ns = 0;
+    emm_status st = emm_synth_records(mesh, so, arrays, name, &syn, &ns, err);
+    if (st != EMM_OK)
+        return st;
+    emm_status sst = sweep_records_shared(m, info, syn, ns, threads, share, true, S, e);
+    free(syn);
+    if (sst != EMM_ERR_NOMEM && (x = cache_add(c, CACHED_SWEEP, so, 0, m, arrays))) {
+        x->st = sst;
+        x->sw = *S;
+        if (sst != EMM_OK)
+            x->e = *e;
+        return EMM_OK;
+    }
+    *owned = *S != NULL;
+    return EMM_OK;
+}
+
+/* The trace's geometry as a mesh: *mesh, owned by the cache when there is
+ * one (*owned false); NULL when it is not a mesh. */
+static void program_mesh(decide_cache *c, const emm_trace_info *info, const char *name,
+                         emm_mesh **mesh, bool *owned)
+{
+    *owned = false;
+    if (c && (c->mesh || c->mesh_st != EMM_OK)) {
+        *mesh = c->mesh;
+        return;
+    }
+    *mesh = NULL;
+    emm_error e;
+    emm_status st = emm_mesh_from_arrays(info->geometry.xyz, info->geometry.nv, info->geometry.tri,
+                                         info->geometry.nt, name, mesh, &e);
+    if (st != EMM_OK)
+        *mesh = NULL;
+    if (c && st != EMM_ERR_NOMEM) {
+        c->mesh = *mesh;
+        c->mesh_st = st;
+    } else {
+        *owned = *mesh != NULL;
+    }
 }
 
 /* The recipe a sample is checked by: its own, or its class's canonical
@@ -679,8 +891,8 @@ static const char *sample_recipe(const emm_table_sample *t)
 static emm_status pick_class(const emm_table *t, const emm_trace_info *info, const emm_mesh *mesh,
                              const struct synth_arrays *arrays, const emm_trace_record *recs,
                              size_t n, const double f[EMM_FEATURES], size_t accesses,
-                             const char *name, const emm_threads *threads, emm_window_decision *out,
-                             emm_error *err)
+                             const char *name, const emm_threads *threads, decide_cache *cache,
+                             emm_window_decision *out, emm_error *err)
 {
     size_t cand[EMM_DECIDE_CLASSES_MAX], nc = 0;
     for (size_t i = 0; i < t->n; i++) {
@@ -712,16 +924,13 @@ static emm_status pick_class(const emm_table *t, const emm_trace_info *info, con
     double bd = INFINITY, mine = INFINITY;
     for (size_t k = 0; k < nc; k++) {
         const emm_table_sample *smp = &t->s[cand[k]];
-        emm_trace_record *syn = NULL;
-        size_t ns = 0, np;
         double g[EMM_FEATURES];
         uint64_t visits = accesses < info->geometry.nt ? accesses : info->geometry.nt;
         emm_error e;
-        emm_status st = synth_over(mesh, arrays, sample_recipe(smp), recs, n, visits, name, &syn,
-                                   &ns, &e);
+        emm_synth_options so;
+        emm_status st = synth_options(mesh, arrays, sample_recipe(smp), recs, n, visits, &so, &e);
         if (st == EMM_OK)
-            st = records_features(info, syn, ns, accesses, name, threads, g, &np, NULL, &e);
-        free(syn);
+            st = synth_features(cache, mesh, info, arrays, &so, accesses, name, threads, g, &e);
         if (st == EMM_ERR_NOMEM)
             return emm_fail(err, st, "%s", e.message);
         out->classes[out->nclasses].distance = emm_feature_distance(f, smp->f);
@@ -770,22 +979,24 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
                                 const emm_mesh *mesh, const struct synth_arrays *arrays,
                                 const emm_trace_record *recs, size_t n, const char *name,
                                 const emm_threads *threads, emm_model_share *share,
-                                emm_window_decision *out, emm_error *err)
+                                decide_cache *cache, emm_window_decision *out, emm_error *err)
 {
     const char *recipe = strcmp(out->table.synth, "-") != 0 ? out->table.synth : out->table.pattern;
     uint64_t visits = info->geometry.nt < EMM_DECIDE_SYNTH_VISITS ? info->geometry.nt
                                                                   : EMM_DECIDE_SYNTH_VISITS;
-    emm_trace_record *syn = NULL;
-    size_t ns = 0;
-    emm_status st = synth_over(mesh, arrays, recipe, recs, n, visits, name, &syn, &ns, err);
+    emm_synth_options so;
+    emm_status st = synth_options(mesh, arrays, recipe, recs, n, visits, &so, err);
+    if (st == EMM_ERR_INVALID)
+        return EMM_OK;
+    emm_sweep *S = NULL, *W = NULL;
+    bool own_S = false;
+    emm_error e;
+    st = synth_sweep(cache, m, info, mesh, arrays, &so, name, threads, share, &S, &own_S, &e, err);
     if (st == EMM_ERR_INVALID)
         return EMM_OK;
     if (st != EMM_OK)
         return st;
-    emm_sweep *S = NULL, *W = NULL;
-    emm_error e;
-    if (sweep_records_shared(m, info, syn, ns, threads, share, &S, &e) != EMM_OK ||
-        sweep_records_shared(m, info, recs, n, threads, share, &W, &e) != EMM_OK) {
+    if (!S || sweep_records_shared(m, info, recs, n, threads, share, true, &W, &e) != EMM_OK) {
         st = e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
         goto done;
     }
@@ -829,9 +1040,9 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
         set_runner_up(out, second == SIZE_MAX ? NULL : &W->result[second], score2 / score - 1);
     }
 done:
-    emm_sweep_free(S);
+    if (own_S)
+        emm_sweep_free(S);
     emm_sweep_free(W);
-    free(syn);
     return st;
 }
 
@@ -846,7 +1057,7 @@ emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
     emm_model_share_keep(share); /* the sweeps build each layout once */
     emm_status st = decide_features_shared(t, m, info, recs, n, f, accesses, name, opt, share,
-                                           out, err);
+                                           NULL, out, err);
     emm_model_share_unref(share);
     return st;
 }
@@ -855,9 +1066,10 @@ emm_status decide_features_shared(const emm_table *t, const emm_machine *m,
                                   const emm_trace_info *info, const emm_trace_record *recs,
                                   size_t n, const double f[EMM_FEATURES], size_t accesses,
                                   const char *name, const emm_decide_options *opt,
-                                  emm_model_share *share, emm_window_decision *out,
-                                  emm_error *err)
+                                  emm_model_share *share, decide_cache *cache,
+                                  emm_window_decision *out, emm_error *err)
 {
+    cache = cache_for(cache, info);
     memset(out, 0, sizeof *out);
     memcpy(out->f, f, sizeof out->f);
     out->accesses = accesses;
@@ -876,16 +1088,19 @@ emm_status decide_features_shared(const emm_table *t, const emm_machine *m,
             return EMM_OK;
         struct synth_arrays arrays;
         emm_mesh *mesh = NULL;
+        bool own_mesh = false;
         st = EMM_OK;
-        if (info->geometry.nt > 0 && program_arrays(info, &arrays) &&
-            emm_mesh_from_arrays(info->geometry.xyz, info->geometry.nv, info->geometry.tri,
-                                 info->geometry.nt, name, &mesh, NULL) == EMM_OK) {
-            st = pick_class(t, info, mesh, &arrays, recs, n, f, accesses, name, threads, out, err);
+        if (info->geometry.nt > 0 && program_arrays(info, &arrays))
+            program_mesh(cache, info, name, &mesh, &own_mesh);
+        if (mesh) {
+            st = pick_class(t, info, mesh, &arrays, recs, n, f, accesses, name, threads, cache,
+                            out, err);
             if (st == EMM_OK)
-                st = check_pattern(m, info, mesh, &arrays, recs, n, name, threads, share, out,
-                                   err);
+                st = check_pattern(m, info, mesh, &arrays, recs, n, name, threads, share, cache,
+                                   out, err);
         }
-        emm_mesh_free(mesh);
+        if (own_mesh)
+            emm_mesh_free(mesh);
         /* A sample's strategy the machine does not have (a cache label on a
          * machine without one) is no answer: the window decides. */
         if (st != EMM_OK || out->how == EMM_DECIDED_CHECKED ||
@@ -893,7 +1108,7 @@ emm_status decide_features_shared(const emm_table *t, const emm_machine *m,
             return st;
     }
     emm_sweep *sw = NULL;
-    st = sweep_records_shared(m, info, recs, n, threads, share, &sw, err);
+    st = sweep_records_shared(m, info, recs, n, threads, share, false, &sw, err);
     if (st == EMM_OK) {
         out->simulated = 1;
         out->how = EMM_DECIDED_WINDOW;

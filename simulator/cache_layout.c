@@ -26,6 +26,7 @@
 #include "model.h"
 
 #define NO_ARRAY UINT32_MAX
+#define NO_TRI UINT32_MAX
 
 typedef struct cache_layout_model {
     struct emm_model base;
@@ -37,12 +38,25 @@ typedef struct cache_layout_model {
     uint32_t *vcopy_cell;      /* by ascending cell */
     uint64_t *vcopy_addr;
     uint64_t *vhome_addr;      /* the home copy (an unused vertex's own record) */
+    uint32_t *tri_v;           /* triangle t's three vertices */
+    uint64_t *tri_vaddr;       /* and the addresses vertex_addr finds for them right after
+                                  an access to t */
     uint32_t cur_cell;         /* cell of the most recent triangle access */
+    uint32_t cur_tri;          /* that triangle, or NO_TRI */
     emm_cache cache;
 } cache_layout_model;
 
 static inline uint64_t vertex_addr(const cache_layout_model *m, uint64_t v)
 {
+    /* A vertex of the triangle just accessed: the address the search below
+     * finds, computed once per triangle at construction and read off the
+     * triangle (warm) instead of the vertex's copies (cold). */
+    if (m->cur_tri != NO_TRI) {
+        const uint32_t *tv = m->tri_v + 3 * (size_t)m->cur_tri;
+        for (int k = 0; k < 3; k++)
+            if (tv[k] == v)
+                return m->tri_vaddr[3 * (size_t)m->cur_tri + (size_t)k];
+    }
     uint32_t i = m->vcopy_start[v], end = m->vcopy_start[v + 1], cell = m->cur_cell;
     /* A vertex has copies in a handful of cells, sorted by cell. */
     for (; i < end && m->vcopy_cell[i] <= cell; i++)
@@ -60,6 +74,7 @@ static void cl_run(emm_model *model, const emm_trace_record *recs, size_t n)
         uint64_t addr;
         if (r->array == tarray) {
             m->cur_cell = m->tri_cell[r->element];
+            m->cur_tri = (uint32_t)r->element;
             addr = m->tri_addr[r->element] + r->offset;
         } else if (r->array == varray) {
             addr = vertex_addr(m, r->element) + r->offset;
@@ -74,6 +89,7 @@ static void cl_reset(emm_model *model)
 {
     cache_layout_model *m = (cache_layout_model *)model;
     m->cur_cell = EMM_LAYOUT_NONE;
+    m->cur_tri = NO_TRI;
     emm_cache_reset(&m->cache);
 }
 
@@ -202,12 +218,14 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
     }
     m->tri_addr = malloc(nt * sizeof *m->tri_addr);
     m->tri_cell = malloc(nt * sizeof *m->tri_cell);
+    m->tri_v = malloc(3 * nt * sizeof *m->tri_v);
+    m->tri_vaddr = malloc(3 * nt * sizeof *m->tri_vaddr);
     m->vcopy_start = malloc((nv + 1) * sizeof *m->vcopy_start);
     m->vcopy_cell = malloc((ncopies ? ncopies : 1) * sizeof *m->vcopy_cell);
     m->vcopy_addr = malloc((ncopies ? ncopies : 1) * sizeof *m->vcopy_addr);
     m->vhome_addr = malloc(nv * sizeof *m->vhome_addr);
-    if (!m->tri_addr || !m->tri_cell || !m->vcopy_start || !m->vcopy_cell || !m->vcopy_addr ||
-        !m->vhome_addr || ncopies > UINT32_MAX) {
+    if (!m->tri_addr || !m->tri_cell || !m->tri_v || !m->tri_vaddr || !m->vcopy_start ||
+        !m->vcopy_cell || !m->vcopy_addr || !m->vhome_addr || ncopies > UINT32_MAX) {
         st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the layout's addresses", name);
         goto fail;
     }
@@ -229,6 +247,17 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
         m->vhome_addr[v] = base + emm_layout_vertex_address(l, (uint32_t)v, EMM_LAYOUT_NONE, 0);
     }
     m->vcopy_start[nv] = k;
+    /* What vertex_addr gives each vertex of each triangle right after that
+     * triangle's access (the copies' search, done once here). */
+    for (size_t t = 0; t < nt; t++) {
+        m->cur_tri = NO_TRI;
+        m->cur_cell = m->tri_cell[t];
+        for (int c = 0; c < 3; c++) {
+            uint32_t v = (uint32_t)g->tri[3 * t + (size_t)c];
+            m->tri_v[3 * t + (size_t)c] = v;
+            m->tri_vaddr[3 * t + (size_t)c] = vertex_addr(m, v);
+        }
+    }
     emm_model_share_release(share, l);
     l = NULL;
 
@@ -237,6 +266,7 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
     if ((st = emm_cache_init(&m->cache, p, err)) != EMM_OK)
         goto fail;
     m->cur_cell = EMM_LAYOUT_NONE;
+    m->cur_tri = NO_TRI;
     *out = &m->base;
     return EMM_OK;
 fail:

@@ -375,16 +375,21 @@ static inline uint32_t vertex_cell(const fetch_model *m, uint64_t v, bool *point
     *pointer = false;
     if (v >= m->nv)
         return NONE;
-    uint32_t lo = m->vcopy_start[v], hi = m->vcopy_start[v + 1];
-    if (lo == hi)
-        return NONE;
+    /* First the triangle just requested, which is in the cache: a vertex of
+     * a triangle with a layout index has a copy in that triangle's cell
+     * (layout.c, fill_vertices), so its copies need not be looked at — the
+     * index table is the cold load of the record loop. */
     if (m->last_tri_id >= 0) {
         const int32_t *t = m->tri + 3 * m->last_tri_id;
         if ((uint64_t)t[0] == v || (uint64_t)t[1] == v || (uint64_t)t[2] == v) {
+            assert(m->vcopy_start[v] != m->vcopy_start[v + 1]);
             *pointer = true;
             return m->last_tri;
         }
     }
+    uint32_t lo = m->vcopy_start[v], hi = m->vcopy_start[v + 1];
+    if (lo == hi)
+        return NONE;
     for (uint32_t i = lo; i < hi; i++)
         if (m->vcopy[i].cell == m->last_tri)
             return m->last_tri;

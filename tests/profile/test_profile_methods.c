@@ -1,4 +1,5 @@
-/* The exact method against a naive double loop, the fast method within its
+/* The exact method against a naive double loop and, bit for bit, against
+ * its kernel's lane-order row sums, the fast method within its
  * stated bound (thesis Eq. 5.1), the profiler's position extraction, and the
  * features' argument checks. */
 #include <math.h>
@@ -101,6 +102,68 @@ static void test_exact(void)
             free(D);
             free(R);
         }
+}
+
+/* Row i as the kernel sums it: the terms round L lanes (8 with AVX2, 4
+ * without) over whole blocks of L, the lanes added pairwise, then the
+ * tail's terms one by one. The exact method shares the work of the rows of
+ * a point that recurs; its rows must still be these, bit for bit. */
+static double lane_row(const double *xy, size_t i)
+{
+    __builtin_cpu_init();
+    size_t L = __builtin_cpu_supports("avx2") ? 8 : 4, k = 0;
+    double acc[8] = {0};
+    double px = xy[2 * i], py = xy[2 * i + 1];
+    for (; k + L <= i; k += L)
+        for (size_t j = 0; j < L; j++) {
+            double dx = xy[2 * (k + j)] - px, dy = xy[2 * (k + j) + 1] - py;
+            acc[j] += sqrt(dx * dx + dy * dy);
+        }
+    double s;
+    if (L == 8) {
+        double l0 = acc[0] + acc[4], l1 = acc[1] + acc[5], l2 = acc[2] + acc[6],
+               l3 = acc[3] + acc[7];
+        s = (l0 + l1) + (l2 + l3);
+    } else {
+        s = (acc[0] + acc[2]) + (acc[1] + acc[3]);
+    }
+    for (; k < i; k++) {
+        double dx = xy[2 * k] - px, dy = xy[2 * k + 1] - py;
+        s += sqrt(dx * dx + dy * dy);
+    }
+    return s;
+}
+
+static void test_exact_rows(void)
+{
+    static const size_t sizes[] = {1, 9, 17, 100, 2047, 2048, 4099};
+    uint64_t saved = rng; /* the other tests' points stay as they were */
+    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++)
+        for (int kind = UNIFORM; kind <= DUPLICATES + 1; kind++) {
+            size_t n = sizes[s];
+            double *xy = malloc(2 * n * sizeof *xy), *D = malloc(n * sizeof *D);
+            if (kind <= DUPLICATES) {
+                points(kind, xy, n);
+            } else {
+                /* a mesh traversal: each position read again a few accesses on */
+                points(UNIFORM, xy, n);
+                for (size_t i = 4; i < n; i++)
+                    if (unit() < 0.7) {
+                        size_t from = i - 1 - (size_t)(unit() * 4);
+                        xy[2 * i] = xy[2 * from];
+                        xy[2 * i + 1] = xy[2 * from + 1];
+                    }
+            }
+            emm_profile_exact(xy, n, D, NULL);
+            size_t bad = 0;
+            for (size_t i = 0; i < n; i++)
+                bad += memcmp(&D[i], &(double){lane_row(xy, i)}, sizeof D[i]) != 0;
+            CHECKF(bad == 0, "exact n=%zu kind=%d: %zu rows differ from the lane-order sum", n,
+                   kind, bad);
+            free(xy);
+            free(D);
+        }
+    rng = saved;
 }
 
 static void test_fast(void)
@@ -239,6 +302,7 @@ static void test_features(void)
 int main(void)
 {
     test_exact();
+    test_exact_rows();
     test_fast();
     test_compute();
     test_profiler();

@@ -1,0 +1,72 @@
+#!/bin/sh
+# The session's own cost on one run (not a test: it times things).
+#
+#   sh bench/session_overhead.sh BUILD [FACES] [PASSES]
+#
+# examples/smooth.c on a generated mesh of FACES faces (default 100,000),
+# PASSES Laplacian passes (default 10), the sancov build under
+#   emm run --capture sancov --compare baselines
+# (the window decided, every probe of the run profiled, the contest of 64
+# candidates, the phases, direct reads and the reference cache simulated
+# over the whole run), against the plain build's native run of the same
+# input, in this one command: median of 3 wall times, and of 3 CPU times
+# (user + system, all threads) where /usr/bin/time exists. The same run as
+# bench/valgrind_overhead.sh's sancov row, without Valgrind.
+set -u
+[ $# -ge 1 ] || { echo "usage: sh bench/session_overhead.sh BUILD [FACES] [PASSES]" >&2; exit 2; }
+B=$(cd "$1" && pwd) || exit 1
+FACES=${2:-100000} PASSES=${3:-10}
+EMM=$B/bin/emm PROG=$B/bin/smooth SANCOV=$B/bin/smooth.sancov
+for f in "$EMM" "$PROG" "$SANCOV"; do
+  [ -e "$f" ] || { echo "session_overhead: $f is not built" >&2; exit 1; }
+done
+mkdir -p "$B/bench" || exit 1
+MESH=$B/bench/smooth$FACES.obj
+if [ ! -s "$MESH" ]; then
+  "$EMM" mesh gen --faces "$FACES" --seed 5 -o "$MESH.tmp.obj" >/dev/null &&
+    mv "$MESH.tmp.obj" "$MESH" || exit 1
+fi
+TMP=$(mktemp -d) || exit 1
+trap 'rm -rf "$TMP"' EXIT
+unset EMM_TAG EMM_REPORT EMM_TRACE EMM_PROFILE_DUMP EMM_PROFILE EMM_CAPTURE EMM_LOG \
+  EMM_STRATEGY EMM_COMPARE EMM_FINALISTS LD_PRELOAD
+TAG='vertices:site=load_mesh,stride=12,xyz=0:f32;triangles:site=load_mesh,stride=12,vidx=0:u32'
+TIME=
+[ -x /usr/bin/time ] && TIME=/usr/bin/time
+
+now() { date +%s%N; }
+# median3 CMD...: three runs; prints the median wall time and the median CPU
+# time in seconds ("-" without /usr/bin/time).
+median3() {
+  for _ in 1 2 3; do
+    t0=$(now)
+    if [ -n "$TIME" ]; then
+      "$TIME" -f '%U %S' -o "$TMP/cpu" "$@" > "$TMP/out" 2> "$TMP/err"
+    else
+      "$@" > "$TMP/out" 2> "$TMP/err"
+    fi || { cat "$TMP/err" >&2; echo "session_overhead: $* failed" >&2; exit 1; }
+    wall=$(( $(now) - t0 ))
+    cpu=-
+    [ -n "$TIME" ] && cpu=$(tail -1 "$TMP/cpu" | awk '{ printf "%.3f", $1 + $2 }')
+    echo "$wall $cpu"
+  done > "$TMP/times"
+  w=$(awk '{ print $1 }' "$TMP/times" | sort -n | sed -n 2p | awk '{ printf "%.3f", $1 / 1e9 }')
+  c=$(awk '{ print $2 }' "$TMP/times" | sort -n | sed -n 2p)
+  echo "$w $c"
+}
+
+# shellcheck disable=SC2046 # two words: the wall and the CPU time
+set -- $(median3 "$PROG" "$MESH" "$PASSES") || exit 1
+nwall=$1 ncpu=$2
+cp "$TMP/out" "$TMP/native.out"
+# shellcheck disable=SC2046
+set -- $(median3 "$EMM" run --capture sancov --compare baselines --tag "$TAG" -- "$SANCOV" "$MESH" \
+  "$PASSES") || exit 1
+swall=$1 scpu=$2
+cmp -s "$TMP/out" "$TMP/native.out" || echo "session_overhead: output differs under emm run!"
+ratio() { awk -v a="$1" -v b="$2" 'BEGIN { if (a == "-" || b == "-" || b <= 0) print "-"; else printf "%.0fx", a / b }'; }
+echo "smooth on $FACES faces, $PASSES passes; medians of 3"
+printf '  %-58s %8s s wall %8s s cpu\n' "native (plain build)" "$nwall" "$ncpu"
+printf '  %-58s %8s s wall %8s s cpu\n' "emm run --capture sancov --compare baselines (the session)" \
+  "$swall" "$scpu"
+echo "  the session over the native run: $(ratio "$swall" "$nwall") wall, $(ratio "$scpu" "$ncpu") cpu"
