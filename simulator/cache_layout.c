@@ -107,6 +107,8 @@ static void cl_destroy(emm_model *model)
     emm_addr_map_free(&m->map);
     free(m->tri_addr);
     free(m->tri_cell);
+    free(m->tri_v);
+    free(m->tri_vaddr);
     free(m->vcopy_start);
     free(m->vcopy_cell);
     free(m->vcopy_addr);
