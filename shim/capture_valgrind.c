@@ -175,8 +175,10 @@ static void drain_locked(void)
 {
     if (!connected)
         return;
+    REQUEST(EMM_VG_BUSY, 1, 0, 0);
     for (size_t n = REQUEST(EMM_VG_TAKE, 0, 0, 0); n > 0; n = REQUEST(EMM_VG_RELEASE, 0, 0, 0))
         shim_feed_locked((const emm_raw_access *)channel.rec, n);
+    REQUEST(EMM_VG_BUSY, 0, 0, 0);
 }
 
 static void fork_child(void)

@@ -61,6 +61,8 @@ static UInt nranges;
 static ULong win_lo[WINDOWS], win_len[WINDOWS];
 static ULong need_drain;
 static ULong work;
+/* `work` when the shim began feeding the session (BUSY). */
+static ULong work_before_busy;
 
 /* The channel (client memory), the records in it, and those that did not
  * fit yet. */
@@ -204,6 +206,12 @@ static Bool client_request(ThreadId tid, UWord *arg, UWord *ret)
         break;
     case EMM_VG_LATER:
         need_drain = 0;
+        break;
+    case EMM_VG_BUSY:
+        if (arg[1])
+            work_before_busy = work;
+        else
+            work = work_before_busy;
         break;
     case EMM_VG_STOP:
         set_ranges(NULL, NULL, 0);

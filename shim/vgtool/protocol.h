@@ -17,12 +17,16 @@
  *   LATER      the drain function was reached where it cannot drain (the
  *              thread is inside the shim or the allocator): not now
  *   STOP       a forked child: record nothing more
+ *   BUSY(1)/BUSY(0)  around the shim's feeding of the session: the work the
+ *              C library does meanwhile (the session's malloc, memcpy,
+ *              qsort, the socket's send) is not the program's, so the
+ *              record count of work goes back to what it was at BUSY(1)
  * Records are emm_raw_access (emm/session.h), laid out identically as
  * emm_vg_record below (capture_valgrind.c checks the layout). */
 #ifndef EMM_VGTOOL_PROTOCOL_H
 #define EMM_VGTOOL_PROTOCOL_H
 
-#define EMM_VG_VERSION 1
+#define EMM_VG_VERSION 2
 /* Valgrind's tool request base for the two letters 'E', 'M'. */
 #define EMM_VG_BASE (((unsigned)'E' & 0xff) << 24 | ((unsigned)'M' & 0xff) << 16)
 
@@ -33,7 +37,8 @@ enum emm_vg_request {
     EMM_VG_TAKE,
     EMM_VG_RELEASE,
     EMM_VG_LATER,
-    EMM_VG_STOP
+    EMM_VG_STOP,
+    EMM_VG_BUSY
 };
 
 /* The write flag in bytes_write, as EMM_RAW_WRITE. */
