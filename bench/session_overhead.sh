@@ -20,21 +20,11 @@ EMM=$B/bin/emm PROG=$B/bin/smooth SANCOV=$B/bin/smooth.sancov
 for f in "$EMM" "$PROG" "$SANCOV"; do
   [ -e "$f" ] || { echo "session_overhead: $f is not built" >&2; exit 1; }
 done
-mkdir -p "$B/bench" || exit 1
-MESH=$B/bench/smooth$FACES.obj
-if [ ! -s "$MESH" ]; then
-  "$EMM" mesh gen --faces "$FACES" --seed 5 -o "$MESH.tmp.obj" >/dev/null &&
-    mv "$MESH.tmp.obj" "$MESH" || exit 1
-fi
-TMP=$(mktemp -d) || exit 1
-trap 'rm -rf "$TMP"' EXIT
-unset EMM_TAG EMM_REPORT EMM_TRACE EMM_PROFILE_DUMP EMM_PROFILE EMM_CAPTURE EMM_LOG \
-  EMM_STRATEGY EMM_COMPARE EMM_FINALISTS LD_PRELOAD
-TAG='vertices:site=load_mesh,stride=12,xyz=0:f32;triangles:site=load_mesh,stride=12,vidx=0:u32'
+NAME=session_overhead
+. "$(dirname "$0")/smooth_setup.sh"
 TIME=
 [ -x /usr/bin/time ] && TIME=/usr/bin/time
 
-now() { date +%s%N; }
 # median3 CMD...: three runs; prints the median wall time and the median CPU
 # time in seconds ("-" without /usr/bin/time).
 median3() {

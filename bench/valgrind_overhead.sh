@@ -36,19 +36,8 @@ for f in "$EMM" "$PROG" "$SANCOV" "$B/lib/emm/valgrind/emm-amd64-linux"; do
   [ -e "$f" ] || { echo "valgrind_overhead: $f is not built" >&2; exit 1; }
 done
 command -v valgrind >/dev/null || { echo "valgrind_overhead: valgrind is not installed" >&2; exit 1; }
-mkdir -p "$B/bench" || exit 1
-MESH=$B/bench/smooth$FACES.obj
-if [ ! -s "$MESH" ]; then
-  "$EMM" mesh gen --faces "$FACES" --seed 5 -o "$MESH.tmp.obj" >/dev/null &&
-    mv "$MESH.tmp.obj" "$MESH" || exit 1
-fi
-TMP=$(mktemp -d) || exit 1
-trap 'rm -rf "$TMP"' EXIT
-unset EMM_TAG EMM_REPORT EMM_TRACE EMM_PROFILE_DUMP EMM_PROFILE EMM_CAPTURE EMM_LOG \
-  EMM_STRATEGY EMM_COMPARE EMM_FINALISTS LD_PRELOAD
-TAG='vertices:site=load_mesh,stride=12,xyz=0:f32;triangles:site=load_mesh,stride=12,vidx=0:u32'
-
-now() { date +%s%N; }
+NAME=valgrind_overhead
+. "$(dirname "$0")/smooth_setup.sh"
 # median3 CMD...: the median wall time of three runs, in seconds.
 median3() {
   for i in 1 2 3; do
