@@ -150,6 +150,14 @@ static bool valid_field(emm_array_kind kind, emm_tag_shape shape, emm_scalar typ
 }
 
 
+/* The copy of the array's bytes a program in another process sent goes:
+ * the array changed (or left), and it is asked for again when needed. */
+static void forget_view(session_array *a)
+{
+    free(a->view);
+    a->view = NULL;
+}
+
 /* An array leaves (freed, moved, re-tagged). When the window holds records
  * of it and the decision is still to come, its coordinates or indices are
  * copied first — a program that frees its mesh before exit still gets its
@@ -170,8 +178,7 @@ static void drop_slot(emm_session *s, int i, bool keep)
                 memcpy(snap + (k * ns + c) * sb, session_scalar_at(s, a, k, c), sb);
         a->snap = snap;
     }
-    free(a->view);
-    a->view = NULL;
+    forget_view(a);
     a->live = false;
     if (s->last == i)
         s->last = -1;
@@ -275,8 +282,7 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
     a->live = true;
     a->refs = 0;
     a->snap = NULL;
-    free(a->view);
-    a->view = NULL;
+    forget_view(a);
     a->trace_index = tidx;
     a->rule = rule;
     a->top = 0;
@@ -315,8 +321,7 @@ emm_session_state emm_session_move(emm_session *s, const void *old, const void *
         if (a->plane)
             a->plane = count * a->stride;
         a->moves++;
-        free(a->view); /* of the old block: the program sends the new one when needed */
-        a->view = NULL;
+        forget_view(a); /* of the old block */
         if (a->trace_index >= 0 && a->count > s->tarrays[a->trace_index].count)
             a->count = s->tarrays[a->trace_index].count; /* later elements are not in the trace */
         if (a->top > a->count)
@@ -625,10 +630,8 @@ emm_status emm_session_decide(emm_session *s, emm_error *err)
         s->xyz = NULL;
         memset(&s->info.geometry, 0, sizeof s->info.geometry);
         s->vertex_only = false;
-        for (int i = 0; i < s->narrays; i++) { /* copies of now: read again later */
-            free(s->arrays[i].view);
-            s->arrays[i].view = NULL;
-        }
+        for (int i = 0; i < s->narrays; i++) /* copies of now: read again later */
+            forget_view(&s->arrays[i]);
         s->phase = PHASE_DEFERRED;
         return EMM_OK;
     }
