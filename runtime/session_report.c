@@ -486,10 +486,16 @@ void session_print_summary(const emm_session *s, FILE *out, const emm_result *re
     if (chosen) {
         emm_strategy_format(&chosen->strategy, name, sizeof name);
         emm_strategy_words(&chosen->strategy, words, sizeof words);
-        if (runner && runner != chosen ? emm_decide_is_tie(chosen->total, runner->total)
-                                       : !s->contest && s->has_wd && s->wd.tie) {
+        /* The other of a tie: the simulated runner-up, or the decision's
+         * (not simulated with EMM_COMPARE=none). */
+        const emm_strategy *tied =
+            runner && runner != chosen
+                ? (emm_decide_is_tie(chosen->total, runner->total) ? &runner->strategy : NULL)
+            : !s->contest && s->has_wd && s->wd.tie && s->wd.has_runner_up ? &s->wd.runner_up
+                                                                          : NULL;
+        if (tied) {
             char other[64];
-            emm_strategy_format(&runner->strategy, other, sizeof other);
+            emm_strategy_format(tied, other, sizeof other);
             fprintf(out, "emm: answer: a tie between %s and %s (within %.0f%%: either will "
                          "do); %s named first (%s)\n",
                     name, other, EMM_DECIDE_TIE_MARGIN * 100, name,
