@@ -100,7 +100,7 @@ static void evaluate(emm_session *s)
     if (n < EMM_PROFILE_MIN)
         goto done; /* a probe that was mostly a sweep: no opinion */
     if (!(D = malloc(n * sizeof *D)) ||
-        emm_profile_compute(xy, n, D, NULL, &s->threads, &e) != EMM_OK ||
+        emm_profile_fast(xy, n, EMM_PROFILE_THETA, D, &s->threads, &e) != EMM_OK ||
         emm_profile_features(D, n, s->program, f, &e) != EMM_OK ||
         emm_table_decide(s->table, f, 0, &d, &e) != EMM_OK)
         goto off;
