@@ -478,6 +478,11 @@ static emm_status build_models(emm_session *s, emm_error *err)
     if (racing)
         n += emm_strategy_sweep(all + n, cap - n);
     for (size_t i = 0; i < n; i++) {
+        /* The contest's sweep brings only what the machine offers: a
+         * strategy it does not offer (cache@LAYOUT without a cache) is no
+         * candidate and, not asked for, no comparison either. */
+        if (i >= shown && !emm_machine_offers(s->machine, &all[i]))
+            continue;
         size_t j = 0;
         while (j < k && !same_strategy(&all[i], &list[j]))
             j++;
@@ -485,7 +490,7 @@ static emm_status build_models(emm_session *s, emm_error *err)
             list[k++] = all[i];
         /* Every candidate of the sweep the machine offers enters the
          * contest once; what the report shows keeps running when dropped. */
-        if (racing && i >= shown && emm_machine_offers(s->machine, &all[i])) {
+        if (racing && i >= shown) {
             bool in = false;
             for (size_t e = 0; e < ne; e++)
                 in = in || entrants[e] == j;
