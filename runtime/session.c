@@ -365,7 +365,7 @@ size_t emm_session_ranges(const emm_session *s, uint64_t *lo, uint64_t *hi, size
         return 0;
     for (int i = 0; i < s->narrays; i++) {
         const session_array *a = &s->arrays[i];
-        if (!a->live || (s->phase == PHASE_SIMULATING && a->trace_index < 0))
+        if (!a->live || ((s->phase == PHASE_SIMULATING || s->deciding) && a->trace_index < 0))
             continue;
         if (n < cap) {
             lo[n] = a->base;
@@ -606,10 +606,31 @@ emm_session_state emm_session_iteration(emm_session *s)
     return public_state(s);
 }
 
-emm_status emm_session_decide(emm_session *s, emm_error *err)
+/* The end of a decision (st: how it went): the window and the snapshots
+ * are done with, and the session simulates or steps aside. */
+static emm_status decide_done(emm_session *s, emm_status st, emm_error *err)
 {
-    if (s->remote)
-        return session_remote_decide(s, err);
+    for (int i = 0; i < s->narrays; i++) {
+        free(s->arrays[i].snap);
+        s->arrays[i].snap = NULL;
+    }
+    free(s->window);
+    s->window = NULL;
+    s->wn = s->wcap = 0;
+    if (st != EMM_OK) {
+        s->phase = PHASE_FAILED;
+        if (err)
+            *err = s->failure;
+        return st;
+    }
+    session_window_done(s);
+    s->phase = PHASE_SIMULATING;
+    return EMM_OK;
+}
+
+emm_status session_decide_begin(emm_session *s, emm_error *err)
+{
+    s->deciding = false;
     if (s->phase == PHASE_SIMULATING || s->phase == PHASE_DONE || s->phase == PHASE_DEFERRED)
         return EMM_OK;
     if (s->phase == PHASE_FAILED) {
@@ -617,7 +638,7 @@ emm_status emm_session_decide(emm_session *s, emm_error *err)
             *err = s->failure;
         return s->failure.status;
     }
-    emm_status st = session_decide(s, &s->failure);
+    emm_status st = session_decide_read(s, &s->failure);
     if (st == EMM_ERR_MESH && s->geometry_failed && !s->deferred) {
         /* The arrays do not hold a mesh yet (a loader that renumbers its
          * faces after the first reads, a block still being filled): keep
@@ -635,22 +656,29 @@ emm_status emm_session_decide(emm_session *s, emm_error *err)
         s->phase = PHASE_DEFERRED;
         return EMM_OK;
     }
-    for (int i = 0; i < s->narrays; i++) {
-        free(s->arrays[i].snap);
-        s->arrays[i].snap = NULL;
+    if (st == EMM_OK) {
+        s->deciding = true;
+        return EMM_OK;
     }
-    free(s->window);
-    s->window = NULL;
-    s->wn = s->wcap = 0;
-    if (st != EMM_OK) {
-        s->phase = PHASE_FAILED;
-        if (err)
-            *err = s->failure;
+    return decide_done(s, st, err);
+}
+
+emm_status session_decide_end(emm_session *s, emm_error *err)
+{
+    if (!s->deciding)
+        return EMM_OK;
+    s->deciding = false;
+    return decide_done(s, session_decide_rest(s, &s->failure), err);
+}
+
+emm_status emm_session_decide(emm_session *s, emm_error *err)
+{
+    if (s->remote)
+        return session_remote_decide(s, err);
+    emm_status st = session_decide_begin(s, err);
+    if (st != EMM_OK || !s->deciding)
         return st;
-    }
-    session_window_done(s);
-    s->phase = PHASE_SIMULATING;
-    return EMM_OK;
+    return session_decide_end(s, err);
 }
 
 /* An output that could not be written is said on the summary stream: the

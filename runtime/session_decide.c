@@ -542,7 +542,7 @@ out:
     return st;
 }
 
-emm_status session_decide(emm_session *s, emm_error *err)
+emm_status session_decide_read(emm_session *s, emm_error *err)
 {
     emm_status st;
     s->geometry_failed = false;
@@ -552,6 +552,13 @@ emm_status session_decide(emm_session *s, emm_error *err)
     }
     if ((st = freeze_arrays(s, err)) != EMM_OK)
         return st;
+    session_outputs_prepare(s);
+    return EMM_OK;
+}
+
+emm_status session_decide_rest(emm_session *s, emm_error *err)
+{
+    emm_status st;
     if (!(s->layouts = emm_model_share_new()))
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", s->program);
     emm_model_share_keep(s->layouts);

@@ -114,6 +114,7 @@ struct emm_session {
     emm_error failure;   /* why the session stepped aside (PHASE_FAILED) */
     bool geometry_failed; /* the last decision failed reading the geometry */
     bool deferred;       /* the decision waited for the program's end (PHASE_DEFERRED) */
+    bool deciding;       /* session_decide_begin read the program: _end is due */
     emm_error deferred_why; /* what the geometry was when the window closed */
 
     session_array arrays[SESSION_MAX_ARRAYS];
@@ -337,10 +338,20 @@ static inline const char *session_path(const char *p)
     return p[0] ? p : NULL;
 }
 
-/* session_decide.c: the geometry, the profile, the choice and the models;
- * the window's records then go through them. A failure leaves the session
- * to step aside. */
-emm_status session_decide(emm_session *s, emm_error *err);
+/* session_decide.c, in two parts. session_decide_read: everything the
+ * decision reads of the program — the geometry, the arrays frozen as the
+ * trace's, the program's objects when a trace will name them — so that a
+ * program in another process may go on once it returns. session_decide_rest:
+ * the profile, the choice and the models, from the session's own copies;
+ * the window's records then go through them. A failure of either leaves
+ * the session to step aside. */
+emm_status session_decide_read(emm_session *s, emm_error *err);
+emm_status session_decide_rest(emm_session *s, emm_error *err);
+/* The two parts of emm_session_decide in-process: _begin reads (or defers
+ * the decision, or fails), and when it leaves s->deciding set, _end
+ * completes it. */
+emm_status session_decide_begin(emm_session *s, emm_error *err);
+emm_status session_decide_end(emm_session *s, emm_error *err);
 
 /* Only the window was captured and simulated: the fault backend stops at
  * the decision. */
@@ -366,7 +377,10 @@ uint64_t session_switch_cycles(const emm_session *s);
  * attribution, started at the decision before the window's replay;
  * session_window_done marks the window's end; session_stall_lines
  * resolves the top stall lines (at finish, before the summary); the
- * timeline is closed by session_timeline_close; session_lines_free frees. */
+ * timeline is closed by session_timeline_close; session_lines_free frees.
+ * session_outputs_prepare, in the decision's reading part, fetches what
+ * the outputs will need of a program in another process (its objects). */
+void session_outputs_prepare(emm_session *s);
 void session_outputs_start(emm_session *s);
 void session_window_done(emm_session *s);
 void session_stall_lines(emm_session *s);

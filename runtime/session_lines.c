@@ -46,6 +46,12 @@ static bool program_modules(emm_session *s, emm_trace_module **mods, uint32_t *n
     return emm_process_modules(mods, n, NULL) == EMM_OK;
 }
 
+void session_outputs_prepare(emm_session *s)
+{
+    if (s->cfg.trace[0] && has_pcs(s) && s->foreign && s->pull_modules)
+        s->pull_modules(s);
+}
+
 void session_outputs_start(emm_session *s)
 {
     emm_trace_module *mods = NULL;

@@ -13,6 +13,10 @@
  *   moment; after it, accesses and iterations are sent without waiting
  *   (their answer can only be SIMULATING) and the socket's back-pressure
  *   bounds what is in flight;
+ * - the decision answers once it has read the program (the geometry, the
+ *   arrays frozen, the objects a trace will name), with the ranges the
+ *   program asks for next; the profile, the sweeps and the models follow
+ *   while the program goes on, its accesses queued;
  * - the session reads the program's memory only inside a call that waits
  *   (the geometry at the decision, an array's fields when it leaves before
  *   it): the server then asks for those bytes (a READ), and for the
@@ -41,7 +45,7 @@
 #include "error.h"
 #include "srcline.h"
 
-#define SESSION_WIRE_VERSION 1
+#define SESSION_WIRE_VERSION 2
 /* Bytes the server's reader may hold before the program waits. */
 #define SERVER_QUEUE_BYTES ((size_t)64 << 20)
 /* The largest frame either side accepts: a mesh array's bytes. */
@@ -144,6 +148,8 @@ struct session_remote {
     bool broken;          /* the server is gone: every call answers OFF */
     bool quiet;           /* a forked child's copy: nothing to say */
     bool decided;         /* the decision was made: accesses no longer wait */
+    bool have_ranges;     /* ranges holds the session's ranges (from the decision) */
+    uint64_t nranges, ranges[2 * SESSION_MAX_ARRAYS];
     emm_session_state state;
     emm_error why;        /* why the server is gone */
     char program[256];
@@ -205,6 +211,8 @@ static bool call(struct session_remote *r, uint32_t op, bool wait, const void *a
 {
     if (r->broken)
         return false;
+    if (op != OP_ACCESS && op != OP_ITERATION && op != OP_RANGES)
+        r->have_ranges = false; /* a call that may change them */
     struct frame f = {.op = op, .wait = wait, .len = alen + blen};
     if (!send_frame(r->fd, &f, a, alen, b, blen)) {
         lost(r, "(the socket closed)");
@@ -445,9 +453,17 @@ size_t session_remote_ranges(const emm_session *s, uint64_t *lo, uint64_t *hi, s
     struct session_remote *r = s->remote;
     uint64_t c = cap, pairs[2 * SESSION_MAX_ARRAYS];
     struct frame reply;
-    if (!call(r, OP_RANGES, true, &c, sizeof c, NULL, 0, &reply, pairs, sizeof pairs))
+    size_t n, got;
+    if (r->have_ranges && !r->broken) {
+        n = (size_t)r->nranges;
+        got = n < SESSION_MAX_ARRAYS ? n : SESSION_MAX_ARRAYS;
+        memcpy(pairs, r->ranges, sizeof pairs);
+    } else if (!call(r, OP_RANGES, true, &c, sizeof c, NULL, 0, &reply, pairs, sizeof pairs)) {
         return 0;
-    size_t n = (size_t)reply.value, got = reply.len / (2 * sizeof *pairs);
+    } else {
+        n = (size_t)reply.value;
+        got = reply.len / (2 * sizeof *pairs);
+    }
     for (size_t i = 0; i < n && i < cap && i < got; i++) {
         lo[i] = pairs[2 * i];
         hi[i] = pairs[2 * i + 1];
@@ -469,10 +485,33 @@ emm_session_state session_remote_iteration(emm_session *s)
     return state_call(r, OP_ITERATION, !r->decided, NULL, 0);
 }
 
+/* The server answers as soon as it has read what the decision needs of the
+ * program, with the arrays' ranges from then on (the program asks for them
+ * next), and decides while the program goes on. */
 emm_status session_remote_decide(emm_session *s, emm_error *err)
 {
     struct session_remote *r = s->remote;
-    emm_status st = status_call(r, OP_DECIDE, NULL, 0, err);
+    struct frame reply;
+    union {
+        uint64_t pairs[2 * SESSION_MAX_ARRAYS];
+        char msg[sizeof err->message];
+    } u;
+    memset(&u, 0, sizeof u);
+    emm_status st;
+    if (!call(r, OP_DECIDE, true, NULL, 0, NULL, 0, &reply, &u, sizeof u - 1)) {
+        st = r->why.status;
+        if (err)
+            *err = r->why;
+    } else if ((st = (emm_status)reply.status) != EMM_OK) {
+        if (err) {
+            err->status = st;
+            snprintf(err->message, sizeof err->message, "%s", u.msg);
+        }
+    } else {
+        r->nranges = (uint64_t)reply.value;
+        memcpy(r->ranges, u.pairs, sizeof r->ranges);
+        r->have_ranges = true;
+    }
     r->decided = true;
     r->state = st == EMM_OK ? EMM_SESSION_SIMULATING : EMM_SESSION_OFF;
     return st;
@@ -531,6 +570,7 @@ struct server {
     struct message *head, *tail;
     size_t queued;
     bool ended;          /* the client closed, or a frame was malformed */
+    bool waiting;        /* the client waits for a REPLY: it answers READs */
     bool stop;           /* the service is over: the reader leaves */
 };
 
@@ -618,6 +658,7 @@ static struct message *next_message(struct server *v)
 static bool reply(struct server *v, int64_t value, emm_status st, const void *data, size_t len)
 {
     struct frame f = {.op = OP_REPLY, .value = value, .status = st, .len = len};
+    v->waiting = false;
     return send_frame(v->fd, &f, data, len, NULL, 0);
 }
 
@@ -628,7 +669,9 @@ static unsigned char *ask(struct server *v, uint32_t op, uint64_t addr, uint64_t
 {
     struct frame f = {.op = op, .value = (int64_t)addr, .len = want};
     *len = 0;
-    if (!send_frame(v->fd, &f, NULL, 0, NULL, 0))
+    /* A client that does not wait reads no request: the session goes
+     * without (session_decide_read has fetched what the rest needs). */
+    if (!v->waiting || !send_frame(v->fd, &f, NULL, 0, NULL, 0))
         return NULL;
     struct message *m = next_message(v);
     if (!m || m->f.op != OP_BYTES) {
@@ -730,10 +773,25 @@ static emm_status serve_new(struct server *v, const struct message *m, emm_error
 }
 
 /* One call; false ends the service (a malformed frame). */
+/* The session's ranges, as the answer. */
+static bool reply_ranges(struct server *v, emm_session *s)
+{
+    uint64_t pairs[2 * SESSION_MAX_ARRAYS];
+    uint64_t lo[SESSION_MAX_ARRAYS], hi[SESSION_MAX_ARRAYS];
+    size_t n = emm_session_ranges(s, lo, hi, SESSION_MAX_ARRAYS);
+    size_t k = n < SESSION_MAX_ARRAYS ? n : SESSION_MAX_ARRAYS;
+    for (size_t i = 0; i < k; i++) {
+        pairs[2 * i] = lo[i];
+        pairs[2 * i + 1] = hi[i];
+    }
+    return reply(v, (int64_t)n, EMM_OK, pairs, k * 2 * sizeof *pairs);
+}
+
 static bool serve_one(struct server *v, const struct message *m)
 {
     emm_error e = {0};
     emm_session *s = v->s;
+    v->waiting = m->f.wait != 0;
     if (m->f.op == OP_NEW) {
         emm_status st = s ? emm_fail(&e, EMM_ERR_FORMAT, "emm-session: started twice")
                           : serve_new(v, m, &e);
@@ -768,17 +826,8 @@ static bool serve_one(struct server *v, const struct message *m)
         memcpy(&b, m->data, sizeof b);
         return reply(v, emm_session_untag(s, (const void *)(uintptr_t)b), EMM_OK, NULL, 0);
     }
-    case OP_RANGES: {
-        uint64_t pairs[2 * SESSION_MAX_ARRAYS];
-        uint64_t lo[SESSION_MAX_ARRAYS], hi[SESSION_MAX_ARRAYS];
-        size_t n = emm_session_ranges(s, lo, hi, SESSION_MAX_ARRAYS);
-        size_t k = n < SESSION_MAX_ARRAYS ? n : SESSION_MAX_ARRAYS;
-        for (size_t i = 0; i < k; i++) {
-            pairs[2 * i] = lo[i];
-            pairs[2 * i + 1] = hi[i];
-        }
-        return reply(v, (int64_t)n, EMM_OK, pairs, k * 2 * sizeof *pairs);
-    }
+    case OP_RANGES:
+        return reply_ranges(v, s);
     case OP_ACCESS: {
         if (m->f.len % sizeof(emm_raw_access))
             return false;
@@ -792,8 +841,16 @@ static bool serve_one(struct server *v, const struct message *m)
         return !m->f.wait || reply(v, st, EMM_OK, NULL, 0);
     }
     case OP_DECIDE: {
-        emm_status st = emm_session_decide(s, &e);
-        return reply(v, 0, st, e.message, st == EMM_OK ? 0 : strlen(e.message) + 1);
+        /* The program goes on once the decision has read it; the rest of
+         * the decision overlaps with its run (its accesses queue up). A
+         * failure then is the summary's, at finish, as in the program. */
+        emm_status st = session_decide_begin(s, &e);
+        if (st != EMM_OK)
+            return reply(v, 0, st, e.message, strlen(e.message) + 1);
+        if (!reply_ranges(v, s))
+            return false;
+        session_decide_end(s, &e);
+        return true;
     }
     case OP_FINISH: {
         uint32_t say = 0;
