@@ -783,6 +783,24 @@ static size_t read_records(const char *path, emm_trace_record *out, size_t cap,
     return n;
 }
 
+/* A session deciding "direct" with EMM_TAG `rules` (the shim's blocks are
+ * then tagged by rule), its trace at `trace` and its report at `report`
+ * (NULL: none). */
+static emm_session *new_tagged(const char *rules, const char *trace, const char *report)
+{
+    emm_error err;
+    emm_session *s;
+    emm_session_config c = base_config();
+    set_strategy("direct");
+    REQUIRE(emm_tag_rules_parse(rules, &tcfg.tags, &err) == EMM_OK);
+    if (trace)
+        strcpy(tcfg.trace, trace);
+    if (report)
+        strcpy(tcfg.report, report);
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    return s;
+}
+
 /* Issue 14 item 5 through the API, as the shim drives it for a rule: a
  * column-major block (order=columns) whose x, y and z columns are one
  * element each, the trace record's offset naming the column; and a
@@ -802,13 +820,8 @@ static void test_shapes(void)
     /* A square of two triangles, V and F column-major (libigl's). */
     static double V[12] = {0, 1, 1, 0, /* x */ 0, 0, 1, 1, /* y */ 5, 6, 7, 8 /* z */};
     static int32_t F[6] = {0, 0, /* first corners */ 1, 2, /* second */ 2, 3 /* third */};
-    emm_session_config c = base_config();
-    set_strategy("direct");
-    REQUIRE(emm_tag_rules_parse("vertices:order=columns,xyz=0:f64;"
-                                "triangles:order=columns,vidx=0:i32",
-                                &tcfg.tags, &err) == EMM_OK);
-    strcpy(tcfg.trace, "shapes.emmt");
-    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    s = new_tagged("vertices:order=columns,xyz=0:f64;triangles:order=columns,vidx=0:i32",
+                   "shapes.emmt", NULL);
     /* The shim hands a rule's block over as entries of `stride` bytes. */
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, V, 12, 8, 0, EMM_F64, 0) >= 0);
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_TRIANGLES, F, 6, 4, 0, EMM_I32, 1) >= 0);
@@ -846,11 +859,7 @@ static void test_shapes(void)
     };
     static struct facet soup[2] = {{7, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}},
                                    {8, {{0, 0, 0}, {1, 1, -0.0f}, {0, 1, 0}}}};
-    c = base_config();
-    set_strategy("direct");
-    REQUIRE(emm_tag_rules_parse("soup:stride=40,corners=4:f32", &tcfg.tags, &err) == EMM_OK);
-    strcpy(tcfg.trace, "soup.emmt");
-    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    s = new_tagged("soup:stride=40,corners=4:f32", "soup.emmt", NULL);
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_TRIANGLES, soup, 2, 40, 4, EMM_F32, 0) >= 0);
     emm_raw_access b[] = {
         {(uintptr_t)&soup[1].id, 4, 0, 0},      /* triangle 1, not a corner */
@@ -919,13 +928,9 @@ static void test_axes(void)
     static struct entry Y[4] = {{0, 0}, {1, 0}, {2, 1}, {3, 1}};
     static struct entry Z[4] = {{0, 5}, {1, 6}, {2, 7}, {3, 8}};
     static int32_t F[6] = {0, 1, 2, 0, 2, 3};
-    emm_session_config c = base_config();
-    set_strategy("direct");
-    REQUIRE(emm_tag_rules_parse("vertices:stride=16,x=8:f64;vertices:stride=16,y=8:f64;"
-                                "vertices:stride=16,z=8:f64;triangles:stride=12,vidx=0:i32",
-                                &tcfg.tags, &err) == EMM_OK);
-    strcpy(tcfg.trace, "axes.emmt");
-    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    s = new_tagged("vertices:stride=16,x=8:f64;vertices:stride=16,y=8:f64;"
+                   "vertices:stride=16,z=8:f64;triangles:stride=12,vidx=0:i32",
+                   "axes.emmt", NULL);
     /* The blocks in another order than their axes: the rules say which is which. */
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, Z, 4, 16, 8, EMM_F64, 2) >= 0);
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, X, 4, 16, 8, EMM_F64, 0) >= 0);
@@ -963,11 +968,7 @@ static void test_axes(void)
     /* In the plane: x and y only, f32, no triangles; both blocks leave
      * before the decision, which reads the copies the session kept. */
     static float x2[4] = {0, 1, 1, 0}, y2[4] = {0, 0, 1, 1};
-    c = base_config();
-    set_strategy("direct");
-    REQUIRE(emm_tag_rules_parse("vertices:x=0:f32;vertices:y=0:f32", &tcfg.tags, &err) == EMM_OK);
-    strcpy(tcfg.trace, "axes2.emmt");
-    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    s = new_tagged("vertices:x=0:f32;vertices:y=0:f32", "axes2.emmt", NULL);
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, x2, 4, 4, 0, EMM_F32, 0) >= 0);
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, y2, 4, 4, 0, EMM_F32, 1) >= 0);
     emm_raw_access b[] = {{(uintptr_t)&x2[3], 4, 0, 0}, {(uintptr_t)&y2[3], 4, 0, 0}};
@@ -988,12 +989,8 @@ static void test_axes(void)
 
     /* Counts that disagree: one line naming both rules, no report. */
     static float y3[3] = {0, 0, 1};
-    c = base_config();
-    set_strategy("direct");
-    REQUIRE(emm_tag_rules_parse("vertices:x=0:f32;vertices:y=0:f32", &tcfg.tags, &err) == EMM_OK);
-    strcpy(tcfg.report, "axes.json");
     remove("axes.json");
-    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    s = new_tagged("vertices:x=0:f32;vertices:y=0:f32", NULL, "axes.json");
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, x2, 4, 4, 0, EMM_F32, 0) >= 0);
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, y3, 3, 4, 0, EMM_F32, 1) >= 0);
     emm_session_access(s, b, 1);
@@ -1011,10 +1008,7 @@ static void test_axes(void)
     /* A y that is no coordinate: the y block is refused, by its rule. */
     static float y4[4] = {0, 0, 1, 1};
     y4[1] = (float)NAN;
-    c = base_config();
-    set_strategy("direct");
-    REQUIRE(emm_tag_rules_parse("vertices:x=0:f32;vertices:y=0:f32", &tcfg.tags, &err) == EMM_OK);
-    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    s = new_tagged("vertices:x=0:f32;vertices:y=0:f32", NULL, NULL);
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, x2, 4, 4, 0, EMM_F32, 0) >= 0);
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, y4, 4, 4, 0, EMM_F32, 1) >= 0);
     emm_session_access(s, b, 1);
