@@ -475,10 +475,13 @@ void emm_config_dump(const emm_config *c, FILE *out)
     fprintf(out, "emm:   EMM_TAG=%zu rule%s\n", c->tags.n, c->tags.n == 1 ? "" : "s");
     for (size_t i = 0; i < c->tags.n; i++) {
         const emm_tag_rule *r = &c->tags.rule[i];
-        fprintf(out, "emm:     rule %zu: %s site=%s min=%llu nth=%llu stride=%u offset=%u\n",
+        fprintf(out, "emm:     rule %zu: %s site=%s min=%llu nth=%llu stride=%u offset=%u%s\n",
                 i + 1, r->kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles",
                 r->site[0] ? r->site : "(any)", (unsigned long long)r->min,
-                (unsigned long long)r->nth, r->stride, r->offset);
+                (unsigned long long)r->nth, r->stride, r->offset,
+                r->shape != EMM_TAG_AXIS ? "" : r->axis == 0 ? " (the x block)"
+                                              : r->axis == 1 ? " (the y block)"
+                                                             : " (the z block)");
     }
     fprintf(out, "emm:   EMM_CAPTURE=%s\n", emm_capture_name(c->capture));
     if (c->window_accesses)

@@ -87,10 +87,18 @@ int emm_tag_rule_fits(const emm_tag_rule *r, uint64_t size)
 }
 
 /* The scalars a record (an entry) holds from its offset: three in a row,
- * one of a column, a soup's nine. */
+ * one of a column or of an axis block, a soup's nine. */
 static unsigned rule_scalars(const emm_tag_rule *r)
 {
-    return r->shape == EMM_TAG_SOUP ? 9 : r->shape == EMM_TAG_COLUMNS ? 1 : 3;
+    return r->shape == EMM_TAG_SOUP                                 ? 9
+           : r->shape == EMM_TAG_COLUMNS || r->shape == EMM_TAG_AXIS ? 1
+                                                                     : 3;
+}
+
+/* The key of an axis rule: x=, y= or z=; -1 for another key. */
+static int axis_key(const char *p, size_t kl)
+{
+    return kl != 1 ? -1 : *p == 'x' ? 0 : *p == 'y' ? 1 : *p == 'z' ? 2 : -1;
 }
 
 /* One rule, text[0..len). */
@@ -121,7 +129,7 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
     const char *field_help = soup ? "corners=OFFSET:f32|f64"
                              : vertices ? "xyz=OFFSET:f32|f64"
                                         : "vidx=OFFSET:i32|u32|u16|i64";
-    bool have_min = false, have_field = false;
+    bool have_min = false, have_field = false, have_order = false;
     const char *p = colon + 1, *end = text + len;
     while (p < end) {
         const char *comma = memchr(p, ',', (size_t)(end - p));
@@ -166,6 +174,7 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
                                 emm_clip(p, plen, q));
             r->stride = (uint32_t)x;
         } else if (is_key(p, kl, "order") && !soup) {
+            have_order = true;
             if (vl == 7 && memcmp(v, "records", 7) == 0)
                 r->shape = EMM_TAG_RECORDS;
             else if (vl == 7 && memcmp(v, "columns", 7) == 0)
@@ -178,16 +187,28 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
                 return emm_fail(err, EMM_ERR_INVALID, "'%s' is not a count of records from 1",
                                 emm_clip(p, plen, q));
             r->n = x;
-        } else if (is_key(p, kl, field)) {
+        } else if (is_key(p, kl, field) || (vertices && axis_key(p, kl) >= 0)) {
+            /* One field per rule: a record's three coordinates, or one
+             * coordinate of every vertex (an axis block). */
+            if (have_field)
+                return emm_fail(err, EMM_ERR_INVALID,
+                                "'%s': a rule has one of xyz=, x=, y=, z= (a block holding one "
+                                "coordinate gets a rule of its own)",
+                                emm_clip(p, plen, q));
             if (!parse_field(v, vl, vertices || soup, &r->offset, &r->type))
-                return emm_fail(err, EMM_ERR_INVALID, "'%s': expected %s", emm_clip(p, plen, q),
-                                field_help);
+                return emm_fail(err, EMM_ERR_INVALID, "'%s': expected %.*s%s",
+                                emm_clip(p, plen, q), (int)kl, p,
+                                field_help + strlen(field));
+            if (axis_key(p, kl) >= 0) {
+                r->axis = (uint32_t)axis_key(p, kl);
+                r->shape = EMM_TAG_AXIS;
+            }
             have_field = true;
         } else {
             return emm_fail(err, EMM_ERR_INVALID, "unknown key in '%s' (%s rules take %s)",
                             emm_clip(p, plen, q), soup ? "soup" : vertices ? "vertices" : "triangles",
                             soup       ? "site, min, nth, stride, corners"
-                            : vertices ? "site, min, nth, stride, order, n, xyz"
+                            : vertices ? "site, min, nth, stride, order, n, xyz or x|y|z"
                                        : "site, min, nth, stride, order, n, vidx");
         }
         p = comma ? comma + 1 : end;
@@ -195,13 +216,19 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
     if (!have_field)
         return emm_fail(err, EMM_ERR_INVALID, "rule '%s' needs %s", emm_clip(text, len, q),
                         field_help);
-    bool columns = r->shape == EMM_TAG_COLUMNS;
+    bool columns = r->shape == EMM_TAG_COLUMNS, axis = r->shape == EMM_TAG_AXIS;
+    if (axis && have_order)
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "rule '%s': an axis block (x=, y=, z=) holds one coordinate of every "
+                        "vertex: order= does not apply",
+                        emm_clip(text, len, q));
     if (r->n && !columns)
         return emm_fail(err, EMM_ERR_INVALID,
                         "rule '%s': n= counts the entries of a column: it needs order=columns",
                         emm_clip(text, len, q));
-    /* A column's entries are its scalars, unless stride= says otherwise. */
-    if (r->stride == 0 && columns)
+    /* A column's or an axis block's entries are its scalars, unless
+     * stride= says otherwise. */
+    if (r->stride == 0 && (columns || axis))
         r->stride = (uint32_t)scalar_size(r->type);
     if (r->stride == 0)
         return emm_fail(err, EMM_ERR_INVALID, "rule '%s' needs stride=BYTES", emm_clip(text, len, q));
@@ -209,6 +236,7 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
         return emm_fail(err, EMM_ERR_INVALID,
                         soup      ? "rule '%s': the nine corner coordinates do not fit in stride bytes"
                         : columns ? "rule '%s': a column's scalar does not fit in stride bytes"
+                        : axis    ? "rule '%s': the coordinate does not fit in stride bytes"
                                   : "rule '%s': the three fields do not fit in stride bytes",
                         emm_clip(text, len, q));
     if (r->n > UINT64_MAX / 3 / r->stride)
@@ -217,6 +245,35 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
         r->min = default_min(r);
     if (r->min < rule_unit(r))
         r->min = rule_unit(r);
+    return EMM_OK;
+}
+
+/* Axis rules come in sets: each needs an x rule and a y rule of its
+ * stride and type (itself counts), which the session joins with it into
+ * one mesh's vertices; z is optional. */
+static emm_status check_axes(const emm_tag_rules *rs, emm_error *err)
+{
+    for (size_t i = 0; i < rs->n; i++) {
+        const emm_tag_rule *r = &rs->rule[i];
+        if (r->shape != EMM_TAG_AXIS)
+            continue;
+        for (uint32_t need = 0; need < 2; need++) {
+            bool found = false;
+            for (size_t j = 0; j < rs->n && !found; j++)
+                found = rs->rule[j].shape == EMM_TAG_AXIS && rs->rule[j].axis == need &&
+                        rs->rule[j].stride == r->stride && rs->rule[j].type == r->type;
+            if (found)
+                continue;
+            char text[256], q[EMM_CLIP + 1];
+            emm_tag_rule_format(r, text, sizeof text);
+            return emm_fail(err, EMM_ERR_INVALID,
+                            "rule %zu '%s' is one coordinate of the vertices, but no rule gives "
+                            "their %c block with stride=%u and %s (a mesh's vertices need an x "
+                            "and a y rule; z is optional)",
+                            i + 1, emm_clip(text, strlen(text), q), "xy"[need], r->stride,
+                            r->type == EMM_F32 ? "f32" : "f64");
+        }
+    }
     return EMM_OK;
 }
 
@@ -241,6 +298,9 @@ emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *
     if (rs.n == 0)
         return emm_fail(err, EMM_ERR_INVALID,
                         "expected rules KIND:key=value,... split by ';' (see emm run --help)");
+    emm_status st = check_axes(&rs, err);
+    if (st != EMM_OK)
+        return st;
     *out = rs;
     return EMM_OK;
 }
@@ -272,10 +332,15 @@ void emm_tag_rule_format(const emm_tag_rule *r, char *out, size_t cap)
         snprintf(order, sizeof order, "order=columns,n=%llu,", (unsigned long long)r->n);
     else if (r->shape == EMM_TAG_COLUMNS)
         snprintf(order, sizeof order, "order=columns,");
+    static const char *const axes[] = {"x", "y", "z"};
     snprintf(out, cap, "%s:%s%s%s%sstride=%u,%s=%u:%s",
              soup ? "soup" : vertices ? "vertices" : "triangles", site, min, nth, order,
-             r->stride, soup ? "corners" : vertices ? "xyz" : "vidx", r->offset,
-             scalar_name(r->type));
+             r->stride,
+             soup                          ? "corners"
+             : r->shape == EMM_TAG_AXIS    ? axes[r->axis < 3 ? r->axis : 0]
+             : vertices                    ? "xyz"
+                                           : "vidx",
+             r->offset, scalar_name(r->type));
 }
 
 void emm_tag_rules_help(FILE *out)
@@ -286,7 +351,7 @@ void emm_tag_rules_help(FILE *out)
             "allocation, looking past allocator and C++ standard-library frames such as\n"
             "std::vector's), min=BYTES (K/M/G; default max(one record, 4K)), nth=N (the Nth\n"
             "block the other selectors select, from 1). Record: stride=BYTES (required;\n"
-            "optional with order=columns), xyz=OFFSET:f32|f64 (vertices),\n"
+            "optional with order=columns or an axis key), xyz=OFFSET:f32|f64 (vertices),\n"
             "vidx=OFFSET:i32|u32|u16|i64 (triangles). Count = block size / stride; a block\n"
             "must be a whole number of records. A rule with site= follows the first\n"
             "allocation call in that function it selects (a growing std::vector\n"
@@ -298,8 +363,15 @@ void emm_tag_rules_help(FILE *out)
             "scalar's size) with its scalar at OFFSET; an access to any column is that\n"
             "element's. n=N (optional) says how many: a block that is not 3*N*stride bytes\n"
             "is not tagged. E.g. vertices:site=load,order=columns,xyz=0:f64;\n"
-            "triangles:site=load,order=columns,vidx=0:i32. x, y and z in three separate\n"
-            "blocks are not supported.\n"
+            "triangles:site=load,order=columns,vidx=0:i32.\n"
+            "Structure of arrays (x at one base, y at another): a vertices rule with\n"
+            "x=OFFSET:f32|f64, y=... or z=... instead of xyz= selects a block holding that\n"
+            "coordinate of every vertex, each entry stride bytes (default: the scalar's\n"
+            "size). One rule per block, e.g. vertices:site=load,x=0:f32;\n"
+            "vertices:site=load,y=0:f32;vertices:site=load,z=0:f32 (the site's blocks in\n"
+            "the order it allocates them); x and y are required, z optional (0 without\n"
+            "it). Blocks of one count, stride and type are one mesh's vertices: element i\n"
+            "of any of them is vertex i.\n"
             "Triangle soup (STL facets): soup:stride=BYTES,corners=OFFSET:f32|f64, each\n"
             "record a triangle whose three corners are nine coordinates in a row at OFFSET\n"
             "(binary STL: soup:stride=50,corners=12:f32); corners at exactly the same\n"

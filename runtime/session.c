@@ -211,6 +211,39 @@ static void drop_overlaps(emm_session *s, uint64_t lo, uint64_t hi, int keep)
             drop_slot(s, i, false);
 }
 
+/* Whether slot i is the lead of another slot's group (it must then stay). */
+static bool leads_others(const emm_session *s, int i)
+{
+    for (int j = 0; j < s->narrays; j++) {
+        const session_array *b = &s->arrays[j];
+        if (j != i && b->lead == i && (b->live || b->refs || b->snap || b->trace_index >= 0))
+            return true;
+    }
+    return false;
+}
+
+/* The group the axis block in slot i (its fields set but for `lead`)
+ * joins: that of a live axis block of another axis, the same count,
+ * stride and type, whose group has no live block of slot i's axis yet; or
+ * its own. */
+static int group_of(const emm_session *s, int i)
+{
+    const session_array *a = &s->arrays[i];
+    for (int j = 0; j < s->narrays; j++) {
+        const session_array *b = &s->arrays[j];
+        if (j == i || !b->live || b->axis < 0 || b->axis == a->axis || b->count != a->count ||
+            b->stride != a->stride || b->type != a->type)
+            continue;
+        bool taken = false;
+        for (int k = 0; k < s->narrays && !taken; k++)
+            taken = k != i && s->arrays[k].live && s->arrays[k].lead == b->lead &&
+                    s->arrays[k].axis == a->axis;
+        if (!taken)
+            return b->lead;
+    }
+    return i;
+}
+
 int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, size_t count,
                          size_t stride, size_t field_offset, emm_scalar type, int rule)
 {
@@ -226,9 +259,12 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
         count /= 3;
         plane = (uint64_t)count * stride;
     }
-    unsigned field_scalars = shape == EMM_TAG_SOUP ? 9 : shape == EMM_TAG_COLUMNS ? 1 : 3;
+    int axis = shape == EMM_TAG_AXIS ? (int)s->cfg.tags.rule[rule].axis : -1;
+    unsigned field_scalars = shape == EMM_TAG_SOUP                           ? 9
+                             : shape == EMM_TAG_COLUMNS || shape == EMM_TAG_AXIS ? 1
+                                                                               : 3;
     if (s->phase == PHASE_FAILED || s->phase == PHASE_DONE || !base || count == 0 ||
-        stride == 0 || (plane && stride > UINT32_MAX / 3) || !valid_field(kind, shape, type) ||
+        stride == 0 || ((plane || axis >= 0) && stride > UINT32_MAX / 3) || !valid_field(kind, shape, type) ||
         field_offset > stride ||
         field_scalars * session_scalar_bytes(type) > stride - field_offset ||
         __builtin_mul_overflow((uint64_t)count, (uint64_t)stride * (plane ? 3 : 1), &span) ||
@@ -236,11 +272,11 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
         return -1;
     drop_overlaps(s, lo, lo + span, -1);
     /* A slot is free when nothing refers to it any more: not live, not named
-     * by a window record, not feeding a trace array. */
+     * by a window record, not feeding a trace array, not its group's lead. */
     int slot = -1;
     for (int i = 0; i < s->narrays && slot < 0; i++)
         if (!s->arrays[i].live && s->arrays[i].refs == 0 && s->arrays[i].trace_index < 0 &&
-            !s->arrays[i].snap)
+            !s->arrays[i].snap && !leads_others(s, i))
             slot = i;
     int32_t tidx = -1;
     if (s->phase == PHASE_SIMULATING) {
@@ -250,11 +286,15 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
         for (int i = 0; i < s->narrays && tidx < 0; i++) {
             session_array *a = &s->arrays[i];
             if (a->live || a->trace_index < 0 || a->kind != kind || a->stride != stride ||
-                a->field != field_offset || a->type != type || a->shape != shape)
+                a->field != field_offset || a->type != type || a->shape != shape ||
+                a->axis != axis)
                 continue;
+            /* An axis block's trace array is its mesh's: bound when a live
+             * block of that axis feeds it. */
             bool bound = false;
             for (int j = 0; j < s->narrays; j++)
-                if (s->arrays[j].live && s->arrays[j].trace_index == a->trace_index)
+                if (s->arrays[j].live && s->arrays[j].trace_index == a->trace_index &&
+                    s->arrays[j].axis == axis)
                     bound = true;
             if (!bound) {
                 tidx = a->trace_index;
@@ -279,6 +319,8 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
     a->type = type;
     a->shape = shape;
     a->plane = plane;
+    a->axis = axis;
+    a->lead = axis >= 0 ? group_of(s, slot) : slot;
     a->live = true;
     a->refs = 0;
     a->snap = NULL;
@@ -403,7 +445,10 @@ static inline bool convert(emm_session *s, const emm_raw_access *raw, emm_trace_
     if (i < 0 || bytes == 0)
         return false;
     session_array *a = &s->arrays[i];
-    uint64_t rel = raw->addr - a->base, column = 0;
+    /* An axis block's entries are its coordinate of the record: the
+     * record's x, y, z sit at offsets 0, stride, 2 stride, as a column-major
+     * array's. */
+    uint64_t rel = raw->addr - a->base, column = a->axis > 0 ? (uint64_t)a->axis : 0;
     if (a->plane) {
         /* Column-major: the same element in each of the three columns,
          * its x, y, z entries one record of the trace. */
@@ -453,6 +498,7 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
         emm_trace_record r;
         if (!convert(s, &a[k], &r))
             continue;
+        uint32_t g = session_group(s, r.array); /* the element's array, for the counts */
         /* Until the first read of the mesh, the program is loading it: the
          * thesis measures from the moment the mesh is frozen in memory (§5),
          * so the loader's writes are counted, not buffered nor simulated. */
@@ -467,10 +513,10 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
              * tens of microseconds an access until the decision). */
             if (r.write && s->loader_elements < loader_allowance(s)) {
                 s->loader_writes++;
-                if (!s->lany || r.array != s->llast_array || r.element != s->llast_element)
+                if (!s->lany || g != s->llast_array || r.element != s->llast_element)
                     s->loader_elements++;
                 s->lany = true;
-                s->llast_array = r.array;
+                s->llast_array = g;
                 s->llast_element = r.element;
                 continue;
             }
@@ -494,9 +540,9 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
         }
         s->window[s->wn++] = r;
         s->arrays[r.array].refs++;
-        bool next = !s->wwany || r.array != s->wwlast_array || r.element != s->wwlast_element;
+        bool next = !s->wwany || g != s->wwlast_array || r.element != s->wwlast_element;
         s->wwany = true;
-        s->wwlast_array = r.array;
+        s->wwlast_array = g;
         s->wwlast_element = r.element;
         /* Counted from the traversal's first profiled read: a loader's
          * sweeps (a growing vector's copies) before it do not end the
@@ -513,14 +559,14 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
          * mesh is frozen, thesis §5), consecutive reads of one element
          * count once. */
         if (s->phase == PHASE_PROFILING && !r.write &&
-            (!s->wany || r.array != s->wlast_array || r.element != s->wlast_element)) {
+            (!s->wany || g != s->wlast_array || r.element != s->wlast_element)) {
             s->wany = true;
-            s->wlast_array = r.array;
+            s->wlast_array = g;
             s->wlast_element = r.element;
             /* The profile starts after a leading index-order sweep (reading
              * the file, initialising per-element data), whose records are
              * still simulated: runtime/lead_sweep.h. */
-            s->welements += (uint64_t)lead_sweep_step(&s->sweep, r.array, r.element);
+            s->welements += (uint64_t)lead_sweep_step(&s->sweep, g, r.element);
             /* Where the window filled, to the record: the batch's further
              * records join it, but the contest counts from here, as emm
              * profile does on the trace. */

@@ -117,35 +117,46 @@ static void shrink_to(session_array *a, uint64_t count)
     }
 }
 
-/* Reads the three coordinates of record i of array a into p: a vertex's
- * (corner < 0), or a soup's corner (0..2); a value that cannot be a
- * coordinate refuses the array in one line (`origin` names it). */
-static emm_status read_position(emm_session *s, const char *origin, session_array *a,
-                                uint64_t i, int corner, double *p, emm_error *err)
+/* Reads the three coordinates of record i into p, coordinate c from array
+ * src[c] (one array for all three, or a mesh's axis blocks; NULL: 0, a
+ * mesh without a z block): a vertex's (corner < 0), or a soup's corner
+ * (0..2). A value that cannot be a coordinate refuses the block it is in,
+ * in one line that names the rule or call that tagged it. */
+static emm_status read_position(emm_session *s, session_array *const src[3], uint64_t i,
+                                int corner, double *p, emm_error *err)
 {
     static const char axis[] = "xyz";
     unsigned first = corner < 0 ? 0 : 3 * (unsigned)corner;
     for (unsigned c = 0; c < 3; c++) {
-        p[c] = read_coord(session_scalar_at(s, a, i, first + c), a->type);
+        session_array *a = src[c];
+        if (!a) {
+            p[c] = 0;
+            continue;
+        }
+        p[c] = read_coord(session_scalar_at(s, a, i, a->axis >= 0 ? 0 : first + c), a->type);
         if (plausible(p[c], a->type))
             continue;
-        char shape[96], what[64];
+        char origin[512], shape[96], what[64], key[8];
         if (a->plane)
             snprintf(shape, sizeof shape, "3 columns of %llu entries of %llu bytes",
                      (unsigned long long)a->count, (unsigned long long)a->stride);
         else
-            snprintf(shape, sizeof shape, "%llu records of %llu bytes",
-                     (unsigned long long)a->count, (unsigned long long)a->stride);
+            snprintf(shape, sizeof shape, "%llu %s of %llu bytes", (unsigned long long)a->count,
+                     a->axis >= 0 ? "entries" : "records", (unsigned long long)a->stride);
         if (corner < 0)
             snprintf(what, sizeof what, "vertex %llu", (unsigned long long)i);
         else
             snprintf(what, sizeof what, "triangle %llu's corner %d", (unsigned long long)i,
                      corner + 1);
+        if (a->axis >= 0)
+            snprintf(key, sizeof key, "%c", axis[c]);
+        else
+            snprintf(key, sizeof key, "%s", a->shape == EMM_TAG_SOUP ? "corners" : "xyz");
         return emm_fail(err, EMM_ERR_MESH,
                         "%s: %s: the block at 0x%llx (%s) is refused: %s has %c = %g, not a "
                         "coordinate (is stride or %s's offset or type wrong?)",
-                        s->program, origin, (unsigned long long)a->base, shape, what, axis[c],
-                        p[c], a->shape == EMM_TAG_SOUP ? "corners" : "xyz");
+                        s->program, session_origin(s, a, origin, sizeof origin),
+                        (unsigned long long)a->base, shape, what, axis[c], p[c], key);
     }
     return EMM_OK;
 }
@@ -182,7 +193,7 @@ static emm_status read_soup(emm_session *s, session_array *t, emm_error *err)
     for (uint64_t i = 0; i < nt; i++)
         for (int k = 0; k < 3; k++) {
             double p[3];
-            emm_status st = read_position(s, to, t, i, k, p, err);
+            emm_status st = read_position(s, (session_array *const[3]){t, t, t}, i, k, p, err);
             if (st != EMM_OK) {
                 free(slot);
                 return st;
@@ -222,6 +233,87 @@ static emm_status read_soup(emm_session *s, session_array *t, emm_error *err)
     return EMM_OK;
 }
 
+/* A mesh's vertices in axis blocks (EMM_TAG x=, y=, z=): the x, y and z
+ * blocks of the group of `best` into src (z may be NULL: 0). A missing x or
+ * y block, or blocks whose counts came to disagree, refuse the mesh in one
+ * line naming the rule of each block concerned. */
+static emm_status axis_blocks(emm_session *s, session_array *best, session_array *src[3],
+                              emm_error *err)
+{
+    static const char axis[] = "xyz";
+    char o[512], o2[512], n1[32], n2[32];
+    for (int k = 0; k < 3; k++) {
+        src[k] = NULL;
+        for (int i = 0; i < s->narrays; i++) {
+            session_array *a = &s->arrays[i];
+            if (session_usable(a) && a->axis == k && a->lead == best->lead &&
+                (!src[k] || better_mesh(a, src[k])))
+                src[k] = a;
+        }
+    }
+    for (int k = 0; k < 2; k++) {
+        if (src[k])
+            continue;
+        /* A block of the axis that is in no group of best's count: its
+         * count disagrees. */
+        session_array *other = NULL;
+        for (int i = 0; i < s->narrays; i++)
+            if (session_usable(&s->arrays[i]) && s->arrays[i].axis == k &&
+                (!other || better_mesh(&s->arrays[i], other)))
+                other = &s->arrays[i];
+        session_origin(s, best, o, sizeof o);
+        if (other)
+            return emm_fail(err, EMM_ERR_INVALID,
+                            "%s: %s tagged the %c block at 0x%llx, %s entries, but %s tagged "
+                            "the %c block at 0x%llx with %s: the counts disagree, and no vertex "
+                            "is read from either (the blocks of one mesh hold one entry per "
+                            "vertex)",
+                            s->program, o, axis[best->axis], (unsigned long long)best->base,
+                            emm_grouped(best->count, n1),
+                            session_origin(s, other, o2, sizeof o2), axis[k],
+                            (unsigned long long)other->base, emm_grouped(other->count, n2));
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "%s: %s tagged the %c block at 0x%llx, %s entries, but no %c block was "
+                        "tagged: the vertices need their x and y (does the %c rule's site=, "
+                        "min= or nth= select its block?)",
+                        s->program, o, axis[best->axis], (unsigned long long)best->base,
+                        emm_grouped(best->count, n1), axis[k], axis[k]);
+    }
+    for (int k = 1; k < 3; k++)
+        if (src[k] && src[k]->count != src[0]->count)
+            return emm_fail(err, EMM_ERR_MESH,
+                            "%s: the vertices' x block at 0x%llx (%s) has %s entries, its %c "
+                            "block at 0x%llx (%s) %s: the counts disagree (a block reallocated "
+                            "alone?)",
+                            s->program, (unsigned long long)src[0]->base,
+                            session_origin(s, src[0], o, sizeof o),
+                            emm_grouped(src[0]->count, n1), axis[k],
+                            (unsigned long long)src[k]->base,
+                            session_origin(s, src[k], o2, sizeof o2),
+                            emm_grouped(src[k]->count, n2));
+    return EMM_OK;
+}
+
+/* The summary's and the report's line on a mesh whose vertices are axis
+ * blocks: "the vertices are 3 blocks (x, y, z) of 4,000 f32 each (EMM_TAG
+ * rules 1, 2, 3)". */
+static void note_axis_blocks(emm_session *s, session_array *const src[3], uint64_t nv)
+{
+    char num[32], rules[64] = "";
+    int n = 0;
+    for (int k = 0; k < 3; k++)
+        if (src[k]) {
+            size_t used = strlen(rules);
+            snprintf(rules + used, sizeof rules - used, "%s%d", n ? ", " : "", src[k]->rule + 1);
+            n++;
+        }
+    size_t used = strlen(s->pick_note);
+    snprintf(s->pick_note + used, sizeof s->pick_note - used,
+             "%sthe vertices are %d blocks (%s) of %s %s each (EMM_TAG rules %s)",
+             used ? "; " : "", n, src[2] ? "x, y, z" : "x, y; z is 0", emm_grouped(nv, num),
+             src[0]->type == EMM_F32 ? "f32" : "f64", rules);
+}
+
 /* "Freeze the data": copies the positions and the triangles' vertex indices
  * out of the program's arrays, checking them. Without a triangle array the
  * geometry is the vertices alone (nt = 0: the layouts cut cells of
@@ -238,12 +330,26 @@ static emm_status read_geometry(emm_session *s, emm_error *err)
                         "'vertices:' rule), so there is no geometry to lay out",
                         s->program);
     session_array *v = &s->arrays[gv];
+    /* Where each coordinate is read from: the array, or its axis blocks. */
+    session_array *src[3] = {v, v, v};
+    if (v->axis >= 0) {
+        emm_status st = axis_blocks(s, v, src, err);
+        if (st != EMM_OK)
+            return st;
+        v = src[0];
+    }
     session_origin(s, v, vo, sizeof vo);
-    if (!session_readable(s, v) || (gt >= 0 && !session_readable(s, &s->arrays[gt])))
+    bool readable = gt < 0 || session_readable(s, &s->arrays[gt]);
+    for (int k = 0; k < 3; k++)
+        readable = readable && (!src[k] || session_readable(s, src[k]));
+    if (!readable)
         return emm_fail(err, EMM_ERR_INVALID,
                         "%s: the tagged arrays' contents never reached the session's process",
                         s->program);
-    uint64_t nv = in_use(v), nt = 0;
+    uint64_t nv = 0, nt = 0;
+    for (int k = 0; k < 3; k++)
+        if (src[k] && in_use(src[k]) > nv)
+            nv = in_use(src[k]);
     int64_t highest = -1;
     if (gt >= 0) {
         session_array *t = &s->arrays[gt];
@@ -290,11 +396,15 @@ static emm_status read_geometry(emm_session *s, emm_error *err)
     if (!s->xyz)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
     for (uint64_t i = 0; i < nv; i++) {
-        emm_status st = read_position(s, vo, v, i, -1, s->xyz + 3 * i, err);
+        emm_status st = read_position(s, src, i, -1, s->xyz + 3 * i, err);
         if (st != EMM_OK)
             return st;
     }
-    shrink_to(v, nv);
+    for (int k = 0; k < 3; k++)
+        if (src[k])
+            shrink_to(src[k], nv);
+    if (v->axis >= 0)
+        note_axis_blocks(s, src, nv);
     s->info.geometry.nv = nv;
     s->info.geometry.xyz = s->xyz;
     if (gt < 0) {
@@ -313,13 +423,30 @@ static emm_status read_geometry(emm_session *s, emm_error *err)
     return EMM_OK;
 }
 
-/* Trace arrays for the live slots the geometry covers, in slot order; the
- * window's records are renumbered and those of other slots dropped. */
+/* The coordinates a record of the axis blocks of group `lead` has: up to
+ * the highest axis among them (x and y: two). */
+static unsigned group_axes(const emm_session *s, int lead)
+{
+    unsigned n = 1;
+    for (int i = 0; i < s->narrays; i++)
+        if (session_usable(&s->arrays[i]) && s->arrays[i].lead == lead &&
+            s->arrays[i].axis >= (int)n)
+            n = (unsigned)s->arrays[i].axis + 1;
+    return n;
+}
+
+/* Trace arrays for the live slots the geometry covers, in slot order, the
+ * axis blocks of one group one trace array (its records their x, y, z
+ * entries side by side); the window's records are renumbered and those of
+ * other slots dropped. */
 static emm_status freeze_arrays(emm_session *s, emm_error *err)
 {
+    int32_t group_trace[SESSION_MAX_ARRAYS];
     s->tarrays = calloc((size_t)s->narrays + 1, sizeof *s->tarrays);
     if (!s->tarrays)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", s->program);
+    for (int i = 0; i < SESSION_MAX_ARRAYS; i++)
+        group_trace[i] = -1;
     for (int i = 0; i < s->narrays; i++) {
         session_array *a = &s->arrays[i];
         /* A soup's vertices are its corners: a vertex array beside it is
@@ -330,10 +457,18 @@ static emm_status freeze_arrays(emm_session *s, emm_error *err)
         a->trace_index = -1;
         if (!session_usable(a) || a->count > limit)
             continue;
+        if (a->axis >= 0 && group_trace[a->lead] >= 0) {
+            a->trace_index = group_trace[a->lead];
+            shrink_to(a, s->tarrays[a->trace_index].count); /* a block grown alone */
+            continue;
+        }
+        uint64_t record = a->axis >= 0 ? group_axes(s, a->lead) * a->stride
+                                       : session_record_bytes(a);
+        if (a->axis >= 0)
+            group_trace[a->lead] = (int32_t)s->ntarrays;
         a->trace_index = (int32_t)s->ntarrays;
         s->tarrays[s->ntarrays++] = (emm_trace_array){
-            .kind = a->kind, .record_size = (uint32_t)session_record_bytes(a), .count = a->count,
-            .base = a->base};
+            .kind = a->kind, .record_size = (uint32_t)record, .count = a->count, .base = a->base};
     }
     s->info.version = 1;
     s->info.narrays = s->ntarrays;

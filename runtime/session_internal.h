@@ -77,6 +77,11 @@ typedef struct session_array {
                             emm_tag_* call) */
     uint64_t plane;      /* columns: the bytes from the x column to the y column (the
                             block's capacity of entries times stride); 0 otherwise */
+    int axis;            /* an axis block (EMM_TAG x=, y=, z=): its coordinate, 0..2; else -1 */
+    int lead;            /* the slot that stands for its group in the window's element
+                            counts: an axis block's, the first of the x, y, z blocks of one
+                            count, stride and type tagged together (one mesh's vertices);
+                            the slot itself otherwise */
     bool live;           /* tagged now */
     unsigned char *snap; /* the fields, copied when the array went away before the
                             decision while the window named it; else NULL */
@@ -246,10 +251,18 @@ static inline size_t session_scalar_bytes(emm_scalar t)
 }
 
 /* The scalars a record holds at its field: three (coordinates, indices),
- * or a soup's nine corner coordinates. */
+ * a soup's nine corner coordinates, or an axis block's one. */
 static inline unsigned session_scalars(const session_array *a)
 {
-    return a->shape == EMM_TAG_SOUP ? 9 : 3;
+    return a->shape == EMM_TAG_SOUP ? 9 : a->axis >= 0 ? 1 : 3;
+}
+
+/* The window's name for the array of slot i: its group's lead, so that
+ * vertex k's x, y and z in three blocks are one element, as after the
+ * decision, when they feed one trace array. */
+static inline uint32_t session_group(const emm_session *s, uint32_t i)
+{
+    return (uint32_t)s->arrays[i].lead;
 }
 
 /* The bytes of one trace record of the array: a column-major array's

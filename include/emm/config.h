@@ -60,8 +60,12 @@ typedef enum emm_tag_shape {
                             block's first third the x's (or first corners), then the y's, then
                             the z's (Eigen's column-major V and F); a scalar at `offset` in each
                             entry */
-    EMM_TAG_SOUP         /* soup: triangle records of `stride` bytes holding their three
+    EMM_TAG_SOUP,        /* soup: triangle records of `stride` bytes holding their three
                             corners inline, nine coordinates in a row at `offset` (STL facets) */
+    EMM_TAG_AXIS         /* x=, y= or z=: one coordinate of every vertex, an entry of `stride`
+                            bytes each with its scalar at `offset` (structure of arrays: x at
+                            one base, y at another); the session joins a mesh's x, y (and z)
+                            blocks of one count, same stride and type, into its vertices */
 } emm_tag_shape;
 
 /* One rule: which allocations are a mesh array (site, min, nth) and where
@@ -74,7 +78,9 @@ typedef struct emm_tag_rule {
     uint64_t nth;                 /* only the nth block the other selectors select; 0: all */
     uint64_t n;                   /* order=columns: entries per column (the block is then
                                      3 * n * stride bytes); 0: the block's size says */
-    uint32_t stride;              /* bytes per record (per column entry for order=columns) */
+    uint32_t stride;              /* bytes per record (per column entry for order=columns, per
+                                     entry of one coordinate for an axis rule) */
+    uint32_t axis;                /* EMM_TAG_AXIS: the coordinate, 0 x, 1 y, 2 z; else 0 */
     uint32_t offset;              /* where the scalars start in a record (an entry) */
     emm_scalar type;              /* f32|f64 for vertices and soups, i32|u32|u16|i64 for
                                      triangles */
@@ -87,7 +93,9 @@ typedef struct emm_tag_rules {
 
 /* Parses EMM_TAG's grammar: rules split by ';', each KIND:key=value,...
  * (docs in emm_tag_rules_help). On failure err says what is wrong in one
- * line that quotes at most a bounded part of the text. */
+ * line that quotes at most a bounded part of the text. Axis rules (x=, y=,
+ * z=) come in sets: every axis rule needs an x rule and a y rule of its
+ * stride and type (z is optional: the layouts work in the plane). */
 EMM_API emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *err);
 /* A rule as EMM_TAG spells it ("vertices:site=read_mesh,stride=24,xyz=0:f64"),
  * into out (cap bytes, NUL included; cut when it does not fit). */

@@ -1,7 +1,8 @@
 /* EMM_TAG's names and messages (core/tag_rules.c): the names a frame
  * answers to (a method of a class template by its own name, issue 14),
  * site= matching, a rule written back as it is spelled, u16 indices, and
- * the line a rule that matched nothing gets; column-major and soup rules. */
+ * the line a rule that matched nothing gets; column-major and soup rules,
+ * and axis rules (x=, y=, z=: structure of arrays). */
 #include <string.h>
 
 #include "check.h"
@@ -104,6 +105,56 @@ static void shapes(void)
            "%s", line);
 }
 
+/* Structure of arrays: x=, y=, z= rules, each one block holding one
+ * coordinate of every vertex; a set needs x and y of one stride and type. */
+static void axes(void)
+{
+    emm_tag_rules rs, again;
+    emm_error err;
+    char back[3][256], joined[800];
+    REQUIRE(emm_tag_rules_parse("vertices:site=load,x=0:f32;vertices:site=load,y=0:f32;"
+                                "vertices:site=load,z=0:f32;triangles:stride=12,vidx=0:u32",
+                                &rs, &err) == EMM_OK);
+    for (uint32_t k = 0; k < 3; k++) {
+        const emm_tag_rule *r = &rs.rule[k];
+        CHECK(r->kind == EMM_ARRAY_VERTICES && r->shape == EMM_TAG_AXIS && r->axis == k &&
+              r->stride == 4 && r->offset == 0 && r->type == EMM_F32 && r->min == 4096);
+        emm_tag_rule_format(r, back[k], sizeof back[k]);
+    }
+    CHECKF(strcmp(back[0], "vertices:site=load,stride=4,x=0:f32") == 0, "%s", back[0]);
+    CHECKF(strcmp(back[2], "vertices:site=load,stride=4,z=0:f32") == 0, "%s", back[2]);
+    CHECK(emm_tag_rule_fits(&rs.rule[1], 4 * 1000) && !emm_tag_rule_fits(&rs.rule[1], 4002));
+    snprintf(joined, sizeof joined, "%s;%s;%s;triangles:stride=12,vidx=0:u32", back[0], back[1],
+             back[2]);
+    REQUIRE(emm_tag_rules_parse(joined, &again, &err) == EMM_OK);
+    CHECK(memcmp(&rs, &again, sizeof rs) == 0);
+    /* An array of structs with only x in it (x at 8 of 16 bytes), doubles;
+     * z is optional. */
+    REQUIRE(emm_tag_rules_parse("vertices:stride=16,y=8:f64;vertices:stride=16,x=8:f64", &rs,
+                                &err) == EMM_OK);
+    CHECK(rs.n == 2 && rs.rule[0].axis == 1 && rs.rule[1].axis == 0 &&
+          rs.rule[1].offset == 8 && rs.rule[1].stride == 16 && rs.rule[1].type == EMM_F64);
+    CHECK(emm_tag_rule_fits(&rs.rule[0], 16 * 300) && !emm_tag_rule_fits(&rs.rule[0], 16 * 300 + 8));
+
+    /* A missing axis, or one of another stride or type: one line naming
+     * the rule. */
+    refused("vertices:x=0:f32;vertices:z=0:f32",
+            "rule 1 'vertices:stride=4,x=0:f32' is one coordinate of the vertices, but no rule "
+            "gives their y block with stride=4 and f32");
+    refused("vertices:x=0:f32;vertices:y=0:f64", "rule 1 'vertices:stride=4,x=0:f32'");
+    refused("vertices:stride=8,x=0:f32;vertices:y=0:f32", "their y block with stride=8");
+    refused("vertices:y=0:f32", "need an x and a y rule");
+    /* One field per rule, and an axis block has no order. */
+    refused("vertices:x=0:f32,y=4:f32", "a rule has one of xyz=, x=, y=, z=");
+    refused("vertices:stride=12,xyz=0:f32,x=0:f32", "a rule has one of");
+    refused("vertices:order=columns,x=0:f32;vertices:y=0:f32", "order= does not apply");
+    refused("vertices:x=0:f32,n=10;vertices:y=0:f32", "needs order=columns");
+    refused("vertices:x=0:i32;vertices:y=0:f32", "'x=0:i32': expected x=OFFSET:f32|f64");
+    refused("vertices:stride=6,x=4:f32;vertices:stride=6,y=0:f32", "coordinate does not fit");
+    refused("triangles:x=0:f32", "unknown key");
+    refused("soup:stride=36,y=0:f32", "unknown key");
+}
+
 int main(void)
 {
     /* A method of a class template, as __cxa_demangle spells it: the
@@ -166,5 +217,6 @@ int main(void)
     CHECKF(strstr(line, "no allocation of 4096 bytes or more was seen"), "%s", line);
 
     shapes();
+    axes();
     return check_done();
 }

@@ -783,6 +783,24 @@ static size_t read_records(const char *path, emm_trace_record *out, size_t cap,
     return n;
 }
 
+/* A session deciding "direct" with EMM_TAG `rules` (the shim's blocks are
+ * then tagged by rule), its trace at `trace` and its report at `report`
+ * (NULL: none). */
+static emm_session *new_tagged(const char *rules, const char *trace, const char *report)
+{
+    emm_error err;
+    emm_session *s;
+    emm_session_config c = base_config();
+    set_strategy("direct");
+    REQUIRE(emm_tag_rules_parse(rules, &tcfg.tags, &err) == EMM_OK);
+    if (trace)
+        strcpy(tcfg.trace, trace);
+    if (report)
+        strcpy(tcfg.report, report);
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    return s;
+}
+
 /* Issue 14 item 5 through the API, as the shim drives it for a rule: a
  * column-major block (order=columns) whose x, y and z columns are one
  * element each, the trace record's offset naming the column; and a
@@ -802,13 +820,8 @@ static void test_shapes(void)
     /* A square of two triangles, V and F column-major (libigl's). */
     static double V[12] = {0, 1, 1, 0, /* x */ 0, 0, 1, 1, /* y */ 5, 6, 7, 8 /* z */};
     static int32_t F[6] = {0, 0, /* first corners */ 1, 2, /* second */ 2, 3 /* third */};
-    emm_session_config c = base_config();
-    set_strategy("direct");
-    REQUIRE(emm_tag_rules_parse("vertices:order=columns,xyz=0:f64;"
-                                "triangles:order=columns,vidx=0:i32",
-                                &tcfg.tags, &err) == EMM_OK);
-    strcpy(tcfg.trace, "shapes.emmt");
-    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    s = new_tagged("vertices:order=columns,xyz=0:f64;triangles:order=columns,vidx=0:i32",
+                   "shapes.emmt", NULL);
     /* The shim hands a rule's block over as entries of `stride` bytes. */
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, V, 12, 8, 0, EMM_F64, 0) >= 0);
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_TRIANGLES, F, 6, 4, 0, EMM_I32, 1) >= 0);
@@ -846,11 +859,7 @@ static void test_shapes(void)
     };
     static struct facet soup[2] = {{7, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}},
                                    {8, {{0, 0, 0}, {1, 1, -0.0f}, {0, 1, 0}}}};
-    c = base_config();
-    set_strategy("direct");
-    REQUIRE(emm_tag_rules_parse("soup:stride=40,corners=4:f32", &tcfg.tags, &err) == EMM_OK);
-    strcpy(tcfg.trace, "soup.emmt");
-    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    s = new_tagged("soup:stride=40,corners=4:f32", "soup.emmt", NULL);
     CHECK(emm_session_tag_rule(s, EMM_ARRAY_TRIANGLES, soup, 2, 40, 4, EMM_F32, 0) >= 0);
     emm_raw_access b[] = {
         {(uintptr_t)&soup[1].id, 4, 0, 0},      /* triangle 1, not a corner */
@@ -876,6 +885,143 @@ static void test_shapes(void)
     memset(&tcfg.tags, 0, sizeof tcfg.tags);
 }
 
+/* finish's summary into text (cap bytes); returns finish's status. */
+static emm_status finish_summary(emm_session *s, char *text, size_t cap)
+{
+    emm_error err;
+    FILE *sum = tmpfile();
+    REQUIRE(sum != NULL);
+    emm_status st = emm_session_finish(s, sum, &err);
+    rewind(sum);
+    size_t n = fread(text, 1, cap - 1, sum);
+    text[n] = '\0';
+    fclose(sum);
+    return st;
+}
+
+/* Structure of arrays through the API, as the shim drives it for x=, y=,
+ * z= rules: three blocks of one count are one mesh's vertices, element i
+ * of any of them vertex i (one trace record, its offset naming the axis);
+ * the geometry combines the axes, at the decision or from the blocks'
+ * copies when they left before it; a mesh without z is in the plane; a
+ * missing axis, counts that disagree and a coordinate that is none are
+ * one line naming the rules, and nothing is simulated. */
+static void test_axes(void)
+{
+    emm_error err;
+    emm_session *s;
+    emm_trace_record rec[16];
+    emm_trace_array arr[2];
+    uint32_t narr;
+    double xyz[24];
+    int32_t tri[24];
+    uint64_t gnv, gnt;
+    char text[2048];
+
+    /* A square of two triangles; each axis an array of structs holding
+     * an id and one coordinate (stride 16, the double at 8). */
+    struct entry {
+        int64_t id;
+        double c;
+    };
+    static struct entry X[4] = {{0, 0}, {1, 1}, {2, 1}, {3, 0}};
+    static struct entry Y[4] = {{0, 0}, {1, 0}, {2, 1}, {3, 1}};
+    static struct entry Z[4] = {{0, 5}, {1, 6}, {2, 7}, {3, 8}};
+    static int32_t F[6] = {0, 1, 2, 0, 2, 3};
+    s = new_tagged("vertices:stride=16,x=8:f64;vertices:stride=16,y=8:f64;"
+                   "vertices:stride=16,z=8:f64;triangles:stride=12,vidx=0:i32",
+                   "axes.emmt", NULL);
+    /* The blocks in another order than their axes: the rules say which is which. */
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, Z, 4, 16, 8, EMM_F64, 2) >= 0);
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, X, 4, 16, 8, EMM_F64, 0) >= 0);
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, Y, 4, 16, 8, EMM_F64, 1) >= 0);
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_TRIANGLES, F, 2, 12, 0, EMM_I32, 3) >= 0);
+    uint64_t lo[8], hi[8];
+    CHECK(emm_session_ranges(s, lo, hi, 8) == 4);
+    emm_raw_access a[] = {
+        {(uintptr_t)&Y[2].c, 8, 0, 0},  /* vertex 2's y */
+        {(uintptr_t)&Z[3].c, 8, 0, 0},  /* vertex 3's z */
+        {(uintptr_t)&X[1].id, 8, 0, 0}, /* vertex 1's x block, its id */
+        {(uintptr_t)&F[5], 4, 0, 0},    /* triangle 1's third corner */
+    };
+    emm_session_access(s, a, 4);
+    CHECKF(emm_session_decide(s, &err) == EMM_OK, "%s", err.message);
+    CHECK(finish_summary(s, text, sizeof text) == EMM_OK);
+    CHECKF(has(text, "the vertices are 3 blocks (x, y, z) of 4 f64 each (EMM_TAG rules 1, 2, 3)"),
+           "%s", text);
+    emm_session_free(s);
+    size_t n = read_records("axes.emmt", rec, 16, arr, &narr, xyz, tri, &gnv, &gnt);
+    REQUIRE(n == 4 && narr == 2);
+    CHECK(arr[0].kind == EMM_ARRAY_VERTICES && arr[0].record_size == 48 && arr[0].count == 4);
+    CHECK(arr[1].kind == EMM_ARRAY_TRIANGLES && arr[1].record_size == 12);
+    CHECK(rec[0].array == 0 && rec[0].element == 2 && rec[0].offset == 16 + 8);
+    CHECK(rec[1].array == 0 && rec[1].element == 3 && rec[1].offset == 32 + 8);
+    CHECK(rec[2].array == 0 && rec[2].element == 1 && rec[2].offset == 0);
+    CHECK(rec[3].array == 1 && rec[3].element == 1 && rec[3].offset == 8);
+    REQUIRE(gnv == 4 && gnt == 2);
+    for (int v = 0; v < 4; v++)
+        CHECKF(xyz[3 * v] == X[v].c && xyz[3 * v + 1] == Y[v].c && xyz[3 * v + 2] == Z[v].c,
+               "vertex %d: %g %g %g", v, xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]);
+    for (int k = 0; k < 6; k++)
+        CHECK(tri[k] == F[k]);
+
+    /* In the plane: x and y only, f32, no triangles; both blocks leave
+     * before the decision, which reads the copies the session kept. */
+    static float x2[4] = {0, 1, 1, 0}, y2[4] = {0, 0, 1, 1};
+    s = new_tagged("vertices:x=0:f32;vertices:y=0:f32", "axes2.emmt", NULL);
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, x2, 4, 4, 0, EMM_F32, 0) >= 0);
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, y2, 4, 4, 0, EMM_F32, 1) >= 0);
+    emm_raw_access b[] = {{(uintptr_t)&x2[3], 4, 0, 0}, {(uintptr_t)&y2[3], 4, 0, 0}};
+    emm_session_access(s, b, 2);
+    CHECK(emm_session_untag(s, x2) == EMM_SESSION_PROFILING); /* y is left */
+    CHECK(emm_session_untag(s, y2) == EMM_SESSION_DECIDE);
+    CHECKF(emm_session_decide(s, &err) == EMM_OK, "%s", err.message);
+    CHECK(finish_summary(s, text, sizeof text) == EMM_OK);
+    CHECKF(has(text, "the vertices are 2 blocks (x, y; z is 0) of 4 f32 each (EMM_TAG rules 1, 2)"),
+           "%s", text);
+    emm_session_free(s);
+    n = read_records("axes2.emmt", rec, 16, arr, &narr, xyz, tri, &gnv, &gnt);
+    REQUIRE(n == 2 && narr == 1 && gnv == 4);
+    CHECK(arr[0].record_size == 8 && rec[0].element == 3 && rec[0].offset == 0 &&
+          rec[1].element == 3 && rec[1].offset == 4);
+    for (int v = 0; v < 4; v++)
+        CHECK(xyz[3 * v] == x2[v] && xyz[3 * v + 1] == y2[v] && xyz[3 * v + 2] == 0);
+
+    /* Counts that disagree: one line naming both rules, no report. */
+    static float y3[3] = {0, 0, 1};
+    remove("axes.json");
+    s = new_tagged("vertices:x=0:f32;vertices:y=0:f32", NULL, "axes.json");
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, x2, 4, 4, 0, EMM_F32, 0) >= 0);
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, y3, 3, 4, 0, EMM_F32, 1) >= 0);
+    emm_session_access(s, b, 1);
+    CHECK(emm_session_decide(s, &err) != EMM_OK);
+    CHECK(finish_summary(s, text, sizeof text) != EMM_OK);
+    CHECKF(has(text, "no simulation: EMM_TAG rule 1 (vertices:stride=4,x=0:f32) tagged the x "
+                     "block at ") &&
+               has(text, ", 4 entries, but EMM_TAG rule 2 (vertices:stride=4,y=0:f32) tagged "
+                         "the y block at ") &&
+               has(text, "with 3: the counts disagree") && !strchr(strchr(text, '\n') + 1, '\n'),
+           "%s", text);
+    CHECK(access("axes.json", F_OK) != 0);
+    emm_session_free(s);
+
+    /* A y that is no coordinate: the y block is refused, by its rule. */
+    static float y4[4] = {0, 0, 1, 1};
+    y4[1] = (float)NAN;
+    s = new_tagged("vertices:x=0:f32;vertices:y=0:f32", NULL, NULL);
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, x2, 4, 4, 0, EMM_F32, 0) >= 0);
+    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, y4, 4, 4, 0, EMM_F32, 1) >= 0);
+    emm_session_access(s, b, 1);
+    emm_session_decide(s, &err);
+    CHECK(finish_summary(s, text, sizeof text) == EMM_ERR_MESH);
+    CHECKF(has(text, "EMM_TAG rule 2 (vertices:stride=4,y=0:f32): the block at ") &&
+               has(text, "(4 entries of 4 bytes) is refused: vertex 1 has y = nan, not a "
+                         "coordinate (is stride or y's offset or type wrong?)"),
+           "%s", text);
+    emm_session_free(s);
+    memset(&tcfg.tags, 0, sizeof tcfg.tags);
+}
+
 int main(void)
 {
     setup();
@@ -892,6 +1038,7 @@ int main(void)
     test_bad_geometry();
     test_tags();
     test_shapes();
+    test_axes();
     free(recs);
     free(vmem);
     free(tmem);

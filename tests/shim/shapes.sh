@@ -1,13 +1,18 @@
 # Real shapes of mesh data (issue 14 item 5), as a user runs them: a program
 # that keeps its mesh column-major (examples/smooth_columns.c, libigl's V and
-# F) or as a triangle soup (examples/stl_normals.c, binary STL facets), run
-# natively and under `emm run --capture CAPTURE` with an EMM_TAG rule:
+# F), as a structure of arrays (examples/smooth_soa.c: x, y, z in three
+# blocks) or as a triangle soup (examples/stl_normals.c, binary STL facets),
+# run natively and under `emm run --capture CAPTURE` with an EMM_TAG rule:
 #   sh shapes.sh SHIM WORKDIR EMM CASE CAPTURE PROGRAM MESH.off
 # CASE columns:  order=columns rules for V (f64) and F (i32)
+# CASE soa:      x=, y=, z= rules for the three f32 blocks, records for F (u32)
 # CASE soup:     soup:stride=50,corners=12:f32 on the mesh written as binary STL
 # CASE wrong-n:  a column-major rule whose n= is not the block's: one line
 #                names the rule and the block that does not fit, nothing is
 #                tagged as vertices, nothing is simulated
+# CASE soa-missing-y: the y rule selects no block (min=1G): one line names
+#                the x block's rule and says no y block was tagged, nothing
+#                is simulated
 # stdout and exit status as in the native run; the report has a pattern and
 # a decision, and counts the vertices and triangles the program loaded; the
 # geometry in the run's trace is the mesh file's, exactly (columns read
@@ -19,8 +24,11 @@ EMM=$1 CASE=$2 CAPTURE=$3 PROG=$4 MESH=$5
 # the geometry read at the decision is the file's.
 EMM_PROFILE=2000; export EMM_PROFILE
 COLUMNS='vertices:site=load_mesh,order=columns,xyz=0:f64;triangles:site=load_mesh,order=columns,vidx=0:i32'
+SOA='vertices:site=mesh_alloc,x=0:f32;vertices:site=mesh_alloc,y=0:f32;vertices:site=mesh_alloc,z=0:f32;triangles:site=mesh_alloc,stride=12,vidx=0:u32'
 case $CASE in
 columns) TAG=$COLUMNS INPUT=$MESH ;;
+soa)     TAG=$SOA INPUT=$MESH ;;
+soa-missing-y) TAG=$(echo "$SOA" | sed 's/site=mesh_alloc,y=/site=mesh_alloc,min=1G,y=/') INPUT=$MESH ;;
 wrong-n) TAG='vertices:site=load_mesh,order=columns,n=999,xyz=0:f64;triangles:site=load_mesh,order=columns,vidx=0:i32'
          INPUT=$MESH ;;
 soup)    TAG='soup:site=load_stl,stride=50,corners=12:f32' INPUT=$WORK/mesh.stl
@@ -63,6 +71,16 @@ if [ "$CASE" = wrong-n ]; then
   echo "shapes $CASE $CAPTURE: ok"
   exit 0
 fi
+if [ "$CASE" = soa-missing-y ]; then
+  line='^emm: smooth_soa: no simulation: EMM_TAG rule 1 \(vertices:site=mesh_alloc,stride=4,x=0:f32\) tagged the x block at 0x[0-9a-f]+, [0-9,]+ entries, but no y block was tagged: the vertices need their x and y'
+  grep -Eq "$line" "$WORK/emm.err" || fail "no line says the y block is missing"
+  [ "$(grep -c 'no y block' "$WORK/emm.err")" -eq 1 ] || fail "not one line for the missing y"
+  grep -q 'EMM_TAG rule 2 (vertices:site=mesh_alloc,min=1073741824,stride=4,y=0:f32) matched no allocation' \
+    "$WORK/emm.err" || fail "no line says rule 2 matched nothing"
+  [ ! -e "$REPORT" ] || fail "a report was written, so something was simulated"
+  echo "shapes $CASE $CAPTURE: ok"
+  exit 0
+fi
 
 grep -q '^emm: answer: ' "$WORK/emm.err" || fail "no answer"
 python3 - "$REPORT" "$TRACE" "$WORK/native.out" "$CASE" "$MESH" "$INPUT" <<'PY' || fail "the report or the geometry is wrong"
@@ -74,7 +92,7 @@ assert r["strategy"] and r["decision"]["source"], "no decision"
 words = open(out).read().split()
 said = dict(zip(words[::2], words[1::2]))
 nv = int(said["vertices"])
-nt = int(said["triangles"] if case == "columns" else said["facets"])
+nt = int(said["facets"] if case == "soup" else said["triangles"])
 m = r["mesh"]
 assert (m["vertices"], m["triangles"]) == (nv, nt), \
     "the report counts %d vertices and %d triangles, the program %d and %d" % (
@@ -87,9 +105,13 @@ at = 72 + 24 * narrays + 8
 xyz = struct.unpack_from("<%dd" % (3 * gnv), b, at)
 tri = struct.unpack_from("<%di" % (3 * gnt), b, at + 24 * gnv)
 assert (gnv, gnt) == (nv, nt), (gnv, gnt)
-if case == "columns":
+if case in ("columns", "soa"):
     tok = open(mesh).read().split()
     V = [float(t) for t in tok[4:4 + 3 * nv]]
+    if case == "soa":  # read as f32 by the program
+        V = [struct.unpack("<f", struct.pack("<f", x))[0] for x in V]
+        assert "3 blocks (x, y, z) of %s f32 each (EMM_TAG rules 1, 2, 3)" % format(nv, ",") \
+            in m["note"], m["note"]
     F = [int(t) for i in range(nt) for t in tok[4 + 3 * nv + 4 * i + 1:4 + 3 * nv + 4 * i + 4]]
     assert list(xyz) == V, "the vertices emm read are not the file's"
     assert list(tri) == F, "the triangles emm read are not the file's"
