@@ -109,18 +109,24 @@ static size_t rank(const contest *c, size_t *order)
     return c->nin;
 }
 
+/* The contenders still in that keep running when dropped (pinned). */
+static size_t pinned_in(const contest *c)
+{
+    size_t n = 0;
+    for (size_t k = 0; k < c->nin; k++)
+        n += member(c->pinned, c->npinned, c->in[k]);
+    return n;
+}
+
 /* Drops the slower half of the contenders still in (keeping at least
- * `finalists`), retiring those not pinned. */
+ * `finalists`), retiring them; a pinned contender (one the report shows,
+ * simulated to the end anyway) stays in whatever its rank, so that the
+ * answer is the fastest of every strategy simulated over the whole run. */
 static void halve(contest *c)
 {
     size_t keep = (c->nin + 1) / 2;
     if (keep < c->finalists)
         keep = c->finalists;
-    if (c->rounds < CONTEST_MAX_ROUNDS) {
-        c->at[c->rounds] = c->done;
-        c->kept[c->rounds] = keep < c->nin ? keep : c->nin;
-        c->rounds++;
-    }
     if (keep >= c->nin)
         return;
     rank(c, c->order);
@@ -132,15 +138,20 @@ static void halve(contest *c)
     size_t m = 0;
     for (size_t k = 0; k < c->nin; k++) {
         size_t i = c->in[k];
-        if (stay[k]) {
+        if (stay[k] || member(c->pinned, c->npinned, i)) {
             c->in[m++] = i;
-        } else if (!member(c->pinned, c->npinned, i)) {
+        } else {
             emm_runner_retire(c->runner, i);
             c->retired[c->nretired++] = i;
         }
     }
     c->nin = m;
     free(stay);
+    if (c->rounds < CONTEST_MAX_ROUNDS) {
+        c->at[c->rounds] = c->done;
+        c->kept[c->rounds] = m;
+        c->rounds++;
+    }
 }
 
 void contest_run(contest *c, const emm_trace_record *recs, size_t n)
@@ -153,7 +164,7 @@ void contest_run(contest *c, const emm_trace_record *recs, size_t n)
         recs += part;
         n -= part;
         if (c->done == c->next) {
-            if (c->nin > c->finalists)
+            if (c->nin - pinned_in(c) > c->finalists)
                 halve(c);
             c->step = c->step > UINT64_MAX / 4 ? UINT64_MAX / 2 : 2 * c->step;
             c->next = c->lead + c->step;
