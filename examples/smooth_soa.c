@@ -8,8 +8,9 @@
  * one per block, in the order mesh_alloc allocates them:
  *   vertices:site=mesh_alloc,x=0:f32;vertices:site=mesh_alloc,y=0:f32;
  *   vertices:site=mesh_alloc,z=0:f32;triangles:site=mesh_alloc,stride=12,vidx=0:u32
- * (site=mesh_alloc, not load_mesh: the C library's 4 KiB buffer for the
- * file is allocated under load_mesh too, and a rule with stride=4 fits it.)
+ * (site=mesh_alloc names the arrays' allocations; site=main would do too:
+ * the C library's 4 KiB buffer for the file, allocated under the inlined
+ * loader and a whole number of 4-byte entries, is never selected.)
  *
  * usage: smooth_soa MESH.off [PASSES]   (default 10 passes) */
 #include <math.h>

@@ -397,8 +397,43 @@ void shim_untag_array(const void *base)
 
 /* --- the allocator --------------------------------------------------------- */
 
+/* The return address of the outermost interposed allocator call: who asked
+ * for the block. */
+static __thread const void *alloc_caller SHIM_TLS;
+
+/* Whether the C library asked for the block itself — a FILE and its
+ * buffer, getline's line, strdup's copy: never a program's array, and a
+ * FILE's 4 KiB buffer is a whole number of small records, which a rule
+ * would select (under fault capture the C library's reads into it then
+ * failed with EFAULT: the kernel does not fault on a protected page).
+ * The answers for the last few callers are kept per thread. */
+static bool libc_block(void)
+{
+    static __thread struct {
+        const void *ra;
+        bool libc;
+    } memo[8] SHIM_TLS;
+    static __thread unsigned next SHIM_TLS;
+    const void *ra = alloc_caller;
+    for (unsigned i = 0; i < 8; i++)
+        if (memo[i].ra == ra && ra)
+            return memo[i].libc;
+    Dl_info info;
+    bool libc = false;
+    if (ra && dladdr(ra, &info) && info.dli_fname) {
+        const char *base = strrchr(info.dli_fname, '/');
+        base = base ? base + 1 : info.dli_fname;
+        libc = strncmp(base, "libc.so", 7) == 0;
+    }
+    memo[next % 8].ra = ra;
+    memo[next % 8].libc = libc;
+    next++;
+    return libc;
+}
+
 /* What the slow path of one allocation decided. */
 struct pending {
+    bool libc; /* the C library's own block: neither tagged nor listed */
     int rule; /* the rule that selects the block, or -1 */
     const char *site; /* the frame a site= rule matched, or NULL */
     void *map;
@@ -412,7 +447,8 @@ static bool alloc_begin(size_t size, size_t align, struct pending *pd)
     if (size < shim.rule_min || shim_busy || !shim.enabled || shim.finished)
         return false;
     shim_busy++;
-    pd->rule = shim.sites ? -1 : shim_rules_match(size, &pd->site);
+    pd->libc = libc_block();
+    pd->rule = shim.sites || pd->libc ? -1 : shim_rules_match(size, &pd->site);
     pd->map = pd->rule >= 0 && shim.ops->map ? shim.ops->map(size, align, &pd->map_len) : NULL;
     return true;
 }
@@ -429,7 +465,7 @@ static void *alloc_end(struct pending *pd, void *p, size_t size)
     } else if (pd->map) {
         munmap(pd->map, pd->map_len);
     }
-    if (p && shim.sites)
+    if (p && shim.sites && !pd->libc)
         shim_rules_list(p, size);
     shim_leave();
     return p;
@@ -462,7 +498,8 @@ static inline void alloc_leave(void)
     SHIM_API ret name params;                                                                 \
     ret name params                                                                           \
     {                                                                                         \
-        shim_in_alloc++;                                                                      \
+        if (shim_in_alloc++ == 0)                                                             \
+            alloc_caller = __builtin_return_address(0);                                       \
         ret r = name##_impl args;                                                             \
         alloc_leave();                                                                        \
         return r;                                                                             \

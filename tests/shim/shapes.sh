@@ -10,6 +10,11 @@
 # CASE wrong-n:  a column-major rule whose n= is not the block's: one line
 #                names the rule and the block that does not fit, nothing is
 #                tagged as vertices, nothing is simulated
+# CASE soa-main: the soa rules with site=main, where the loader (inlined)
+#                also has the C library allocate its FILE's 4 KiB buffer, a
+#                whole number of 4-byte entries: no rule selects a block the
+#                C library allocates for itself (under fault capture the
+#                program's own reads into it failed with EFAULT)
 # CASE soa-missing-y: the y rule selects no block (min=1G): one line names
 #                the x block's rule and says no y block was tagged, nothing
 #                is simulated
@@ -28,6 +33,7 @@ SOA='vertices:site=mesh_alloc,x=0:f32;vertices:site=mesh_alloc,y=0:f32;vertices:
 case $CASE in
 columns) TAG=$COLUMNS INPUT=$MESH ;;
 soa)     TAG=$SOA INPUT=$MESH ;;
+soa-main) TAG=$(echo "$SOA" | sed 's/site=mesh_alloc/site=main/g') INPUT=$MESH CASE=soa ;;
 soa-missing-y) TAG=$(echo "$SOA" | sed 's/site=mesh_alloc,y=/site=mesh_alloc,min=1G,y=/') INPUT=$MESH ;;
 wrong-n) TAG='vertices:site=load_mesh,order=columns,n=999,xyz=0:f64;triangles:site=load_mesh,order=columns,vidx=0:i32'
          INPUT=$MESH ;;
