@@ -109,6 +109,12 @@ static size_t rank(const contest *c, size_t *order)
     return c->nin;
 }
 
+bool contest_pins(const emm_strategy *s)
+{
+    return s->kind == EMM_STRATEGY_DIRECT ||
+           (s->kind == EMM_STRATEGY_CACHE && s->layout == EMM_LAYOUT_ORIGINAL);
+}
+
 /* The contenders still in that keep running when dropped (pinned). */
 static size_t pinned_in(const contest *c)
 {
@@ -249,9 +255,10 @@ emm_status emm_contest_trace(const char *path, const emm_machine *m, const emm_s
     for (size_t i = 0; i < count; i++)
         if (emm_machine_offers(m, &sweep[i]) && memcmp(&sweep[i], predicted, sizeof *predicted))
             list[n++] = sweep[i];
-    for (size_t i = 0; i < n; i++)
+    for (size_t i = 0; i < n; i++) {
         idx[i] = i;
-    pinned[0] = true;
+        pinned[i] = i == 0 || contest_pins(&list[i]);
+    }
     if ((st = emm_trace_reader_open(path, &r, err)) != EMM_OK ||
         (st = emm_runner_new(threads, &run, err)) != EMM_OK ||
         (st = emm_runner_add(run, m, list, n, emm_trace_reader_info(r), errs, err)) != EMM_OK ||

@@ -29,13 +29,19 @@ typedef struct contest contest;
  * that could not be built is left out). It checks when the records run
  * reach lead + unit·2, lead + unit·4, ... (lead: the records of the
  * window's leading sweep, which the profile leaves out; unit > 0: the
- * window's other records). A dropped
- * model is retired from the runner unless pinned[j] (pinned may be NULL)
- * says it is needed for something else (a comparison the report shows).
- * EMM_ERR_NOMEM only. */
+ * window's other records), and drops the slower half. A model pinned[j]
+ * (pinned may be NULL) runs to the end for something else (a comparison
+ * the report shows) and so is never dropped: the answer is the fastest of
+ * every model that ran the whole run. EMM_ERR_NOMEM only. */
 emm_status contest_new(emm_runner *r, const size_t *models, const bool *pinned, size_t n,
                        uint64_t lead, uint64_t unit, size_t finalists, contest **out,
                        emm_error *err);
+
+/* Whether a candidate always runs to the end, whatever is compared: the
+ * baselines (direct reads, the reference cache), which cost little beside
+ * an EMM model and against which the answer is set; the session and
+ * emm_contest_trace pin them alike, so that both reach the same answer. */
+bool contest_pins(const emm_strategy *s);
 
 /* Runs recs[0..n) through the runner, checking at every check point. */
 void contest_run(contest *c, const emm_trace_record *recs, size_t n);

@@ -630,7 +630,7 @@ static emm_status build_models(emm_session *s, emm_error *err)
             for (size_t e = 0; e < ne; e++)
                 in = in || entrants[e] == j;
             if (!in) {
-                pinned[ne] = j < shown;
+                pinned[ne] = j < shown || contest_pins(&all[i]);
                 entrants[ne++] = j;
             }
         }
