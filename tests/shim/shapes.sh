@@ -67,6 +67,10 @@ env -u LD_PRELOAD "$PROG" "$INPUT" > "$WORK/native.out" 2> "$WORK/native.err"; n
 cmp -s "$WORK/native.out" "$WORK/emm.out" || {
   diff "$WORK/native.out" "$WORK/emm.out" >&2; cat "$WORK/emm.err" >&2; fail "stdout differs under emm run"; }
 cat "$WORK/emm.err"
+# Fault capture simulates the window only: nothing is said of the run.
+if [ "$CAPTURE" = fault ] && grep -q 'over the run' "$WORK/emm.err"; then
+  fail "the summary speaks of the run, but only the window was simulated"
+fi
 
 if [ "$CASE" = wrong-n ]; then
   line='^emm: EMM_TAG rule 1 \(vertices:site=load_mesh,order=columns,n=999,stride=8,xyz=0:f64\) matched no allocation; sites seen, closest first: load_mesh \([0-9]+ blocks?, up to [0-9]+ bytes, not 3 columns of n=999 entries of 8 bytes \(23976 bytes\)\)'
