@@ -108,10 +108,13 @@ static bool plausible(double x, emm_scalar t)
 }
 
 /* The array's count becomes the records in use: later accesses past them
- * are not the mesh's. */
+ * are not the mesh's. A snapshot (an array freed before the decision)
+ * holds every record's fields in a row, so it shrinks alike; left at its
+ * capacity it was more records than the mesh's vertices, and the trace
+ * left the whole array out. */
 static void shrink_to(session_array *a, uint64_t count)
 {
-    if (count < a->count && !a->snap) {
+    if (count < a->count) {
         a->count = count;
         a->end = session_array_end(a);
     }
