@@ -772,6 +772,7 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
         if (session_overruled(s))
             s->chosen = s->mstrat[s->answer_model];
     }
+    session_phases_answer(s);
     /* Every model, the answer first, those that could not be built with
      * only their strategy (the report says why), and without the contest's
      * dropped candidates, whose cycles stop short of the run; the summary
@@ -885,6 +886,7 @@ void emm_session_free(emm_session *s)
     free(s->tarrays);
     free(s->mstrat);
     free(s->probe);
+    session_phases_free(s);
     free(s->merr);
     free(s->xyz);
     free(s->tri);

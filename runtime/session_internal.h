@@ -63,8 +63,14 @@ typedef struct program_phase {
     size_t model;         /* the runner's model of `best` started at detection, or SIZE_MAX */
     uint64_t detected;    /* accesses simulated when it was detected */
     uint64_t chosen_at;   /* the chosen strategy's cycles then */
-    uint64_t chosen_span; /* at its end: the chosen strategy's cycles since detection */
+    uint64_t chosen_span; /* at its end: the answer's cycles since detection (the chosen
+                             strategy's until the answer is known) */
     uint64_t best_span;   /* and `best`'s, started cold at detection */
+    uint64_t *at, *end;   /* every model's cycles at detection and at its end (nat of
+                             them; NULL without memory): the answer's span, once the
+                             contest has named it */
+    size_t nat;
+    bool best_is_answer;  /* `best` is the answer's strategy: nothing to switch to */
     bool closed;
 } program_phase;
 
@@ -381,6 +387,10 @@ uint64_t session_mesh_bytes(const emm_session *s);
 void session_phases_start(emm_session *s);
 void session_phases_see(emm_session *s, const emm_trace_record *recs, size_t n);
 void session_phases_close(emm_session *s);
+/* Once the answer is known (the contest's, or the chosen strategy): each
+ * phase's kept cycles become the answer's over the phase. */
+void session_phases_answer(emm_session *s);
+void session_phases_free(emm_session *s);
 /* The cycles a switch costs: the mesh's bytes in by DMA and the new layout
  * out (2 x one DMA of the mesh's bytes). */
 uint64_t session_switch_cycles(const emm_session *s);

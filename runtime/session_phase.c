@@ -62,6 +62,16 @@ void session_phases_start(emm_session *s)
                  !session_window_only(s);
 }
 
+/* Every model's cycles now (those of a retired model stopped where it
+ * was dropped; only the answer's, which never is, are read). */
+static uint64_t *totals(const emm_session *s, size_t n)
+{
+    uint64_t *t = malloc((n ? n : 1) * sizeof *t);
+    for (size_t i = 0; t && i < n; i++)
+        t[i] = model_total(s, i);
+    return t;
+}
+
 static void close_phase(emm_session *s, program_phase *p)
 {
     if (p->closed)
@@ -69,6 +79,8 @@ static void close_phase(emm_session *s, program_phase *p)
     p->closed = true;
     if (p->model == SIZE_MAX)
         return;
+    if (p->at)
+        p->end = totals(s, p->nat);
     p->chosen_span = model_total(s, 0) - p->chosen_at;
     p->best_span = model_total(s, p->model);
     /* The next phase measures from its own detection, and nothing else
@@ -134,7 +146,12 @@ static void evaluate(emm_session *s)
                                &opt, s->layouts, s->decisions, &wd, &e) == EMM_OK) {
         p->has_best = true;
         p->best = wd.strategy;
-        if (memcmp(&wd.strategy, &s->chosen, sizeof wd.strategy) != 0) {
+        p->best_is_answer = memcmp(&wd.strategy, &s->chosen, sizeof wd.strategy) == 0;
+        /* With a contest the answer is known at the end only: the best
+         * candidate's cold model runs even when it is the window's choice. */
+        if (!p->best_is_answer || s->contest) {
+            p->nat = s->nmodels;
+            p->at = totals(s, p->nat);
             emm_error why;
             size_t k = emm_runner_count(s->runner);
             if (emm_runner_add(s->runner, s->machine, &wd.strategy, 1, &s->info, &why, &e) ==
@@ -190,5 +207,29 @@ void session_phases_see(emm_session *s, const emm_trace_record *recs, size_t n)
             s->probe_reads = 0;
             s->gap = SESSION_PROBE_GAP * s->probe_len;
         }
+    }
+}
+
+void session_phases_answer(emm_session *s)
+{
+    size_t a = s->answer_model != SIZE_MAX ? s->answer_model : 0;
+    if (!s->mstrat || a >= s->nmodels)
+        return;
+    for (int i = 1; i < s->nphases; i++) {
+        program_phase *p = &s->phases[i];
+        if (!p->has_best)
+            continue;
+        p->best_is_answer = memcmp(&p->best, &s->mstrat[a], sizeof p->best) == 0;
+        if (p->at && p->end && a < p->nat)
+            p->chosen_span = p->end[a] - p->at[a];
+    }
+}
+
+void session_phases_free(emm_session *s)
+{
+    for (int i = 0; i < s->nphases; i++) {
+        free(s->phases[i].at);
+        free(s->phases[i].end);
+        s->phases[i].at = s->phases[i].end = NULL;
     }
 }

@@ -122,7 +122,8 @@ static const emm_result *find_result(const emm_result *res, size_t n, const emm_
  * over the same span. */
 static bool phase_pays(const emm_session *s, const program_phase *p)
 {
-    return p->model != SIZE_MAX && p->best_span + session_switch_cycles(s) < p->chosen_span;
+    return p->model != SIZE_MAX && !p->best_is_answer &&
+           p->best_span + session_switch_cycles(s) < p->chosen_span;
 }
 
 /* "phases" (docs/report.md): the program's phases as the probes found them. */
@@ -151,7 +152,7 @@ static void write_phases(json_writer *w, const emm_session *s)
         } else {
             json_null(w);
         }
-        if (p->model != SIZE_MAX) {
+        if (p->model != SIZE_MAX && !p->best_is_answer) {
             json_key(w, "switch");
             json_begin_object(w);
             json_key(w, "from_access");
@@ -596,14 +597,14 @@ void session_print_summary(const emm_session *s, FILE *out, const emm_result *re
             if (!p->has_best)
                 continue;
             emm_strategy_format(&p->best, name, sizeof name);
-            if (p->model == SIZE_MAX) {
+            if (p->best_is_answer || p->model == SIZE_MAX) {
                 fprintf(out, "emm:   the %s phase's best candidate is the answer too: no switch\n",
                         p->pattern);
                 continue;
             }
             uint64_t cost = session_switch_cycles(s), with = p->best_span + cost;
             fprintf(out, "emm:   the %s phase: switching to %s would take %s cycles with %s to "
-                         "re-lay out the mesh, against %s kept: switching %s\n",
+                         "re-lay out the mesh, against %s for the answer: switching %s\n",
                     p->pattern, name, emm_grouped(with, num), emm_grouped(cost, num2),
                     emm_grouped(p->chosen_span, vs), phase_pays(s, p) ? "pays" : "does not pay");
         }
