@@ -3,10 +3,12 @@
  * Blocks are grouped by call path. A block's records are looked at once,
  * when it is freed or moved and at exit: the table tries three indices in
  * 12 bytes (i32/u32), then three coordinates in 12 bytes (f32) or 24 bytes
- * (f64), over its records up to the last one that is not all zero (the
- * rest is spare capacity). Integers read as floats are subnormal, floats
- * read as indices are huge: the tests tell them apart. A site keeps what
- * its largest block looked like. */
+ * (f64), then one coordinate per entry (a block of a structure of arrays,
+ * f32 or f64), over its records up to the last one that is not all zero
+ * (the rest is spare capacity). Integers read as floats are subnormal,
+ * floats read as indices are huge: the tests tell them apart. A site keeps
+ * what its largest block looked like; two or three coordinate blocks of
+ * one type and count are a mesh's x, y (and z), in allocation order. */
 #include "emm/sites.h"
 
 #include <math.h>
@@ -26,6 +28,7 @@
 struct guess {
     emm_array_kind kind;
     bool found;
+    bool axis; /* one coordinate per entry: a block of a structure of arrays */
     unsigned stride;
     emm_scalar type;
     uint64_t records, in_use;
@@ -38,6 +41,7 @@ struct site {
     uint64_t count, largest, live;
     struct guess g;
     uint64_t looked; /* the size of the block g comes from */
+    int order;       /* the site's place among the program's first allocations */
 };
 
 struct block {
@@ -81,6 +85,7 @@ void emm_sites_add(emm_sites *t, uint64_t path, const char *const *names, size_t
         struct site *s = &t->site[t->nsites++];
         memset(s, 0, sizeof *s);
         s->path = path;
+        s->order = t->nsites - 1;
         snprintf(s->name, sizeof s->name, "%s", n && names[0] ? names[0] : "?");
         size_t used = 0;
         for (size_t k = 0; k < n && k < MAX_STACK && used + 1 < sizeof s->stack; k++) {
@@ -106,10 +111,11 @@ static bool plausible(double x, emm_scalar type)
     return isfinite(x) && (x == 0 || fabs(x) >= tiny) && fabs(x) < 1e7;
 }
 
-/* Whether the block reads as records of `stride` bytes with three scalars
- * of `type` at their start, over its records in use. */
-static bool reads_as(const unsigned char *p, uint64_t size, unsigned stride, emm_scalar type,
-                     struct guess *g)
+/* Whether the block reads as records of `stride` bytes with `scalars` (3,
+ * or 1 for one coordinate per entry) scalars of `type` at their start,
+ * over its records in use. */
+static bool reads_as_n(const unsigned char *p, uint64_t size, unsigned stride, emm_scalar type,
+                       int scalars, struct guess *g)
 {
     if (size % stride)
         return false;
@@ -132,7 +138,7 @@ static bool reads_as(const unsigned char *p, uint64_t size, unsigned stride, emm
             ok = v[0] < (1u << 26) && v[1] < (1u << 26) && v[2] < (1u << 26) &&
                  (v[0] != v[1] || v[1] != v[2]);
         } else {
-            for (int c = 0; c < 3 && ok; c++) {
+            for (int c = 0; c < scalars && ok; c++) {
                 double x;
                 if (type == EMM_F32) {
                     float f;
@@ -148,9 +154,40 @@ static bool reads_as(const unsigned char *p, uint64_t size, unsigned stride, emm
     }
     if (good * 100 < look * 98)
         return false;
-    *g = (struct guess){type == EMM_U32 ? EMM_ARRAY_TRIANGLES : EMM_ARRAY_VERTICES, true, stride,
-                        type, n, used};
+    *g = (struct guess){type == EMM_U32 ? EMM_ARRAY_TRIANGLES : EMM_ARRAY_VERTICES, true,
+                        scalars == 1, stride, type, n, used};
     return true;
+}
+
+static bool reads_as(const unsigned char *p, uint64_t size, unsigned stride, emm_scalar type,
+                     struct guess *g)
+{
+    return reads_as_n(p, size, stride, type, 3, g);
+}
+
+/* One coordinate per entry (a structure of arrays), f32 or f64. Small
+ * coordinates read either way: f64 data read as f32 shows its low words
+ * (zero for round values), f32 data read as f64 pairs of floats. f32 wins
+ * unless nearly every other f32 entry is exactly zero. */
+static bool reads_as_axis(const unsigned char *p, uint64_t size, struct guess *g)
+{
+    struct guess g32, g64;
+    bool f32 = reads_as_n(p, size, 4, EMM_F32, 1, &g32);
+    bool f64 = reads_as_n(p, size, 8, EMM_F64, 1, &g64);
+    if (f32 && f64) {
+        uint64_t look = g64.in_use < SAMPLE ? g64.in_use : SAMPLE, zero = 0;
+        for (uint64_t i = 0; i < look; i++) {
+            uint32_t low;
+            memcpy(&low, p + 8 * i, sizeof low);
+            zero += low == 0;
+        }
+        f32 = zero * 10 < look * 9;
+    }
+    if (f32)
+        *g = g32;
+    else if (f64)
+        *g = g64;
+    return f32 || f64;
 }
 
 static void look_at(emm_sites *t, int b)
@@ -163,7 +200,8 @@ static void look_at(emm_sites *t, int b)
         const unsigned char *p = k->p;
         struct guess g = {0};
         bool found = reads_as(p, k->size, 12, EMM_U32, &g) ||
-                     reads_as(p, k->size, 12, EMM_F32, &g) || reads_as(p, k->size, 24, EMM_F64, &g);
+                     reads_as(p, k->size, 12, EMM_F32, &g) || reads_as(p, k->size, 24, EMM_F64, &g) ||
+                     reads_as_axis(p, k->size, &g);
         if (found ? k->size >= s->looked || !s->g.found : !s->g.found && k->size >= s->looked) {
             s->g = g;
             s->looked = k->size;
@@ -188,6 +226,24 @@ static int by_size(const void *a, const void *b)
     return x->largest < y->largest ? 1 : x->largest > y->largest ? -1 : 0;
 }
 
+/* The axis of site i's blocks when two or three axis-looking sites of the
+ * same type and count look like one mesh's x, y (and z): in the order the
+ * program first allocated them; 0 when that cannot be told. */
+static char axis_of(const emm_sites *t, int i)
+{
+    const struct site *s = &t->site[i];
+    int before = 0, same = 0;
+    for (int j = 0; j < t->nsites; j++) {
+        const struct site *o = &t->site[j];
+        if (!o->g.found || !o->g.axis || o->g.type != s->g.type ||
+            o->g.records != s->g.records)
+            continue;
+        same++;
+        before += o->order < s->order;
+    }
+    return same >= 2 && same <= 3 ? "xyz"[before] : 0;
+}
+
 void emm_sites_print(emm_sites *t, const char *program, FILE *out)
 {
     char b1[32], b2[32], b3[32];
@@ -209,7 +265,19 @@ void emm_sites_print(emm_sites *t, const char *program, FILE *out)
                 s->name, emm_grouped(s->count, b1), s->count == 1 ? "" : "s",
                 emm_grouped(s->largest, b2), emm_grouped(s->live, b3));
         fprintf(out, "emm:      stack: %s\n", s->stack);
-        if (s->g.found) {
+        if (s->g.found && s->g.axis) {
+            const char *type = s->g.type == EMM_F32 ? "f32" : "f64";
+            fprintf(out, "emm:      records: one %s coordinate per %u bytes (a structure of "
+                         "arrays: a block per axis), %s in use of %s\n",
+                    type, s->g.stride, emm_grouped(s->g.in_use, b1), emm_grouped(s->g.records, b2));
+            char axis = axis_of(t, i);
+            if (axis)
+                fprintf(out, "emm:      rule: vertices:site=%s,%c=0:%s\n", s->name, axis, type);
+            else
+                fprintf(out, "emm:      rule: vertices:site=%s,x=0:%s (or y=, z=: the block's "
+                             "axis)\n",
+                        s->name, type);
+        } else if (s->g.found) {
             bool v = s->g.kind == EMM_ARRAY_VERTICES;
             const char *type = s->g.type == EMM_F32 ? "f32" : s->g.type == EMM_F64 ? "f64" : "u32";
             fprintf(out, "emm:      records: 3 x %s in %u bytes (%s), %s in use of %s\n", type,

@@ -4,7 +4,8 @@
  * libemmshim.so, in list mode, hands every large block the program
  * allocates to a site table with its call stack; when a block is freed,
  * and at exit for those still live, the table reads the block once to see
- * what its records look like (three floats, three indices); at exit it
+ * what its records look like (three floats, three indices, or one float
+ * per entry: a block of a structure of arrays); at exit it
  * prints the sites, largest block first, each with its stack and a
  * suggested EMM_TAG rule. Not thread-safe: the shim serialises calls. */
 #ifndef EMM_SITES_H
