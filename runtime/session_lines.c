@@ -143,6 +143,8 @@ void session_print_stall_lines(const emm_session *s, FILE *out)
      * run's contest answered otherwise they are not the answer's: say how
      * to see the answer's instead of naming another strategy's lines. */
     if (session_overruled(s)) {
+        if (s->chosen.kind != EMM_STRATEGY_EMM)
+            return; /* direct reads (a cache) move no cell: no DMA stalls */
         char name[64];
         emm_strategy_format(&s->chosen, name, sizeof name);
         fprintf(out, "emm:   the answer's DMA stalls by source line: emm annotate %s --strategy %s\n",

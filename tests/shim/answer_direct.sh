@@ -1,0 +1,14 @@
+# A run whose fastest strategy over the run is direct reads (random access
+# on the default 20,000-face mesh, the whole run captured): the contest
+# keeps direct reads in its ranking to the end and names them, and the
+# summary points at no DMA stalls, which direct reads do not have.
+. "$(dirname "$0")/lib.sh"
+unset EMM_STRATEGY # the session's own answer
+run_both direct "$@"
+expect_err direct '^emm: answer: direct \(measured over the run: the fastest of 64 candidates'
+expect_err direct '^emm:   runner-up [a-z]+\+[a-z]+@[0-9]+: [0-9,]+ cycles \([0-9.]+% slower over the run\)'
+if grep -q 'DMA stalls' "$WORK/direct.shim.err"; then
+  cat "$WORK/direct.shim.err" >&2
+  fail "the summary speaks of DMA stalls for direct reads"
+fi
+echo "answer_direct: ok"
