@@ -244,6 +244,22 @@ static char axis_of(const emm_sites *t, int i)
     return same >= 2 && same <= 3 ? "xyz"[before] : 0;
 }
 
+/* The axis rules for a site whose one call made two or three axis blocks:
+ * x, y (and z), one block each in the order they were allocated. */
+static const char *loop_rules(const struct site *s, const char *type, char *buf, size_t cap)
+{
+    size_t used = 0;
+    buf[0] = 0;
+    for (uint64_t k = 0; k < s->count && k < 3 && used < cap; k++) {
+        int w = snprintf(buf + used, cap - used, "%svertices:site=%s,%c=0:%s,nth=1", k ? ";" : "",
+                         s->name, "xyz"[k], type);
+        if (w < 0)
+            break;
+        used += (size_t)w;
+    }
+    return buf;
+}
+
 void emm_sites_print(emm_sites *t, const char *program, FILE *out)
 {
     char b1[32], b2[32], b3[32];
@@ -267,11 +283,16 @@ void emm_sites_print(emm_sites *t, const char *program, FILE *out)
         fprintf(out, "emm:      stack: %s\n", s->stack);
         if (s->g.found && s->g.axis) {
             const char *type = s->g.type == EMM_F32 ? "f32" : "f64";
+            char rules[3 * (EMM_TAG_SITE_MAX + 48)];
             fprintf(out, "emm:      records: one %s coordinate per %u bytes (a structure of "
                          "arrays: a block per axis), %s in use of %s\n",
                     type, s->g.stride, emm_grouped(s->g.in_use, b1), emm_grouped(s->g.records, b2));
             char axis = axis_of(t, i);
-            if (axis)
+            if (s->count >= 2 && s->count <= 3 && !axis)
+                /* One call made them all (a loop over the axes): the rules
+                 * take its blocks in turn, one each (nth=1). */
+                fprintf(out, "emm:      rule: %s\n", loop_rules(s, type, rules, sizeof rules));
+            else if (axis)
                 fprintf(out, "emm:      rule: vertices:site=%s,%c=0:%s\n", s->name, axis, type);
             else
                 fprintf(out, "emm:      rule: vertices:site=%s,x=0:%s (or y=, z=: the block's "
