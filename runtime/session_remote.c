@@ -257,9 +257,11 @@ static bool call(struct session_remote *r, uint32_t op, bool wait, const void *a
     return true;
 }
 
-/* A REPLY that carries a status and a message. */
+/* A REPLY that carries a status and a message; on success its payload (at
+ * most `cap` bytes, and no more than a message's) goes to `ok` and its
+ * value to *value (either may be NULL). */
 static emm_status status_call(struct session_remote *r, uint32_t op, const void *a, size_t alen,
-                              emm_error *err)
+                              void *ok, size_t cap, int64_t *value, emm_error *err)
 {
     struct frame reply;
     char msg[sizeof err->message];
@@ -272,6 +274,12 @@ static emm_status status_call(struct session_remote *r, uint32_t op, const void 
     if (reply.status != EMM_OK && err) {
         err->status = (emm_status)reply.status;
         snprintf(err->message, sizeof err->message, "%s", msg);
+    }
+    if (reply.status == EMM_OK) {
+        if (ok)
+            memcpy(ok, msg, cap < sizeof msg ? cap : sizeof msg);
+        if (value)
+            *value = reply.value;
     }
     return (emm_status)reply.status;
 }
@@ -402,7 +410,7 @@ emm_status session_remote_new(const emm_session_config *sc, emm_session **out, e
         st = emm_fail(err, EMM_ERR_NOMEM, "session: out of memory");
         goto fail;
     }
-    st = status_call(r, OP_NEW, msg, bytes, err);
+    st = status_call(r, OP_NEW, msg, bytes, NULL, 0, NULL, err);
     free(msg);
     if (st != EMM_OK)
         goto fail;
@@ -491,25 +499,11 @@ emm_session_state session_remote_iteration(emm_session *s)
 emm_status session_remote_decide(emm_session *s, emm_error *err)
 {
     struct session_remote *r = s->remote;
-    struct frame reply;
-    union {
-        uint64_t pairs[2 * SESSION_MAX_ARRAYS];
-        char msg[sizeof err->message];
-    } u;
-    memset(&u, 0, sizeof u);
-    emm_status st;
-    if (!call(r, OP_DECIDE, true, NULL, 0, NULL, 0, &reply, &u, sizeof u - 1)) {
-        st = r->why.status;
-        if (err)
-            *err = r->why;
-    } else if ((st = (emm_status)reply.status) != EMM_OK) {
-        if (err) {
-            err->status = st;
-            snprintf(err->message, sizeof err->message, "%s", u.msg);
-        }
-    } else {
-        r->nranges = (uint64_t)reply.value;
-        memcpy(r->ranges, u.pairs, sizeof r->ranges);
+    int64_t n = 0;
+    _Static_assert(sizeof r->ranges < sizeof err->message, "the ranges fit a reply's message");
+    emm_status st = status_call(r, OP_DECIDE, NULL, 0, r->ranges, sizeof r->ranges, &n, err);
+    if (st == EMM_OK) {
+        r->nranges = (uint64_t)n;
         r->have_ranges = true;
     }
     r->decided = true;
@@ -525,7 +519,7 @@ emm_status session_remote_finish(emm_session *s, FILE *summary, emm_error *err)
     if (summary)
         fflush(summary);
     uint32_t say = summary != NULL;
-    emm_status st = status_call(r, OP_FINISH, &say, sizeof say, err);
+    emm_status st = status_call(r, OP_FINISH, &say, sizeof say, NULL, 0, NULL, err);
     if (r->broken && summary) {
         fprintf(summary, "emm: %s\n", r->why.message);
         fflush(summary);

@@ -31,3 +31,26 @@ run_both() {
 expect_err() {
   grep -Eq -- "$2" "$WORK/$1.shim.err" || { cat "$WORK/$1.shim.err" >&2; fail "$1: no stderr line matches '$2'"; }
 }
+
+# list_sites EMM PROGRAM ARGS...: the program natively (native.out), then
+# under `emm run --list-sites` (list.out, list.err): same exit status and
+# stdout; the listing is shown.
+list_sites() {
+  _emm=$1; shift
+  env -u LD_PRELOAD "$@" > "$WORK/native.out"; native_rc=$?
+  "$_emm" run --list-sites -- "$@" > "$WORK/list.out" 2> "$WORK/list.err"; _rc=$?
+  [ $_rc = $native_rc ] || { cat "$WORK/list.err" >&2; fail "exit status $_rc under --list-sites, $native_rc natively"; }
+  cmp -s "$WORK/native.out" "$WORK/list.out" || fail "stdout differs under --list-sites"
+  cat "$WORK/list.err"
+}
+
+# run_suggested EMM RULES PROGRAM ARGS...: the rules --list-sites suggested,
+# used as they are under fault capture (tagged.out, tagged.err, r.json):
+# stdout as natively and an answer.
+run_suggested() {
+  _emm=$1 _rules=$2; shift 2
+  "$_emm" run --capture fault --tag "$_rules" --report "$WORK/r.json" -- "$@" \
+    > "$WORK/tagged.out" 2> "$WORK/tagged.err" || { cat "$WORK/tagged.err" >&2; fail "the suggested rules: run failed"; }
+  cmp -s "$WORK/native.out" "$WORK/tagged.out" || fail "stdout differs under the suggested rules"
+  grep -q '^emm: answer: ' "$WORK/tagged.err" || { cat "$WORK/tagged.err" >&2; fail "the suggested rules: no answer"; }
+}

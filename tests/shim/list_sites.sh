@@ -7,11 +7,7 @@
 EMM_TEST_DECIDE=1
 . "$(dirname "$0")/lib.sh"
 EMM=$1; shift
-env -u LD_PRELOAD "$@" > "$WORK/native.out"; native_rc=$?
-"$EMM" run --list-sites -- "$@" > "$WORK/list.out" 2> "$WORK/list.err"; rc=$?
-[ $rc = $native_rc ] || { cat "$WORK/list.err" >&2; fail "exit status $rc under --list-sites, $native_rc natively"; }
-cmp -s "$WORK/native.out" "$WORK/list.out" || fail "stdout differs under --list-sites"
-cat "$WORK/list.err"
+list_sites "$EMM" "$@"
 grep -q 'candidate array sites (blocks of 65,536 bytes or more' "$WORK/list.err" || fail "no listing"
 grep -q '^emm:      stack: .* < main' "$WORK/list.err" || fail "no stack down to main"
 vrule=$(sed -n 's/^emm:      rule: \(vertices:site=[^,]*,stride=12,xyz=0:f32\)$/\1/p' "$WORK/list.err" | head -1)
@@ -19,9 +15,6 @@ trule=$(sed -n 's/^emm:      rule: \(triangles:site=[^,]*,stride=12,vidx=0:u32\)
 [ -n "$vrule" ] || fail "no vertices rule with 3 x f32 in 12 bytes suggested"
 [ -n "$trule" ] || fail "no triangles rule with 3 x u32 in 12 bytes suggested"
 grep -q 'no simulation\|answer' "$WORK/list.err" && fail "--list-sites simulated something"
-"$EMM" run --capture fault --tag "$vrule;$trule" --report "$WORK/r.json" -- "$@" \
-  > "$WORK/tagged.out" 2> "$WORK/tagged.err" || { cat "$WORK/tagged.err" >&2; fail "the suggested rules: run failed"; }
-cmp -s "$WORK/native.out" "$WORK/tagged.out" || fail "stdout differs under the suggested rules"
-grep -q '^emm: answer: ' "$WORK/tagged.err" || { cat "$WORK/tagged.err" >&2; fail "the suggested rules: no answer"; }
+run_suggested "$EMM" "$vrule;$trule" "$@"
 echo "suggested: $vrule;$trule"
 echo "list_sites: ok"

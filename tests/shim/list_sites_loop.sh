@@ -8,20 +8,13 @@
 EMM_TEST_DECIDE=1
 . "$(dirname "$0")/lib.sh"
 EMM=$1; shift
-env -u LD_PRELOAD "$@" > "$WORK/native.out"; native_rc=$?
-"$EMM" run --list-sites -- "$@" > "$WORK/list.out" 2> "$WORK/list.err"; rc=$?
-[ $rc = $native_rc ] || { cat "$WORK/list.err" >&2; fail "exit status $rc under --list-sites, $native_rc natively"; }
-cmp -s "$WORK/native.out" "$WORK/list.out" || fail "stdout differs under --list-sites"
-cat "$WORK/list.err"
+list_sites "$EMM" "$@"
 axes=$(sed -n 's/^emm:      rule: \(vertices:site=mesh_alloc,x=0:f32,nth=1;vertices:site=mesh_alloc,y=0:f32,nth=1;vertices:site=mesh_alloc,z=0:f32,nth=1\)$/\1/p' "$WORK/list.err")
 trule=$(sed -n 's/^emm:      rule: \(triangles:site=mesh_alloc,stride=12,vidx=0:u32\)$/\1/p' "$WORK/list.err")
 [ -n "$axes" ] || fail "no x, y, z rules with nth=1 suggested for the loop's three blocks"
 [ -n "$trule" ] || fail "no triangles rule suggested"
-"$EMM" run --capture fault --tag "$axes;$trule" -- "$@" > "$WORK/tagged.out" 2> "$WORK/tagged.err" ||
-  { cat "$WORK/tagged.err" >&2; fail "the suggested rules: run failed"; }
-cmp -s "$WORK/native.out" "$WORK/tagged.out" || fail "stdout differs under the suggested rules"
+run_suggested "$EMM" "$axes;$trule" "$@"
 cat "$WORK/tagged.err"
-grep -q '^emm: answer: ' "$WORK/tagged.err" || fail "the suggested rules: no answer"
 grep -q 'the vertices are 3 blocks (x, y, z) of 40,000 f32 each' "$WORK/tagged.err" ||
   fail "the suggested rules did not tag the three blocks as one mesh"
 echo "list_sites_loop: ok"

@@ -9,11 +9,7 @@
 EMM_TEST_DECIDE=1
 . "$(dirname "$0")/lib.sh"
 EMM=$1; shift
-env -u LD_PRELOAD "$@" > "$WORK/native.out"; native_rc=$?
-"$EMM" run --list-sites -- "$@" > "$WORK/list.out" 2> "$WORK/list.err"; rc=$?
-[ $rc = $native_rc ] || { cat "$WORK/list.err" >&2; fail "exit status $rc under --list-sites, $native_rc natively"; }
-cmp -s "$WORK/native.out" "$WORK/list.out" || fail "stdout differs under --list-sites"
-cat "$WORK/list.err"
+list_sites "$EMM" "$@"
 grep -q 'records: one f32 coordinate per 4 bytes (a structure of arrays' "$WORK/list.err" ||
   fail "no block read as one coordinate per entry"
 xrule=$(sed -n 's/^emm:      rule: \(vertices:site=[^,]*,x=0:f32\)$/\1/p' "$WORK/list.err")
@@ -22,10 +18,7 @@ trule=$(sed -n 's/^emm:      rule: \(triangles:site=[^,]*,stride=12,vidx=0:u32\)
 [ "$(echo "$xrule" | grep -c .)" = 1 ] || fail "not one x rule suggested: '$xrule'"
 [ "$(echo "$yrule" | grep -c .)" = 1 ] || fail "not one y rule suggested: '$yrule'"
 [ -n "$trule" ] || fail "no triangles rule suggested"
-"$EMM" run --capture fault --tag "$xrule;$yrule;$trule" --report "$WORK/r.json" -- "$@" \
-  > "$WORK/tagged.out" 2> "$WORK/tagged.err" || { cat "$WORK/tagged.err" >&2; fail "the suggested rules: run failed"; }
-cmp -s "$WORK/native.out" "$WORK/tagged.out" || fail "stdout differs under the suggested rules"
-grep -q '^emm: answer: ' "$WORK/tagged.err" || { cat "$WORK/tagged.err" >&2; fail "the suggested rules: no answer"; }
+run_suggested "$EMM" "$xrule;$yrule;$trule" "$@"
 grep -q 'the vertices are 2 blocks (x, y[;)]' "$WORK/tagged.err" ||
   { cat "$WORK/tagged.err" >&2; fail "the suggested rules did not tag the x and y blocks as one mesh"; }
 echo "suggested: $xrule;$yrule;$trule"
