@@ -104,31 +104,47 @@ static void add_cost(emm_annotate_row *r, const emm_record_cost *c)
     r->accesses++;
 }
 
+/* The row of counter pc (nonzero), added when new; NULL when memory ran
+ * out. */
+static emm_annotate_row *row_of(emm_annotation *a, uint64_t pc)
+{
+    if (2 * (a->used + 1) > a->cap && !grow(a))
+        return NULL;
+    size_t k = slot_of(pc, a->cap);
+    while (a->t[k].pc && a->t[k].pc != pc)
+        k = (k + 1) & (a->cap - 1);
+    if (!a->t[k].pc) {
+        a->t[k].pc = pc;
+        a->used++;
+    }
+    return &a->t[k].row;
+}
+
 int emm_annotation_add(emm_annotation *a, const emm_trace_record *recs,
                        const emm_record_cost *cost, size_t n)
 {
     int ok = 1;
     for (size_t i = 0; i < n; i++) {
         add_cost(&a->total, &cost[i]);
-        uint64_t pc = recs[i].pc;
-        if (!pc) {
-            add_cost(&a->nopc, &cost[i]);
-            continue;
-        }
-        if (2 * (a->used + 1) > a->cap && !grow(a)) {
+        emm_annotate_row *r = recs[i].pc ? row_of(a, recs[i].pc) : &a->nopc;
+        if (r)
+            add_cost(r, &cost[i]);
+        else
             ok = 0;
-            continue;
-        }
-        size_t k = slot_of(pc, a->cap);
-        while (a->t[k].pc && a->t[k].pc != pc)
-            k = (k + 1) & (a->cap - 1);
-        if (!a->t[k].pc) {
-            a->t[k].pc = pc;
-            a->used++;
-        }
-        add_cost(&a->t[k].row, &cost[i]);
     }
     return ok;
+}
+
+int emm_annotation_add_stall(emm_annotation *a, uint64_t pc, uint64_t cycles)
+{
+    a->total.cycles[EMM_BUCKET_DMA_STALL] += cycles;
+    a->total.total += cycles;
+    emm_annotate_row *r = pc ? row_of(a, pc) : &a->nopc;
+    if (!r)
+        return 0;
+    r->cycles[EMM_BUCKET_DMA_STALL] += cycles;
+    r->total += cycles;
+    return 1;
 }
 
 const emm_annotate_row *emm_annotation_total(const emm_annotation *a)

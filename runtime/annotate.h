@@ -48,6 +48,12 @@ void emm_annotation_free(emm_annotation *a);
 int emm_annotation_add(emm_annotation *a, const emm_trace_record *recs,
                        const emm_record_cost *cost, size_t n);
 
+/* Adds a DMA stall of `cycles` at program counter pc (0: none) alone: the
+ * stall lines of a run whose model reports its stalls (emm_model_stalls),
+ * whose rows then hold DMA stalls and nothing else. Returns 0 when memory
+ * ran out. */
+int emm_annotation_add_stall(emm_annotation *a, uint64_t pc, uint64_t cycles);
+
 /* The sums so far, every record included (a row with file, line and
  * function NULL). */
 const emm_annotate_row *emm_annotation_total(const emm_annotation *a);

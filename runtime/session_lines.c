@@ -3,9 +3,9 @@
  * modules (for emm annotate), the timeline (EMM_TIMELINE), and the source
  * lines its DMA stalls came from, named in the summary and the report.
  *
- * The stalls are attributed record by record (emm_runner_costs: the chosen
- * model runs costed; the others run as before) and summed by program
- * counter (annotate.c, as emm annotate does); at finish the counters are
+ * The chosen model reports each DMA stall with the record that waited
+ * (emm_model_stalls, as emm annotate's costed run would charge it), summed
+ * by program counter (annotate.c, as emm annotate does); at finish the counters are
  * resolved to source lines with libdw (srcline.c), off every capture path. */
 #include "session_internal.h"
 
@@ -14,14 +14,14 @@
 
 #include "error.h"
 #include "annotate.h"
+#include "model.h"
 #include "srcline.h"
 
-/* The chosen model's costs, batch by batch (on the runner's thread). */
-static void on_costs(void *ctx, const emm_trace_record *recs, const emm_record_cost *cost,
-                     size_t n)
+/* A DMA stall of the chosen model (on the thread running it). */
+static void on_stall(void *ctx, const emm_trace_record *r, uint64_t cycles)
 {
     emm_session *s = ctx;
-    emm_annotation_add(s->annotation, recs, cost, n);
+    emm_annotation_add_stall(s->annotation, r->pc, cycles);
 }
 
 /* The capture records program counters: sancov's hooks' return addresses,
@@ -82,8 +82,7 @@ void session_outputs_start(emm_session *s)
         }
     }
     if (has_pcs(s) && chosen && s->chosen.kind == EMM_STRATEGY_EMM &&
-        (s->annotation = emm_annotation_new()) != NULL &&
-        emm_runner_costs(s->runner, 0, on_costs, s, NULL) != EMM_OK) {
+        (s->annotation = emm_annotation_new()) != NULL && !emm_model_stalls(chosen, on_stall, s)) {
         emm_annotation_free(s->annotation);
         s->annotation = NULL;
     }

@@ -276,7 +276,7 @@ static void cache_destroy(emm_model *model)
 }
 
 static const struct emm_model_ops cache_ops = {cache_run, cache_reset, cache_result, cache_destroy,
-                                               NULL, NULL};
+                                               NULL,      NULL,        NULL};
 
 emm_status emm_cache_model_new(const emm_machine_params *p, const emm_trace_info *trace,
                                emm_model **out, emm_error *err)

@@ -117,7 +117,7 @@ static void cl_destroy(emm_model *model)
 }
 
 static const struct emm_model_ops cache_layout_ops = {cl_run, cl_reset, cl_result, cl_destroy,
-                                                      NULL, NULL};
+                                                      NULL,   NULL,     NULL};
 
 /* Where the image starts: where the program's mesh arrays started, unless
  * that overlaps another array, then past every array (4 KiB aligned, as a

@@ -119,7 +119,7 @@ static void direct_destroy(emm_model *model)
 }
 
 static const struct emm_model_ops direct_ops = {direct_run, direct_reset, direct_result,
-                                                direct_destroy, NULL, NULL};
+                                                direct_destroy, NULL, NULL, NULL};
 
 emm_status emm_direct_model_new(const emm_machine_params *p, const emm_trace_info *trace,
                                 emm_model **out, emm_error *err)

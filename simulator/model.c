@@ -113,6 +113,14 @@ int emm_model_observe(emm_model *model, const emm_observer *obs, void *ctx)
     return 1;
 }
 
+int emm_model_stalls(emm_model *model, emm_stall_fn fn, void *ctx)
+{
+    if (!model->ops->stalls)
+        return 0;
+    model->ops->stalls(model, fn, ctx);
+    return 1;
+}
+
 void emm_model_reset(emm_model *model)
 {
     model->ops->reset(model);

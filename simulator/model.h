@@ -11,6 +11,10 @@
 #include "machine.h"
 #include "share.h"
 
+/* A DMA stall of `cycles` (EMM_BUCKET_DMA_STALL) while the model served
+ * record r: the record emm_model_run_costed would charge it to. */
+typedef void (*emm_stall_fn)(void *ctx, const emm_trace_record *r, uint64_t cycles);
+
 struct emm_model_ops {
     void (*run)(emm_model *m, const emm_trace_record *recs, size_t n);
     void (*reset)(emm_model *m);
@@ -22,6 +26,9 @@ struct emm_model_ops {
     /* Optional. Sets (or, with NULL, clears) the observer; a model without
      * it has no events to report. */
     void (*observe)(emm_model *m, const emm_observer *obs, void *ctx);
+    /* Optional. Sets (or, with NULL, clears) where the core's DMA stalls
+     * are reported with the record that waited (emm_model_stalls). */
+    void (*stalls)(emm_model *m, emm_stall_fn fn, void *ctx);
 };
 
 struct emm_model {
@@ -67,5 +74,12 @@ emm_status emm_direct_model_new(const emm_machine_params *p, const emm_trace_inf
                                 emm_model **out, emm_error *err);
 emm_status emm_cache_model_new(const emm_machine_params *p, const emm_trace_info *trace,
                                emm_model **out, emm_error *err);
+
+/* From now on `model` reports each DMA stall to fn (NULL: stops it), on
+ * the thread that runs it, while it runs at full speed: what the session
+ * needs of emm_model_run_costed (its stall lines) at the price of a call
+ * per stall instead of a look at the counters after every record. Returns
+ * 0 when the model has no stalls to report (direct reads, the cache). */
+int emm_model_stalls(emm_model *model, emm_stall_fn fn, void *ctx);
 
 #endif

@@ -30,6 +30,21 @@ cat "$W/ann.out"
 # The three function rows.
 sed -n '/^-- functions/,/^$/p' "$W/ann.out" | grep -q " trace_curve (curve_tracing.c)$" ||
     no "trace_curve is not among the top three functions for DMA stalls"
+# The session's stall lines (the chosen model reporting its stalls as it
+# runs) are emm annotate's DMA stalls of those lines (a costed replay).
+python3 - "$W/run.json" "$W/ann.out" <<'PY' || no "the session's stall lines are not emm annotate's"
+import json, re, sys
+lines = json.load(open(sys.argv[1]))["stall_lines"]
+ann = {}
+for row in open(sys.argv[2]):
+    m = re.match(r"\s*(\d+)\s+(\d+)\s+[\d.]+%.*\s(\S+:\d+) \(", row)
+    if m:
+        ann[m.group(3)] = int(m.group(2))
+assert lines, "no stall lines"
+for l in lines:
+    key = "%s:%d" % (l["file"].rsplit("/", 1)[-1], l["line"])
+    assert ann.get(key) == l["dma_stall"], (key, l["dma_stall"], ann.get(key))
+PY
 # The total is emm replay's.
 "$EMM" replay "$W/curves.emmt" --strategy $S --json "$W/replay.json" --quiet || no "replay failed"
 total=$(sed -n 's/.* accesses, \([0-9]*\) cycles .*/\1/p' "$W/ann.out")
