@@ -20,6 +20,7 @@
 #include "infile.h"
 #include "outfile.h"
 #include "parse.h"
+#include "model.h"
 #include "runner.h"
 #include "share.h"
 #include "synth_internal.h"
@@ -473,10 +474,84 @@ emm_status emm_sweep_records(const emm_machine *m, const emm_trace_info *info,
     return sweep_records_shared(m, info, recs, n, threads, NULL, false, out, err);
 }
 
-emm_status sweep_records_shared(const emm_machine *m, const emm_trace_info *info,
-                                const emm_trace_record *recs, size_t n,
-                                const emm_threads *threads, emm_model_share *share,
-                                bool offered_only, emm_sweep **out, emm_error *err)
+/* A bounded sweep's pieces: its records in about this many, none shorter
+ * than SWEEP_PIECE_MIN (a shorter run is swept whole). */
+#define SWEEP_PIECES 16
+#define SWEEP_PIECE_MIN 4096
+/* A strategy stops once its cycles exceed the second fewest of the whole
+ * run by more than one part in this many (table_internal.h). */
+#define SWEEP_MARGIN 1000
+
+/* The runner's models by their sweep index: the two fewest cycles so far
+ * among the offered strategies (*a, *b: SIZE_MAX when fewer ran). */
+static void two_fewest(emm_runner *run, const size_t *model_of, size_t count, size_t *a,
+                       size_t *b)
+{
+    uint64_t ta = UINT64_MAX, tb = UINT64_MAX;
+    *a = *b = SIZE_MAX;
+    for (size_t i = 0; i < count; i++) {
+        emm_model *model = model_of[i] == SIZE_MAX ? NULL : emm_runner_model(run, model_of[i]);
+        if (!model)
+            continue;
+        uint64_t t = emm_model_total(model);
+        if (t < ta) {
+            *b = *a, tb = ta;
+            *a = i, ta = t;
+        } else if (t < tb) {
+            *b = i, tb = t;
+        }
+    }
+}
+
+/* recs through the sweep's models (every strategy offered), bounded: all
+ * run the first piece; the two fewest cycles then, and the reference cache,
+ * run to the end; every other strategy runs until its cycles pass the
+ * larger of those two's by more than 1/SWEEP_MARGIN, and is marked in
+ * partial (its result a lower bound). */
+static emm_status run_bounded(emm_runner *run, const emm_strategy *s, const size_t *model_of,
+                              size_t count, const emm_trace_record *recs, size_t n,
+                              uint8_t *partial, emm_error *err)
+{
+    size_t piece = n / SWEEP_PIECES < SWEEP_PIECE_MIN ? SWEEP_PIECE_MIN : n / SWEEP_PIECES;
+    size_t *lead = calloc(count, sizeof *lead), *rest = calloc(count, sizeof *rest);
+    size_t *rest_of = calloc(count, sizeof *rest_of), *ran = calloc(count, sizeof *ran);
+    size_t nlead = 0, nrest = 0, a, b;
+    if (!lead || !rest || !rest_of || !ran) {
+        free(lead), free(rest), free(rest_of), free(ran);
+        return emm_fail(err, EMM_ERR_NOMEM, "strategy sweep: out of memory");
+    }
+    emm_runner_run(run, recs, piece);
+    two_fewest(run, model_of, count, &a, &b);
+    for (size_t i = 0; i < count; i++) {
+        if (model_of[i] == SIZE_MAX || !emm_runner_model(run, model_of[i]))
+            continue;
+        if (i == a || i == b || (s[i].kind == EMM_STRATEGY_CACHE && s[i].layout == EMM_LAYOUT_ORIGINAL))
+            lead[nlead++] = model_of[i];
+        else
+            rest_of[nrest] = i, rest[nrest++] = model_of[i];
+    }
+    emm_runner_run_bounded(run, lead, nlead, recs + piece, n - piece, piece, UINT64_MAX, ran);
+    uint64_t bound = 0;
+    for (size_t i = 0; i < count; i++)
+        if (i == a || i == b) {
+            uint64_t t = emm_model_total(emm_runner_model(run, model_of[i]));
+            bound = t > bound ? t : bound;
+        }
+    bound += bound / SWEEP_MARGIN;
+    emm_runner_run_bounded(run, rest, nrest, recs + piece, n - piece, piece, bound, ran);
+    for (size_t j = 0; j < nrest; j++)
+        partial[rest_of[j]] = ran[j] < n - piece;
+    free(lead), free(rest), free(rest_of), free(ran);
+    return EMM_OK;
+}
+
+/* The sweep; partial NULL: every strategy over every record; else a
+ * bounded sweep of the offered strategies (run_bounded), *partial set to
+ * its flags. */
+static emm_status sweep_run(const emm_machine *m, const emm_trace_info *info,
+                            const emm_trace_record *recs, size_t n, const emm_threads *threads,
+                            emm_model_share *share, bool offered_only, uint8_t **partial,
+                            emm_sweep **out, emm_error *err)
 {
     *out = NULL;
     size_t count = emm_strategy_sweep(NULL, 0);
@@ -484,13 +559,15 @@ emm_status sweep_records_shared(const emm_machine *m, const emm_trace_info *info
     emm_strategy *s = calloc(count, sizeof *s), *ran = calloc(count, sizeof *ran);
     emm_error *skipped = calloc(count, sizeof *skipped);
     size_t *model_of = calloc(count, sizeof *model_of), nrun = 0;
+    uint8_t *flags = partial ? calloc(count, 1) : NULL;
     emm_runner *run = NULL;
     emm_status st = EMM_OK;
     if (sw) {
         sw->result = calloc(count, sizeof *sw->result);
         sw->ran = calloc(count, sizeof *sw->ran);
     }
-    if (!sw || !s || !ran || !skipped || !model_of || !sw->result || !sw->ran) {
+    if (!sw || !s || !ran || !skipped || !model_of || !sw->result || !sw->ran ||
+        (partial && !flags)) {
         st = emm_fail(err, EMM_ERR_NOMEM, "strategy sweep: out of memory");
         goto out;
     }
@@ -508,7 +585,12 @@ emm_status sweep_records_shared(const emm_machine *m, const emm_trace_info *info
     if ((st = emm_runner_new_shared(threads, share, &run, err)) != EMM_OK ||
         (st = emm_runner_add(run, m, ran, nrun, info, skipped, err)) != EMM_OK)
         goto out;
-    emm_runner_run(run, recs, n);
+    if (flags && n >= 2 * SWEEP_PIECE_MIN)
+        st = run_bounded(run, s, model_of, count, recs, n, flags, err);
+    else
+        emm_runner_run(run, recs, n);
+    if (st != EMM_OK)
+        goto out;
     uint64_t best = UINT64_MAX;
     for (size_t i = 0; i < count; i++) {
         emm_model *model = model_of[i] == SIZE_MAX ? NULL : emm_runner_model(run, model_of[i]);
@@ -534,11 +616,32 @@ out:
     free(ran);
     free(model_of);
     free(skipped);
-    if (st == EMM_OK)
+    if (st == EMM_OK) {
         *out = sw;
-    else
+        if (partial)
+            *partial = flags;
+    } else {
         emm_sweep_free(sw);
+        free(flags);
+    }
     return st;
+}
+
+emm_status sweep_records_shared(const emm_machine *m, const emm_trace_info *info,
+                                const emm_trace_record *recs, size_t n,
+                                const emm_threads *threads, emm_model_share *share,
+                                bool offered_only, emm_sweep **out, emm_error *err)
+{
+    return sweep_run(m, info, recs, n, threads, share, offered_only, NULL, out, err);
+}
+
+emm_status sweep_records_bounded(const emm_machine *m, const emm_trace_info *info,
+                                 const emm_trace_record *recs, size_t n,
+                                 const emm_threads *threads, emm_model_share *share,
+                                 emm_sweep **out, uint8_t **partial, emm_error *err)
+{
+    *partial = NULL;
+    return sweep_run(m, info, recs, n, threads, share, true, partial, out, err);
 }
 
 void emm_sweep_free(emm_sweep *sw)
@@ -689,6 +792,7 @@ typedef struct cached {
     emm_error e;             /* why, when st != EMM_OK */
     double g[EMM_FEATURES];  /* features */
     emm_sweep *sw;           /* sweep, when st == EMM_OK */
+    uint8_t *partial;        /* its bounded results (sweep_records_bounded), or NULL */
 } cached;
 
 struct decide_cache {
@@ -708,8 +812,10 @@ void decide_cache_free(decide_cache *c)
 {
     if (!c)
         return;
-    for (size_t i = 0; i < c->n; i++)
+    for (size_t i = 0; i < c->n; i++) {
         emm_sweep_free(c->e[i].sw);
+        free(c->e[i].partial);
+    }
     free(c->e);
     emm_mesh_free(c->mesh);
     free(c);
@@ -811,23 +917,29 @@ static emm_status synth_features(decide_cache *c, const emm_mesh *mesh,
     return st;
 }
 
-/* The sweep of the traversal `so` over the mesh on machine m: *S, owned by
- * the cache when there is one (*owned false), or NULL with *e saying why
- * it could not be swept. Returns the synthesis's errors. */
+/* The sweep of the traversal `so` over the mesh on machine m, bounded
+ * (sweep_records_bounded; exact: every strategy in full): *S and *partial
+ * (NULL: all exact), owned by the cache when there is one (*owned false),
+ * or *S NULL with *e saying why it could not be swept. An exact sweep
+ * replaces a bounded one in the cache. Returns the synthesis's errors. */
 static emm_status synth_sweep(decide_cache *c, const emm_machine *m, const emm_trace_info *info,
                               const emm_mesh *mesh, const struct synth_arrays *arrays,
                               const emm_synth_options *so, const char *name,
-                              const emm_threads *threads, emm_model_share *share, emm_sweep **S,
-                              bool *owned, emm_error *e, emm_error *err)
+                              const emm_threads *threads, emm_model_share *share, bool exact,
+                              emm_sweep **S, uint8_t **partial, bool *owned, emm_error *e,
+                              emm_error *err)
 {
     *S = NULL;
+    *partial = NULL;
     *owned = false;
     cached *x = cache_find(c, CACHED_SWEEP, so, 0, m, arrays);
-    if (x) {
-        if (x->st == EMM_OK)
+    if (x && !(exact && x->partial)) {
+        if (x->st == EMM_OK) {
             *S = x->sw;
-        else
+            *partial = x->partial;
+        } else {
             *e = x->e;
+        }
         return EMM_OK;
     }
     emm_trace_record *syn = NULL;
@@ -835,11 +947,15 @@ static emm_status synth_sweep(decide_cache *c, const emm_machine *m, const emm_t
     emm_status st = emm_synth_records(mesh, so, arrays, name, &syn, &ns, err);
     if (st != EMM_OK)
         return st;
-    emm_status sst = sweep_records_shared(m, info, syn, ns, threads, share, true, S, e);
+    emm_status sst = exact ? sweep_records_shared(m, info, syn, ns, threads, share, true, S, e)
+                           : sweep_records_bounded(m, info, syn, ns, threads, share, S, partial, e);
     free(syn);
-    if (sst != EMM_ERR_NOMEM && (x = cache_add(c, CACHED_SWEEP, so, 0, m, arrays))) {
+    if (sst != EMM_ERR_NOMEM && (x || (x = cache_add(c, CACHED_SWEEP, so, 0, m, arrays)))) {
+        emm_sweep_free(x->sw);
+        free(x->partial);
         x->st = sst;
         x->sw = *S;
+        x->partial = *partial;
         if (sst != EMM_OK)
             x->e = *e;
         return EMM_OK;
@@ -975,6 +1091,75 @@ static emm_status pick_class(const emm_table *t, const emm_trace_info *info, con
  * 1/EMM_DECIDE_CACHE_MARGIN times better than the cache over both.
  * Returns EMM_OK leaving *out alone when the recipe names no traversal;
  * errors are out of memory only. */
+/* The pattern check's ranking (check_pattern): the candidates (ran in both
+ * sweeps, offered), and the least and second least score S/S_best, W
+ * breaking ties. */
+struct ranking {
+    size_t pick, second, both;
+    double score, score2;
+};
+
+static void rank_checked(const emm_machine *m, const emm_sweep *S, const emm_sweep *W,
+                         struct ranking *r)
+{
+    double sb = (double)S->result[S->best].total, wb = (double)W->result[W->best].total;
+    r->pick = r->second = SIZE_MAX;
+    r->both = 0;
+    r->score = r->score2 = INFINITY;
+    for (size_t i = 0; i < S->count; i++) {
+        if (!S->ran[i] || !W->ran[i] || !emm_machine_offers(m, &S->result[i].strategy))
+            continue;
+        r->both++;
+        double v = (double)S->result[i].total / sb + 1e-6 * ((double)W->result[i].total / wb);
+        if (v < r->score) {
+            r->score2 = r->score;
+            r->second = r->pick;
+            r->score = v;
+            r->pick = i;
+        } else if (v < r->score2) {
+            r->score2 = v;
+            r->second = i;
+        }
+    }
+}
+
+int check_bounds_hold(const emm_machine *m, const emm_sweep *S, const uint8_t *partial,
+                      const emm_sweep *W, size_t pick, size_t second, double score2)
+{
+    if (!partial)
+        return 1;
+    if ((pick != SIZE_MAX && partial[pick]) || (second != SIZE_MAX && partial[second]) ||
+        partial[S->best] || partial[S->cache])
+        return 0;
+    double sb = (double)S->result[S->best].total, wb = (double)W->result[W->best].total;
+    for (size_t i = 0; i < S->count; i++) {
+        if (!partial[i] || !S->ran[i] || !W->ran[i] ||
+            !emm_machine_offers(m, &S->result[i].strategy))
+            continue;
+        /* S_i is a lower bound: so is the score made of it. */
+        double v = (double)S->result[i].total / sb + 1e-6 * ((double)W->result[i].total / wb);
+        if (!(v > score2))
+            return 0;
+    }
+    return 1;
+}
+
+/* The table's pattern, checked on this mesh and this window (docs/profile.md
+ * "The decision"): the nearest sample's canonical traversal (its recipe,
+ * or its class's for a sample from a program) is synthesised over the
+ * program's own mesh and arrays and swept (S: the long run the pattern
+ * predicts on this mesh and machine), the window is swept too (W: what the
+ * program did, cold, in its first accesses), and the strategy with the
+ * least S/S_best is taken, W breaking ties (measured: weighing W in,
+ * as (S/S_best)·(W/W_best), doubled the regret on traces not in the table:
+ * a window is too short to see cells reused) — unless, on a machine with a
+ * cache, the long run says it loses to the cache and it is not at least
+ * 1/EMM_DECIDE_CACHE_MARGIN times better than the cache over both.
+ * S is swept bounded (sweep_records_bounded); when a strategy it stopped
+ * early could have ranked first or second, S is swept again in full, so
+ * the outcome is the full sweep's.
+ * Returns EMM_OK leaving *out alone when the recipe names no traversal;
+ * errors are out of memory only. */
 static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info,
                                 const emm_mesh *mesh, const struct synth_arrays *arrays,
                                 const emm_trace_record *recs, size_t n, const char *name,
@@ -989,35 +1174,36 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
     if (st == EMM_ERR_INVALID)
         return EMM_OK;
     emm_sweep *S = NULL, *W = NULL;
+    uint8_t *partial = NULL;
     bool own_S = false;
     emm_error e;
-    st = synth_sweep(cache, m, info, mesh, arrays, &so, name, threads, share, &S, &own_S, &e, err);
-    if (st == EMM_ERR_INVALID)
-        return EMM_OK;
-    if (st != EMM_OK)
-        return st;
-    if (!S || sweep_records_shared(m, info, recs, n, threads, share, true, &W, &e) != EMM_OK) {
-        st = e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
-        goto done;
-    }
-    double sb = (double)S->result[S->best].total, wb = (double)W->result[W->best].total;
-    size_t pick = SIZE_MAX, second = SIZE_MAX, both = 0;
-    double score = INFINITY, score2 = INFINITY;
-    for (size_t i = 0; i < S->count; i++) {
-        if (!S->ran[i] || !W->ran[i] || !emm_machine_offers(m, &S->result[i].strategy))
-            continue;
-        both++;
-        double v = (double)S->result[i].total / sb + 1e-6 * ((double)W->result[i].total / wb);
-        if (v < score) {
-            score2 = score;
-            second = pick;
-            score = v;
-            pick = i;
-        } else if (v < score2) {
-            score2 = v;
-            second = i;
+    struct ranking r;
+    for (int exact = 0; exact < 2; exact++) {
+        if (own_S) {
+            emm_sweep_free(S);
+            free(partial);
         }
+        st = synth_sweep(cache, m, info, mesh, arrays, &so, name, threads, share, exact, &S,
+                         &partial, &own_S, &e, err);
+        if (st == EMM_ERR_INVALID) {
+            st = EMM_OK;
+            goto done;
+        }
+        if (st != EMM_OK)
+            goto done;
+        if (!S || (!W && sweep_records_shared(m, info, recs, n, threads, share, true, &W, &e) !=
+                             EMM_OK)) {
+            st = e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
+            goto done;
+        }
+        rank_checked(m, S, W, &r);
+        if (check_bounds_hold(m, S, partial, W, r.pick, r.second, r.score2))
+            break;
     }
+    size_t pick = r.pick, second = r.second;
+    double score = r.score, score2 = r.score2, sb = (double)S->result[S->best].total,
+           wb = (double)W->result[W->best].total;
+    size_t both = r.both;
     size_t c = S->cache;
     if (pick != SIZE_MAX && S->ran[c] && W->ran[c] && pick != c &&
         emm_machine_offers(m, &S->result[c].strategy) &&
@@ -1040,8 +1226,10 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
         set_runner_up(out, second == SIZE_MAX ? NULL : &W->result[second], score2 / score - 1);
     }
 done:
-    if (own_S)
+    if (own_S) {
         emm_sweep_free(S);
+        free(partial);
+    }
     emm_sweep_free(W);
     return st;
 }

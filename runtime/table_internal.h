@@ -9,6 +9,7 @@
 #define EMM_RUNTIME_TABLE_INTERNAL_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "emm/table.h"
 #include "share.h"
@@ -20,6 +21,30 @@ emm_status sweep_records_shared(const emm_machine *m, const emm_trace_info *info
                                 const emm_trace_record *recs, size_t n,
                                 const emm_threads *threads, emm_model_share *share,
                                 bool offered_only, emm_sweep **out, emm_error *err);
+
+/* sweep_records_shared over the offered strategies, bounded: what the
+ * pattern check reads of a long run is its two fewest cycles (the pick and
+ * the runner-up, W breaking near-ties) and the reference cache's, so once
+ * those are known a strategy stops as soon as its cycles exceed the
+ * larger of the two by more than a thousandth — it ends there or above
+ * (cycles never go down). The two run first: the two fewest after the
+ * first sixteenth of the records; then the others, in parallel, each on
+ * its own. *partial (count flags, malloc'ed, free it): 1 where the result
+ * is such a lower bound. Exact for every strategy within that margin of
+ * the second fewest, the fewest and the cache; a caller that ranks by more
+ * than the cycles must check that no stopped strategy could have ranked
+ * first or second (check_pattern does, and sweeps again in full if so). */
+emm_status sweep_records_bounded(const emm_machine *m, const emm_trace_info *info,
+                                 const emm_trace_record *recs, size_t n,
+                                 const emm_threads *threads, emm_model_share *share,
+                                 emm_sweep **out, uint8_t **partial, emm_error *err);
+
+/* Whether the pattern check's pick and second (check_pattern's ranking of
+ * S and W) stand on a bounded S: none of them, S's best or the cache was
+ * stopped early, and every strategy that was scores (on its lower bound)
+ * above score2. partial NULL: all exact, so they stand. */
+int check_bounds_hold(const emm_machine *m, const emm_sweep *S, const uint8_t *partial,
+                      const emm_sweep *W, size_t pick, size_t second, double score2);
 
 /* What a session's decisions over one trace share (runtime/table.c): the
  * geometry as a mesh, and each canonical traversal's profile and sweep,

@@ -88,6 +88,16 @@ static void costs_so_far(const emm_model *model, emm_record_cost *c)
     c->lookups = r.emm.lookups;
 }
 
+uint64_t emm_model_total(const emm_model *model)
+{
+    emm_record_cost c;
+    costs_so_far(model, &c);
+    uint64_t t = 0;
+    for (int b = 0; b < EMM_BUCKET_COUNT; b++)
+        t += c.cycles[b];
+    return t;
+}
+
 /* One record at a time, each followed by a look at the counters: the
  * models have no batch-wide state, so the run is the same as in batches. */
 void emm_model_run_costed(emm_model *model, const emm_trace_record *recs, size_t n,

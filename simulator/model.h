@@ -75,6 +75,9 @@ emm_status emm_direct_model_new(const emm_machine_params *p, const emm_trace_inf
 emm_status emm_cache_model_new(const emm_machine_params *p, const emm_trace_info *trace,
                                emm_model **out, emm_error *err);
 
+/* The model's cycles so far: its result's total, read cheaply. */
+uint64_t emm_model_total(const emm_model *model);
+
 /* From now on `model` reports each DMA stall to fn (NULL: stops it), on
  * the thread that runs it, while it runs at full speed: what the session
  * needs of emm_model_run_costed (its stall lines) at the price of a call

@@ -173,6 +173,38 @@ void emm_runner_run(emm_runner *r, const emm_trace_record *recs, size_t n)
     emm_pool_for(r->pool, r->nlive, run_one, &job);
 }
 
+struct bounded_job {
+    const emm_runner *r;
+    const size_t *idx;
+    const emm_trace_record *recs;
+    size_t n, chunk;
+    uint64_t bound;
+    size_t *ran;
+};
+
+static void run_bounded_one(void *ctx, size_t k)
+{
+    const struct bounded_job *j = ctx;
+    emm_model *m = j->r->models[j->idx[k]];
+    size_t done = 0;
+    while (done < j->n) {
+        size_t len = j->n - done < j->chunk ? j->n - done : j->chunk;
+        emm_model_run(m, j->recs + done, len);
+        done += len;
+        if (done < j->n && emm_model_total(m) > j->bound)
+            break;
+    }
+    j->ran[k] = done;
+}
+
+void emm_runner_run_bounded(emm_runner *r, const size_t *idx, size_t k,
+                            const emm_trace_record *recs, size_t n, size_t chunk, uint64_t bound,
+                            size_t *ran)
+{
+    struct bounded_job job = {r, idx, recs, n, chunk ? chunk : n, bound, ran};
+    emm_pool_for(r->pool, k, run_bounded_one, &job);
+}
+
 void emm_runner_free(emm_runner *r)
 {
     if (!r)

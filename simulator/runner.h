@@ -57,6 +57,16 @@ void emm_runner_retire(emm_runner *r, size_t i);
 /* Runs recs[0..n) through every model not retired. */
 void emm_runner_run(emm_runner *r, const emm_trace_record *recs, size_t n);
 
+/* Runs recs[0..n) through models idx[0..k) (built, not retired, not
+ * costed), each on one thread at a time, in pieces of `chunk` records: a
+ * model whose total exceeds `bound` at the end of a piece stops there (a
+ * model's cycles never go down, so it ends above the bound). ran[j]: the
+ * records model idx[j] ran, n when it ran them all. Deterministic: where a
+ * model stops depends on its own cycles only. */
+void emm_runner_run_bounded(emm_runner *r, const size_t *idx, size_t k,
+                            const emm_trace_record *recs, size_t n, size_t chunk, uint64_t bound,
+                            size_t *ran);
+
 /* Frees the runner and its models; NULL is allowed. */
 void emm_runner_free(emm_runner *r);
 
