@@ -80,6 +80,9 @@ struct fetch_model {
     const uint32_t *vcopy_start;
     const emm_layout_index *vcopy;
     const emm_layout_cell *cells;
+    uint64_t *find;           /* per cell: emm.lookup + emm.quadtree_level x its depth (the
+                                 look-up's cost, beside the record loop's other state: the
+                                 shared cells are large and cold) */
 
     /* Costs, from the machine. */
     uint64_t lookup, level, residency, issue_instr, local_cycles;
@@ -93,9 +96,12 @@ struct fetch_model {
 
     /* The run. */
     emm_dma dma;
-    uint64_t now;
     uint64_t cycles[EMM_BUCKET_COUNT];
     uint64_t *ready;          /* present cells: when their transfer completes */
+    /* Not beside cycles: a charge then adds to both in one 16-byte load and
+     * store, which cannot take the 8-byte store just made to either (a
+     * store-forwarding stall on every record). */
+    uint64_t now;
     uint32_t *prev, *next;    /* LRU list of present cells, most recent at head */
     uint8_t *flags;
     uint64_t *cell_dma;       /* bytes DMA moved per cell (emm_model_cells) */
@@ -279,8 +285,7 @@ static void touch_table(fetch_model *m, uint64_t off)
  * emm.residency; with paged tables, the pages those entries live in. */
 static void lookup(fetch_model *m, int kind, uint64_t e, uint32_t c)
 {
-    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS,
-           m->lookup + m->level * m->cells[c].depth + m->residency);
+    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->find[c] + m->residency);
     m->lookups++;
     if (m->paged) {
         touch_table(m, (kind == ARR_TRIANGLES ? m->pg.tri_off : m->pg.vert_off) + 4 * e);
@@ -332,7 +337,7 @@ static void demand_fetch(fetch_model *m, uint32_t c)
  * the core for a guess. */
 void emm_fetcher_prefetch(fetch_model *m, uint32_t c, uint32_t entered)
 {
-    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->lookup + m->level * m->cells[c].depth);
+    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->find[c]);
     if (m->paged)
         touch_table(m, m->pg.cell_off + 8 * (uint64_t)c);
     if (m->cells[c].ntri == 0)
@@ -602,6 +607,7 @@ static void fetch_destroy(emm_model *model)
     free(m->next);
     free(m->flags);
     free(m->cell_dma);
+    free(m->find);
     free(m->scheme_state);
     free(m->pg.page_frame);
     free(m->pg.frame_page);
@@ -790,13 +796,16 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
     m->next = malloc(nc * sizeof *m->next);
     m->flags = calloc(nc, 1);
     m->cell_dma = calloc(nc, sizeof *m->cell_dma);
-    if (!m->ready || !m->prev || !m->next || !m->flags || !m->cell_dma) {
+    m->find = malloc(nc * sizeof *m->find);
+    if (!m->ready || !m->prev || !m->next || !m->flags || !m->cell_dma || !m->find) {
         st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for %u cells", name, nc);
         goto fail;
     }
     m->lookup = p->emm_lookup;
     m->level = p->emm_quadtree_level;
     m->residency = p->emm_residency;
+    for (uint32_t c = 0; c < nc; c++)
+        m->find[c] = m->lookup + m->level * m->cells[c].depth;
     m->issue_instr = p->emm_dma_issue_instr;
     m->local_cycles = p->local_cycles;
     m->compute_per_access = p->compute_per_access;

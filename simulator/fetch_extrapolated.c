@@ -22,23 +22,28 @@ static void enter(emm_fetcher *f, void *state, uint32_t from, uint32_t to)
 {
     struct fifo *q = state;
     const emm_layout *l = emm_fetcher_layout(f);
-    unsigned count[EMM_SIDE_BITS] = {0}, best = 0, side = 0;
+    unsigned count[EMM_SIDE_BITS] = {0}, best = 0, side = 0, top = 0;
     if (from == EMM_LAYOUT_NONE)
         return;
     q->move[q->pos] = (uint8_t)emm_layout_move_side(l, from, to);
-    q->pos = (q->pos + 1) % q->cap;
+    if (++q->pos == q->cap)
+        q->pos = 0;
     if (q->len < q->cap)
         q->len++;
     emm_fetcher_instructions(f, emm_fetcher_params(f)->emm_predict);
+    /* Each side's moves (counted without a branch per bit), the most of
+     * them, and the sides that have that many. */
     for (uint32_t i = 0; i < q->len; i++)
         for (unsigned b = 0; b < EMM_SIDE_BITS; b++)
-            if (q->move[i] & (1u << b) && ++count[b] > best)
-                best = count[b];
+            count[b] += (q->move[i] >> b) & 1u;
+    for (unsigned b = 0; b < EMM_SIDE_BITS; b++)
+        best = count[b] > best ? count[b] : best;
+    for (unsigned b = 0; b < EMM_SIDE_BITS; b++)
+        top |= (count[b] == best) << b;
+    /* Of those, the lowest side of the most recent move that has one. */
     for (uint32_t k = 1; k <= q->len && !side; k++) {
-        uint8_t mv = q->move[(q->pos + q->cap - k) % q->cap];
-        for (unsigned b = 0; b < EMM_SIDE_BITS && !side; b++)
-            if (mv & (1u << b) && count[b] == best)
-                side = 1u << b;
+        unsigned mv = q->move[q->pos >= k ? q->pos - k : q->pos + q->cap - k] & top;
+        side = mv & -mv;
     }
     if (!side)
         return;
