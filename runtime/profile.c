@@ -798,14 +798,55 @@ static void sort_doubles(double *v, size_t n)
     free(a < b ? a : b);
 }
 
+/* v[k] of v[lo..hi) once sorted — the same value sort_doubles would put
+ * there — with [lo, k) not above it and (k, hi) not below (reorders v).
+ * Quickselect on non-negative values (the profile's: comparing them is
+ * comparing their bits, as the sort does), which runs in time linear in
+ * hi - lo; anything else, or a range that keeps splitting badly, is
+ * sorted. */
+static double select_kth(double *v, size_t lo, size_t hi, size_t k)
+{
+    for (size_t i = lo; i < hi; i++)
+        if (!(v[i] >= 0) || signbit(v[i])) {
+            sort_doubles(v + lo, hi - lo);
+            return v[k];
+        }
+    for (unsigned rounds = 0; hi - lo > 16; rounds++) {
+        if (rounds > 64) {
+            sort_doubles(v + lo, hi - lo);
+            return v[k];
+        }
+        /* The median of the first, middle and last as the pivot. */
+        double a = v[lo], b = v[lo + (hi - lo) / 2], c = v[hi - 1];
+        double p = a < b ? (b < c ? b : (a < c ? c : a)) : (a < c ? a : (b < c ? c : b));
+        size_t i = lo, j = hi - 1;
+        for (;;) { /* Hoare's partition: [lo, i) <= p, (j, hi) >= p */
+            while (v[i] < p)
+                i++;
+            while (v[j] > p)
+                j--;
+            if (i >= j)
+                break;
+            double t = v[i];
+            v[i++] = v[j];
+            v[j--] = t;
+        }
+        if (k <= j)
+            hi = j + 1;
+        else
+            lo = j + 1;
+    }
+    sort_doubles(v + lo, hi - lo);
+    return v[k];
+}
+
 /* The q-quantile of v[0..n) (reorders v). */
 static double quantile(double *v, size_t n, double q)
 {
     if (n == 0)
         return 0;
-    sort_doubles(v, n);
     size_t k = (size_t)(q * (double)(n - 1) + 0.5);
-    return v[k < n ? k : n - 1];
+    return select_kth(v, 0, n, k < n ? k : n - 1);
 }
 
 /* Mean of m_i = D_i / i over [a, b). */
@@ -929,7 +970,14 @@ emm_status emm_profile_features(const double *D, size_t n, const char *name,
         if (m0 > 0)
             tmp[c++] = fabs(m1 - m0) / m0;
     }
-    double med = quantile(tmp, c, 0.5), p90 = tmp[c ? (size_t)(0.9 * (double)(c - 1)) : 0];
+    double med = quantile(tmp, c, 0.5), p90 = 0;
+    if (c) {
+        /* The median leaves the larger half above it: the 90th is there. */
+        size_t k50 = (size_t)(0.5 * (double)(c - 1) + 0.5), k90 = (size_t)(0.9 * (double)(c - 1));
+        p90 = k90 > k50 ? select_kth(tmp, k50 + 1, c, k90)
+              : k90 < k50 ? select_kth(tmp, 0, k50, k90)
+                          : med;
+    }
     f[k++] = 0.5 * log10(fmax(med, 1e-5));
     f[k++] = 0.5 * log10(fmax(p90, 1e-5));
 
