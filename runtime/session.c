@@ -83,7 +83,7 @@ emm_status emm_session_new(const emm_session_config *sc, emm_session **out, emm_
     s->wlimit = s->cfg.window_accesses
                     ? (size_t)(s->cfg.window_accesses * SESSION_RECORDS_PER_ELEMENT + 4096)
                     : SESSION_ITERATION_RECORDS;
-    s->last = -1;
+    s->last = s->last2 = -1;
 
     if ((st = emm_machine_new(&s->machine, err)) != EMM_OK)
         goto fail;
@@ -182,6 +182,8 @@ static void drop_slot(emm_session *s, int i, bool keep)
     a->live = false;
     if (s->last == i)
         s->last = -1;
+    if (s->last2 == i)
+        s->last2 = -1;
 }
 
 const char *session_origin(const emm_session *s, const session_array *a, char *buf, size_t cap)
@@ -315,6 +317,8 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
     a->end = lo + span;
     a->count = count;
     a->stride = stride;
+    /* floor((2^64 - 1) / d) + 1, which is 2^64 (no multiplier) for d = 1. */
+    a->stride_m = stride > 1 && stride <= UINT32_MAX ? UINT64_MAX / stride + 1 : 0;
     a->field = field_offset;
     a->type = type;
     a->shape = shape;
@@ -420,19 +424,43 @@ size_t emm_session_ranges(const emm_session *s, uint64_t *lo, uint64_t *hi, size
 
 /* ---- accesses ------------------------------------------------------------ */
 
+static inline bool in_slot(const emm_session *s, int i, uint64_t addr)
+{
+    return i >= 0 && addr - s->arrays[i].base < s->arrays[i].end - s->arrays[i].base;
+}
+
 static inline int find_array(emm_session *s, uint64_t addr)
 {
     int last = s->last;
-    if (last >= 0 && addr - s->arrays[last].base < s->arrays[last].end - s->arrays[last].base)
+    if (in_slot(s, last, addr))
         return last;
+    int other = s->last2;
+    if (in_slot(s, other, addr)) {
+        s->last2 = last;
+        s->last = other;
+        return other;
+    }
     for (int i = 0; i < s->narrays; i++) {
         const session_array *a = &s->arrays[i];
         if (a->live && addr - a->base < a->end - a->base) {
+            if (last >= 0)
+                s->last2 = last;
             s->last = i;
             return i;
         }
     }
     return -1;
+}
+
+/* n / a->stride: a multiply and a shift for n and the stride below 2^32,
+ * floor(n / d) = (M n) >> 64 with M = floor((2^64 - 1) / d) + 1, exact for
+ * every such n and d (Lemire, Kaser & Kurz, "Faster remainder by direct
+ * computation", 2019); the record loop's per-access division otherwise. */
+static inline uint64_t div_stride(const session_array *a, uint64_t n)
+{
+    if (a->stride_m && n <= UINT32_MAX)
+        return (uint64_t)(((unsigned __int128)a->stride_m * n) >> 64);
+    return n / a->stride;
 }
 
 /* Converts one raw access into *r (array = the slot); false when it is not
@@ -455,7 +483,7 @@ static inline bool convert(emm_session *s, const emm_raw_access *raw, emm_trace_
         column = rel / a->plane;
         rel -= column * a->plane;
     }
-    r->element = rel / a->stride;
+    r->element = div_stride(a, rel);
     if (r->element >= a->count)
         return false; /* a column's entries past the records in use */
     if (r->element >= a->top)

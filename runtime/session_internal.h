@@ -78,6 +78,7 @@ typedef struct session_array {
     emm_array_kind kind;
     uint64_t base, end;  /* [base, end) */
     uint64_t count, stride, field;
+    uint64_t stride_m;   /* for rel / stride by a multiply (session.c, div_stride); 0: divide */
     emm_scalar type;
     emm_tag_shape shape; /* records, columns or a soup (its EMM_TAG rule's; records for an
                             emm_tag_* call) */
@@ -131,6 +132,8 @@ struct emm_session {
     session_array arrays[SESSION_MAX_ARRAYS];
     int narrays;
     int last;            /* the slot the previous access hit */
+    int last2;           /* and the one before it, of another slot (a triangle's index
+                            and then its vertices: two arrays by turns) */
     uint64_t pending_work; /* work of dropped accesses, carried to the next record */
 
     /* the window */
