@@ -138,6 +138,51 @@ void emm_pool_for(emm_pool *p, size_t n, void (*fn)(void *ctx, size_t i), void *
     pthread_mutex_unlock(&p->mu);
 }
 
+struct emm_task {
+    pthread_t tid;
+    emm_threads t;
+    void (*fn)(void *ctx);
+    void *ctx;
+};
+
+static void *task_main(void *arg)
+{
+    emm_task *k = arg;
+    if (k->t.on_start)
+        k->t.on_start(k->t.ctx);
+    k->fn(k->ctx);
+    return NULL;
+}
+
+emm_task *emm_task_start(const emm_threads *t, void (*fn)(void *ctx), void *ctx)
+{
+    emm_task *k = emm_threads_jobs(t) > 1 ? calloc(1, sizeof *k) : NULL;
+    if (k) {
+        if (t)
+            k->t = *t;
+        k->fn = fn;
+        k->ctx = ctx;
+        sigset_t all, old;
+        sigfillset(&all);
+        pthread_sigmask(SIG_SETMASK, &all, &old);
+        int e = pthread_create(&k->tid, NULL, task_main, k);
+        pthread_sigmask(SIG_SETMASK, &old, NULL);
+        if (e == 0)
+            return k;
+        free(k);
+    }
+    fn(ctx);
+    return NULL;
+}
+
+void emm_task_join(emm_task *task)
+{
+    if (!task)
+        return;
+    pthread_join(task->tid, NULL);
+    free(task);
+}
+
 void emm_pool_free(emm_pool *p)
 {
     if (!p)

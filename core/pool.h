@@ -33,4 +33,15 @@ void emm_pool_for(emm_pool *p, size_t n, void (*fn)(void *ctx, size_t i), void *
 /* Stops and joins the helpers. NULL is allowed. */
 void emm_pool_free(emm_pool *p);
 
+/* One piece of work beside the caller's: fn(ctx) on a thread of its own,
+ * started as the pool's helpers are (signals blocked, on_start first).
+ * Returns NULL — and has run fn(ctx) on the calling thread before
+ * returning — when `t` allows one thread only, or no thread can be had:
+ * either way the work is done once emm_task_join returns. */
+typedef struct emm_task emm_task;
+emm_task *emm_task_start(const emm_threads *t, void (*fn)(void *ctx), void *ctx);
+
+/* Waits for the task's work and frees it. NULL is allowed. */
+void emm_task_join(emm_task *task);
+
 #endif

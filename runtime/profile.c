@@ -457,8 +457,11 @@ emm_status emm_profile_fast(const double *xy, size_t n, double theta, double *D,
     double half = 0.5 * fmax(hi[0] - lo[0], hi[1] - lo[1]);
     half = half > 0 ? half * (1 + 1e-9) : 1.0;
     /* Answering queries costs far more than inserting, so the second thread,
-     * which first inserts the first part, takes a little less than half. */
-    size_t mid = n < 4096 ? n : n / 2 + n / 50;
+     * which first inserts the first part, takes a little less than half.
+     * One thread does it all in one go (no part inserted twice). Either way
+     * query i meets the tree of points 0..i-1 built in that order, so the
+     * profile does not depend on the split. */
+    size_t mid = n < 4096 || emm_threads_jobs(threads) < 2 ? n : n / 2 + n / 50;
     struct fast_job jobs[2] = {
         {xy, n, 0, mid, theta, D, 0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), half, false},
         {xy, n, mid, n, theta, D, 0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), half, false},

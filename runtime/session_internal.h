@@ -52,6 +52,10 @@ enum decision_source { FROM_NONE, FROM_CONFIG, FROM_TABLE, FROM_CHECKED, FROM_SI
  * simulated from there on, cold, as a switch would start. */
 #define SESSION_MAX_PHASES 8
 #define SESSION_PROBE_GAP 7
+/* A probe's outcome is applied this many records after it filled (at the
+ * end of the batch that passes them): its profile is worked out meanwhile
+ * beside the run. */
+#define SESSION_PROBE_LAG 262144
 
 typedef struct program_phase {
     uint64_t start;       /* accesses simulated before its first probe */
@@ -222,6 +226,8 @@ struct emm_session {
     uint64_t pending_start;
     uint32_t plast_array;
     uint64_t plast_element;
+    struct probe_job *probe_job; /* a full probe evaluated beside the run, or NULL */
+    uint64_t probe_apply; /* the accesses after which its outcome is applied */
     uint64_t dropped;    /* records of arrays left out of the trace */
     /* session_lines.c: the timeline and the chosen strategy's stalls by
      * program counter */

@@ -1,11 +1,13 @@
 /* The program's phases (docs/profile.md "Phases"; beyond the thesis, which
  * profiles one window): after the window the session keeps a cheap running
  * profile — a probe as long as the window every SESSION_PROBE_GAP + 1
- * window lengths of element reads, its Eq. 5.1 profile and nearest sample —
- * and when two probes in a row find the same pattern, other than the
- * current phase's, a phase begins at the first of them. Its best candidate is decided on the probe as the window's
- * was (emm_decide_features) and, when it differs from the chosen strategy,
- * simulated from the detection on in a model of its own that starts cold:
+ * window lengths of element reads, its Eq. 5.1 profile and nearest sample,
+ * worked out beside the run and acted on SESSION_PROBE_LAG records after
+ * the probe filled (the detection) — and when two probes in a row find the
+ * same pattern, other than the current phase's, a phase begins at the
+ * first of them. Its best candidate is decided on the probe as the
+ * window's was (emm_decide_features) and, when it differs from the chosen
+ * strategy, simulated from the detection on in a model of its own that starts cold:
  * exactly what switching strategy would do (the local store flushed). At
  * the phase's end its cycles are set against the chosen strategy's over
  * the same span plus the cost of re-laying out the mesh. */
@@ -15,6 +17,9 @@
 #include <string.h>
 
 #include "error.h"
+#include "pool.h"
+
+static void finish_probe(emm_session *s);
 
 static uint64_t model_total(const emm_session *s, size_t i)
 {
@@ -91,44 +96,102 @@ static void close_phase(emm_session *s, program_phase *p)
 
 void session_phases_close(emm_session *s)
 {
+    finish_probe(s);
     if (s->nphases > 0)
         close_phase(s, &s->phases[s->nphases - 1]);
 }
 
-/* The probe is full: a new phase when its pattern differs. Failures
- * (memory) end the probing quietly: phases are an addition to the answer,
- * never a reason to lose it. */
-static void evaluate(emm_session *s)
+/* A full probe, evaluated beside the run (emm_task): its Eq. 5.1 profile,
+ * features and nearest sample, and — when that makes it the second probe
+ * in a row with the same new pattern — the new phase's best candidate.
+ * What it reads of the session does not change while it runs (the trace's
+ * arrays, the table, the machine; the decisions' cache and layouts are the
+ * phases' alone by then, the layouts' share locks itself); its outcome is
+ * applied (apply) on the session's thread. */
+struct probe_job {
+    emm_session *s;
+    emm_task *task;
+    emm_trace_record *recs; /* the probe's records (owned) */
+    size_t n;
+    uint64_t reads, start;  /* its element reads; the access it starts at */
+    char cur[EMM_TABLE_NAME_MAX], pending[EMM_TABLE_NAME_MAX]; /* the patterns when it filled */
+    bool full;              /* no room for another phase */
+    /* out */
+    bool off;               /* it failed (memory): probing ends */
+    bool opinion;           /* enough positions to name a pattern */
+    emm_decision d;
+    bool decided;           /* the best candidate of a new phase is in wd */
+    emm_window_decision wd;
+};
+
+static const char *job_pattern(const struct probe_job *j)
 {
+    return j->d.novel ? "novel" : j->d.pattern;
+}
+
+static void evaluate(void *ctx)
+{
+    struct probe_job *j = ctx;
+    const emm_session *s = j->s;
     emm_profiler *pr = NULL;
     emm_error e;
     double *D = NULL, f[EMM_FEATURES];
     size_t n;
-    emm_decision d;
-    if (emm_profiler_new(&s->info, s->probe_reads, s->program, &pr, &e) != EMM_OK ||
-        emm_profiler_add(pr, s->probe, s->pn, &e) != EMM_OK)
+    if (emm_profiler_new(&s->info, j->reads, s->program, &pr, &e) != EMM_OK ||
+        emm_profiler_add(pr, j->recs, j->n, &e) != EMM_OK)
         goto off;
     const double *xy = emm_profiler_positions(pr, &n);
     if (n < EMM_PROFILE_MIN)
         goto done; /* a probe that was mostly a sweep: no opinion */
-    if (!(D = malloc(n * sizeof *D)) ||
-        emm_profile_fast(xy, n, EMM_PROFILE_THETA, D, &s->threads, &e) != EMM_OK ||
+    /* On this thread alone: it runs beside the run's models, which keep the
+     * others busy, and one thread inserts no point twice. */
+    emm_threads one = s->threads;
+    one.jobs = 1;
+    if (!(D = malloc(n * sizeof *D)) || emm_profile_fast(xy, n, EMM_PROFILE_THETA, D, &one, &e) != EMM_OK ||
         emm_profile_features(D, n, s->program, f, &e) != EMM_OK ||
-        emm_table_decide(s->table, f, 0, &d, &e) != EMM_OK)
+        emm_table_decide(s->table, f, 0, &j->d, &e) != EMM_OK)
         goto off;
-    const char *pattern = d.novel ? "novel" : d.pattern;
+    j->opinion = true;
+    const char *pattern = job_pattern(j);
+    if (strcmp(pattern, j->cur) != 0 && !j->full && strcmp(pattern, j->pending) == 0) {
+        emm_decide_options opt = {0, 0, &s->threads};
+        j->decided = decide_features_shared(s->table, s->machine, &s->info, j->recs, j->n, f, n,
+                                            s->program, &opt, s->layouts, s->decisions, &j->wd,
+                                            &e) == EMM_OK;
+    }
+done:
+    emm_profiler_free(pr);
+    free(D);
+    return;
+off:
+    j->off = true;
+    goto done;
+}
+
+/* The probe's outcome: a new phase when its pattern differs. Failures
+ * (memory) end the probing quietly: phases are an addition to the answer,
+ * never a reason to lose it. */
+static void apply(emm_session *s, struct probe_job *j)
+{
+    if (j->off) {
+        s->probing = false;
+        return;
+    }
+    if (!j->opinion)
+        return;
+    const char *pattern = job_pattern(j);
     program_phase *cur = &s->phases[s->nphases - 1];
     if (strcmp(pattern, cur->pattern) == 0 || s->nphases == SESSION_MAX_PHASES) {
         s->pending[0] = 0;
-        goto done;
+        return;
     }
     /* One probe is not a phase: a short stretch of the traversal can look
      * like another pattern. The second in a row with the same new pattern
      * confirms it, and the phase starts at the first. */
     if (strcmp(pattern, s->pending) != 0) {
         snprintf(s->pending, sizeof s->pending, "%s", pattern);
-        s->pending_start = s->probe_start;
-        goto done;
+        s->pending_start = j->start;
+        return;
     }
     s->pending[0] = 0;
     close_phase(s, cur);
@@ -137,38 +200,66 @@ static void evaluate(emm_session *s)
     p->start = s->pending_start;
     p->detected = s->accesses;
     snprintf(p->pattern, sizeof p->pattern, "%s", pattern);
-    snprintf(p->nearest, sizeof p->nearest, "%s", d.nearest);
-    p->distance = d.distance;
+    snprintf(p->nearest, sizeof p->nearest, "%s", j->d.nearest);
+    p->distance = j->d.distance;
     p->model = SIZE_MAX;
-    emm_window_decision wd;
-    emm_decide_options opt = {0, 0, &s->threads};
-    if (decide_features_shared(s->table, s->machine, &s->info, s->probe, s->pn, f, n, s->program,
-                               &opt, s->layouts, s->decisions, &wd, &e) == EMM_OK) {
-        p->has_best = true;
-        p->best = wd.strategy;
-        p->best_is_answer = memcmp(&wd.strategy, &s->chosen, sizeof wd.strategy) == 0;
-        /* With a contest the answer is known at the end only: the best
-         * candidate's cold model runs even when it is the window's choice. */
-        if (!p->best_is_answer || s->contest) {
-            p->nat = s->nmodels;
-            p->at = totals(s, p->nat);
-            emm_error why;
-            size_t k = emm_runner_count(s->runner);
-            if (emm_runner_add(s->runner, s->machine, &wd.strategy, 1, &s->info, &why, &e) ==
-                    EMM_OK &&
-                emm_runner_model(s->runner, k)) {
-                p->model = k;
-                p->chosen_at = model_total(s, 0);
-            }
+    if (!j->decided)
+        return;
+    p->has_best = true;
+    p->best = j->wd.strategy;
+    p->best_is_answer = memcmp(&j->wd.strategy, &s->chosen, sizeof j->wd.strategy) == 0;
+    /* With a contest the answer is known at the end only: the best
+     * candidate's cold model runs even when it is the window's choice. */
+    if (!p->best_is_answer || s->contest) {
+        emm_error why, e;
+        p->nat = s->nmodels;
+        p->at = totals(s, p->nat);
+        size_t k = emm_runner_count(s->runner);
+        if (emm_runner_add(s->runner, s->machine, &j->wd.strategy, 1, &s->info, &why, &e) ==
+                EMM_OK &&
+            emm_runner_model(s->runner, k)) {
+            p->model = k;
+            p->chosen_at = model_total(s, 0);
         }
     }
-done:
-    emm_profiler_free(pr);
-    free(D);
-    return;
-off:
-    s->probing = false;
-    goto done;
+}
+
+/* The probe in flight, if any: waited for, applied, freed. */
+static void finish_probe(emm_session *s)
+{
+    struct probe_job *j = s->probe_job;
+    if (!j)
+        return;
+    emm_task_join(j->task);
+    s->probe_job = NULL;
+    apply(s, j);
+    free(j->recs);
+    free(j);
+}
+
+/* The probe is full: its records go to a job evaluated beside the run, the
+ * probe starts empty. Without memory for that, probing ends. */
+static void launch_probe(emm_session *s)
+{
+    finish_probe(s); /* never in flight here: a probe is over in SESSION_PROBE_LAG records */
+    struct probe_job *j = calloc(1, sizeof *j);
+    if (!j) {
+        s->probing = false;
+        return;
+    }
+    j->s = s;
+    j->recs = s->probe;
+    j->n = s->pn;
+    j->reads = s->probe_reads;
+    j->start = s->probe_start;
+    snprintf(j->cur, sizeof j->cur, "%s", s->phases[s->nphases - 1].pattern);
+    snprintf(j->pending, sizeof j->pending, "%s", s->pending);
+    j->full = s->nphases == SESSION_MAX_PHASES;
+    s->probe = NULL;
+    s->pn = s->pcap = 0;
+    s->probe_job = j;
+    s->probe_apply = s->accesses + SESSION_PROBE_LAG;
+    j->task = emm_task_start(&s->threads, evaluate, j);
 }
 
 void session_phases_see(emm_session *s, const emm_trace_record *recs, size_t n)
@@ -202,12 +293,17 @@ void session_phases_see(emm_session *s, const emm_trace_record *recs, size_t n)
         s->probe[s->pn++] = *r;
         s->probe_reads += element;
         if (s->probe_reads >= s->probe_len) {
-            evaluate(s);
+            launch_probe(s);
             s->pn = 0;
             s->probe_reads = 0;
             s->gap = SESSION_PROBE_GAP * s->probe_len;
         }
     }
+    /* A probe's outcome lands a fixed number of records after it filled, at
+     * the end of a batch, so that what it finds does not depend on how
+     * fast it was evaluated. */
+    if (s->probe_job && s->accesses >= s->probe_apply)
+        finish_probe(s);
 }
 
 void session_phases_answer(emm_session *s)
@@ -227,6 +323,12 @@ void session_phases_answer(emm_session *s)
 
 void session_phases_free(emm_session *s)
 {
+    if (s->probe_job) {
+        emm_task_join(s->probe_job->task);
+        free(s->probe_job->recs);
+        free(s->probe_job);
+        s->probe_job = NULL;
+    }
     for (int i = 0; i < s->nphases; i++) {
         free(s->phases[i].at);
         free(s->phases[i].end);

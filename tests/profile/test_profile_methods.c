@@ -191,6 +191,21 @@ static void test_fast(void)
         free(D);
         free(R);
     }
+    /* One thread or two: the same profile, to the bit. */
+    {
+        size_t n = 30000;
+        double *xy = malloc(2 * n * sizeof *xy), *D1 = malloc(n * sizeof *D1),
+               *D2 = malloc(n * sizeof *D2);
+        points(CURVES, xy, n);
+        emm_threads one = {1, NULL, NULL}, two = {2, NULL, NULL};
+        emm_error err;
+        REQUIRE(emm_profile_fast(xy, n, EMM_PROFILE_THETA, D1, &one, &err) == EMM_OK);
+        REQUIRE(emm_profile_fast(xy, n, EMM_PROFILE_THETA, D2, &two, &err) == EMM_OK);
+        CHECK(memcmp(D1, D2, n * sizeof *D1) == 0);
+        free(xy);
+        free(D1);
+        free(D2);
+    }
     CHECK(emm_profile_fast_bound(0.147) <= 1e-3);
     CHECK(emm_profile_fast_bound(0.5) > emm_profile_fast_bound(0.3));
     CHECK(isinf(emm_profile_fast_bound(1.0)));
