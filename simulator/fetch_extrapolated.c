@@ -10,7 +10,19 @@
 struct fifo {
     uint8_t move[MAX_FIFO]; /* EMM_SIDE_* bits of each move */
     uint32_t len, pos, cap;
+    uint64_t counts;        /* how many moves in the FIFO have each side: 8 bits a side */
 };
+
+#define SIDES ((1u << EMM_SIDE_BITS) - 1u)
+
+/* A move's sides as counts of one in counts' lanes. */
+static uint64_t spread(unsigned mv)
+{
+    uint64_t s = 0;
+    for (unsigned b = 0; b < EMM_SIDE_BITS; b++)
+        s |= (uint64_t)((mv >> b) & 1u) << (8 * b);
+    return s;
+}
 
 static void reset(void *state, const emm_machine_params *p)
 {
@@ -22,28 +34,32 @@ static void enter(emm_fetcher *f, void *state, uint32_t from, uint32_t to)
 {
     struct fifo *q = state;
     const emm_layout *l = emm_fetcher_layout(f);
-    unsigned count[EMM_SIDE_BITS] = {0}, best = 0, side = 0, top = 0;
+    unsigned best = 0, side = 0, top = 0;
     if (from == EMM_LAYOUT_NONE)
         return;
-    q->move[q->pos] = (uint8_t)emm_layout_move_side(l, from, to);
+    /* The FIFO's side counts follow it: the move that leaves, out; the new
+     * one, in. */
+    unsigned mv = (unsigned)emm_layout_move_side(l, from, to) & SIDES;
+    if (q->len == q->cap)
+        q->counts -= spread(q->move[q->pos]);
+    else
+        q->len++;
+    q->move[q->pos] = (uint8_t)mv;
+    q->counts += spread(mv);
     if (++q->pos == q->cap)
         q->pos = 0;
-    if (q->len < q->cap)
-        q->len++;
     emm_fetcher_instructions(f, emm_fetcher_params(f)->emm_predict);
-    /* Each side's moves (counted without a branch per bit), the most of
-     * them, and the sides that have that many. */
-    for (uint32_t i = 0; i < q->len; i++)
-        for (unsigned b = 0; b < EMM_SIDE_BITS; b++)
-            count[b] += (q->move[i] >> b) & 1u;
+    /* The most moves to one side, and the sides that have that many. */
+    for (unsigned b = 0; b < EMM_SIDE_BITS; b++) {
+        unsigned c = (unsigned)(q->counts >> (8 * b)) & 0xffu;
+        best = c > best ? c : best;
+    }
     for (unsigned b = 0; b < EMM_SIDE_BITS; b++)
-        best = count[b] > best ? count[b] : best;
-    for (unsigned b = 0; b < EMM_SIDE_BITS; b++)
-        top |= (count[b] == best) << b;
+        top |= (((unsigned)(q->counts >> (8 * b)) & 0xffu) == best) << b;
     /* Of those, the lowest side of the most recent move that has one. */
     for (uint32_t k = 1; k <= q->len && !side; k++) {
-        unsigned mv = q->move[q->pos >= k ? q->pos - k : q->pos + q->cap - k] & top;
-        side = mv & -mv;
+        unsigned m = q->move[q->pos >= k ? q->pos - k : q->pos + q->cap - k] & top;
+        side = m & -m;
     }
     if (!side)
         return;
