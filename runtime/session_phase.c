@@ -147,7 +147,8 @@ static void evaluate(void *ctx)
      * others busy, and one thread inserts no point twice. */
     emm_threads one = s->threads;
     one.jobs = 1;
-    if (!(D = malloc(n * sizeof *D)) || emm_profile_fast(xy, n, EMM_PROFILE_THETA, D, &one, &e) != EMM_OK ||
+    if (!(D = malloc(n * sizeof *D)) ||
+        emm_profile_fast(xy, n, EMM_PROFILE_THETA, D, &one, &e) != EMM_OK ||
         emm_profile_features(D, n, s->program, f, &e) != EMM_OK ||
         emm_table_decide(s->table, f, 0, &j->d, &e) != EMM_OK)
         goto off;

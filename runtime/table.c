@@ -525,7 +525,8 @@ static emm_status run_bounded(emm_runner *run, const emm_strategy *s, const size
     for (size_t i = 0; i < count; i++) {
         if (model_of[i] == SIZE_MAX || !emm_runner_model(run, model_of[i]))
             continue;
-        if (i == a || i == b || (s[i].kind == EMM_STRATEGY_CACHE && s[i].layout == EMM_LAYOUT_ORIGINAL))
+        bool reference = s[i].kind == EMM_STRATEGY_CACHE && s[i].layout == EMM_LAYOUT_ORIGINAL;
+        if (i == a || i == b || reference)
             lead[nlead++] = model_of[i];
         else
             rest_of[nrest] = i, rest[nrest++] = model_of[i];
