@@ -87,9 +87,20 @@ static void *helper(void *arg)
     return NULL;
 }
 
-/* Starts the helpers, once. The program's signals must never land on them:
- * every signal is blocked while they are created, so they inherit a full
- * mask. */
+/* Starts a thread of the library's. The program's signals must never land
+ * on it: every signal is blocked while it is created, so it inherits a full
+ * mask. Returns pthread_create's status. */
+static int spawn(pthread_t *tid, void *(*fn)(void *), void *arg)
+{
+    sigset_t all, old;
+    sigfillset(&all);
+    pthread_sigmask(SIG_SETMASK, &all, &old);
+    int e = pthread_create(tid, NULL, fn, arg);
+    pthread_sigmask(SIG_SETMASK, &old, NULL);
+    return e;
+}
+
+/* Starts the helpers, once. */
 static void start(emm_pool *p)
 {
     p->tried = true;
@@ -98,12 +109,8 @@ static void start(emm_pool *p)
     p->tids = calloc(p->want, sizeof *p->tids);
     if (!p->tids)
         return;
-    sigset_t all, old;
-    sigfillset(&all);
-    pthread_sigmask(SIG_SETMASK, &all, &old);
-    while (p->started < p->want && pthread_create(&p->tids[p->started], NULL, helper, p) == 0)
+    while (p->started < p->want && spawn(&p->tids[p->started], helper, p) == 0)
         p->started++;
-    pthread_sigmask(SIG_SETMASK, &old, NULL);
 }
 
 unsigned emm_pool_jobs(emm_pool *p)
@@ -162,12 +169,7 @@ emm_task *emm_task_start(const emm_threads *t, void (*fn)(void *ctx), void *ctx)
             k->t = *t;
         k->fn = fn;
         k->ctx = ctx;
-        sigset_t all, old;
-        sigfillset(&all);
-        pthread_sigmask(SIG_SETMASK, &all, &old);
-        int e = pthread_create(&k->tid, NULL, task_main, k);
-        pthread_sigmask(SIG_SETMASK, &old, NULL);
-        if (e == 0)
+        if (spawn(&k->tid, task_main, k) == 0)
             return k;
         free(k);
     }

@@ -809,7 +809,7 @@ static void sort_doubles(double *v, size_t n)
  * sorted. */
 static double select_kth(double *v, size_t lo, size_t hi, size_t k)
 {
-    for (size_t i = lo; i < hi; i++)
+    for (size_t i = lo; i < hi && hi - lo > 16; i++)
         if (!(v[i] >= 0) || signbit(v[i])) {
             sort_doubles(v + lo, hi - lo);
             return v[k];

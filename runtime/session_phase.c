@@ -225,17 +225,32 @@ static void apply(emm_session *s, struct probe_job *j)
     }
 }
 
+/* The probe in flight, waited for and no longer the session's; NULL when
+ * there is none. Free it with free_probe. */
+static struct probe_job *take_probe(emm_session *s)
+{
+    struct probe_job *j = s->probe_job;
+    if (j) {
+        emm_task_join(j->task);
+        s->probe_job = NULL;
+    }
+    return j;
+}
+
+static void free_probe(struct probe_job *j)
+{
+    if (j)
+        free(j->recs);
+    free(j);
+}
+
 /* The probe in flight, if any: waited for, applied, freed. */
 static void finish_probe(emm_session *s)
 {
-    struct probe_job *j = s->probe_job;
-    if (!j)
-        return;
-    emm_task_join(j->task);
-    s->probe_job = NULL;
-    apply(s, j);
-    free(j->recs);
-    free(j);
+    struct probe_job *j = take_probe(s);
+    if (j)
+        apply(s, j);
+    free_probe(j);
 }
 
 /* The probe is full: its records go to a job evaluated beside the run, the
@@ -324,12 +339,7 @@ void session_phases_answer(emm_session *s)
 
 void session_phases_free(emm_session *s)
 {
-    if (s->probe_job) {
-        emm_task_join(s->probe_job->task);
-        free(s->probe_job->recs);
-        free(s->probe_job);
-        s->probe_job = NULL;
-    }
+    free_probe(take_probe(s));
     for (int i = 0; i < s->nphases; i++) {
         free(s->phases[i].at);
         free(s->phases[i].end);

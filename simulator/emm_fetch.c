@@ -85,7 +85,7 @@ struct fetch_model {
                                  shared cells are large and cold) */
 
     /* Costs, from the machine. */
-    uint64_t lookup, level, residency, issue_instr, local_cycles;
+    uint64_t residency, issue_instr, local_cycles;
     uint64_t compute_per_access, compute_per_work;
     uint64_t direct_read, direct_write;
     uint32_t word_shift;
@@ -801,11 +801,9 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
         st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for %u cells", name, nc);
         goto fail;
     }
-    m->lookup = p->emm_lookup;
-    m->level = p->emm_quadtree_level;
     m->residency = p->emm_residency;
     for (uint32_t c = 0; c < nc; c++)
-        m->find[c] = m->lookup + m->level * m->cells[c].depth;
+        m->find[c] = p->emm_lookup + p->emm_quadtree_level * m->cells[c].depth;
     m->issue_instr = p->emm_dma_issue_instr;
     m->local_cycles = p->local_cycles;
     m->compute_per_access = p->compute_per_access;
