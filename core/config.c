@@ -58,6 +58,12 @@ static bool parse_strict(emm_config *c, const char *v, long pid, char *why, size
     return parse_01(v, &c->strict);
 }
 
+static bool parse_phases(emm_config *c, const char *v, long pid, char *why, size_t cap)
+{
+    (void)pid; (void)why; (void)cap;
+    return parse_01(v, &c->phases);
+}
+
 static bool parse_list_sites(emm_config *c, const char *v, long pid, char *why, size_t cap)
 {
     (void)pid; (void)why; (void)cap;
@@ -311,6 +317,13 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
         "slower half is dropped at 2, 4, 8, ... windows until N remain; the fastest of them\n"
         "over the run is the answer (0: the window's prediction stands, as in the thesis)",
         {{0}}}, parse_finalists},
+    [EMM_CONFIG_PHASES] = {{"EMM_PHASES", NULL, NULL, "0 or 1", "1",
+        "1: when the whole run is captured, probe it after the window for the program's\n"
+        "phases (a window's profile every 8 windows, beside the run) and say whether switching\n"
+        "strategy between them pays; 0: the window's pattern stands for the whole run, as in\n"
+        "the thesis (on a program made of mesh accesses, a fifth of the capture's time)",
+        {{"--no-phases", "0", "do not probe the run for phases after the window"}}},
+        parse_phases},
     [EMM_CONFIG_MACHINE] = {{"EMM_MACHINE", "--machine", "FILE", "a readable machine file",
         "(built-in)", "the machine model's parameters (see emm machine --help)", {{0}}},
         parse_machine},
@@ -357,6 +370,7 @@ void emm_config_init(emm_config *c)
     c->window_accesses = EMM_CONFIG_DEFAULT_WINDOW;
     c->compare = EMM_COMPARE_BASELINES;
     c->finalists = EMM_CONFIG_DEFAULT_FINALISTS;
+    c->phases = 1;
     c->log = 1;
 }
 
@@ -493,6 +507,7 @@ void emm_config_dump(const emm_config *c, FILE *out)
     fprintf(out, "emm:   EMM_STRATEGY=%s\n", s);
     fprintf(out, "emm:   EMM_COMPARE=%s\n", emm_compare_name(c->compare));
     fprintf(out, "emm:   EMM_FINALISTS=%u\n", c->finalists);
+    fprintf(out, "emm:   EMM_PHASES=%d\n", c->phases);
     fprintf(out, "emm:   EMM_MACHINE=%s\n", c->machine);
     fprintf(out, "emm:   EMM_TABLE=%s\n", c->table);
     fprintf(out, "emm:   EMM_REPORT=%s\n", c->report);

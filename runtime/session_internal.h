@@ -218,6 +218,7 @@ struct emm_session {
     program_phase phases[SESSION_MAX_PHASES];
     int nphases;
     bool probing;        /* after the window's replay, with a profile and a table */
+    bool probed;         /* probing began after the window (the report's phases_probed) */
     emm_trace_record *probe;
     size_t pn, pcap;
     uint64_t probe_reads, probe_len, gap, probe_start;

@@ -61,10 +61,12 @@ void session_phases_start(emm_session *s)
     s->nphases = 1;
     s->probe_len = s->nD;
     s->gap = SESSION_PROBE_GAP * s->probe_len;
-    /* Probes need a table, a chosen strategy to weigh a switch against, and
-     * the rest of the run (fault capture stops at the decision). */
-    s->probing = s->has_profile && s->table && s->has_chosen && s->probe_len >= EMM_PROFILE_MIN &&
-                 !session_window_only(s);
+    /* Probes need EMM_PHASES, a table, a chosen strategy to weigh a switch
+     * against, and the rest of the run (fault capture stops at the
+     * decision). */
+    s->probing = s->cfg.phases && s->has_profile && s->table && s->has_chosen &&
+                 s->probe_len >= EMM_PROFILE_MIN && !session_window_only(s);
+    s->probed = s->probing;
 }
 
 /* Every model's cycles now (those of a retired model stopped where it

@@ -130,6 +130,8 @@ static bool phase_pays(const emm_session *s, const program_phase *p)
 static void write_phases(json_writer *w, const emm_session *s)
 {
     char name[64];
+    json_key(w, "phases_probed");
+    json_bool(w, s->probed);
     json_key(w, "phases");
     json_begin_array(w);
     for (int i = 0; i < s->nphases; i++) {

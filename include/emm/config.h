@@ -160,6 +160,7 @@ typedef enum emm_config_key {
     EMM_CONFIG_STRATEGY,
     EMM_CONFIG_COMPARE,
     EMM_CONFIG_FINALISTS,
+    EMM_CONFIG_PHASES,
     EMM_CONFIG_MACHINE,
     EMM_CONFIG_TABLE,
     EMM_CONFIG_REPORT,
@@ -194,6 +195,7 @@ typedef struct emm_config {
     emm_strategy strategy;
     emm_compare compare;          /* EMM_COMPARE */
     unsigned finalists;           /* EMM_FINALISTS: 0, the window's prediction stands */
+    int phases;                   /* EMM_PHASES: probe the run for phases after the window */
     char machine[EMM_CONFIG_PATH_MAX];      /* EMM_MACHINE; "": built-in */
     char table[EMM_CONFIG_PATH_MAX];        /* EMM_TABLE; "": the shipped table only */
     char report[EMM_CONFIG_PATH_MAX];       /* EMM_REPORT */
