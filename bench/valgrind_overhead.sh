@@ -15,6 +15,10 @@
 #                 captured, decided, and simulated under the answer, the
 #                 contest's finalists, direct reads and the reference cache;
 #                 the session natively in emm-session beside the program)
+#      no phases  the same with --no-phases (the run not probed for phases)
+#      thesis     the same with --no-phases --finalists 0: the thesis' method
+#                 (the window's prediction stands, one pattern for the run),
+#                 still simulated over the whole run beside the baselines
 #      untagged   the same without rules: Valgrind, emm's tool and the shim,
 #                 nothing tagged (the instrumentation's own cost)
 #      none       valgrind --tool=none (Valgrind's base)
@@ -59,6 +63,10 @@ emm=$(median3 "$EMM" run --capture valgrind --compare baselines --tag "$TAG" --r
   -- "$PROG" "$MESH" "$PASSES") || exit 1
 cmp -s "$TMP/out" "$TMP/native.out" || echo "valgrind_overhead: output differs under emm run!"
 accesses=$(captured "$TMP/r.json")
+nophases=$(median3 "$EMM" run --capture valgrind --compare baselines --no-phases --tag "$TAG" \
+  -- "$PROG" "$MESH" "$PASSES") || exit 1
+thesis=$(median3 "$EMM" run --capture valgrind --compare baselines --no-phases --finalists 0 \
+  --tag "$TAG" -- "$PROG" "$MESH" "$PASSES") || exit 1
 untagged=$(median3 "$EMM" run --capture valgrind -- "$PROG" "$MESH" "$PASSES") || exit 1
 none=$(median3 valgrind --tool=none "$PROG" "$MESH" "$PASSES") || exit 1
 sancov=$(median3 "$EMM" run --capture sancov --compare baselines --tag "$TAG" -- "$SANCOV" "$MESH" \
@@ -72,12 +80,16 @@ ratio() { awk -v a="$1" -v b="$native" 'BEGIN { printf "%.1fx", a / b }'; }
 echo "smooth on $FACES faces, $PASSES passes; median of 3 wall times; ${accesses:-?} element accesses captured"
 printf '  %-44s %8s s\n' "native" "$native"
 printf '  %-44s %8s s  %8s\n' "emm run --capture valgrind --compare baselines" "$emm" "$(ratio "$emm")"
+printf '  %-44s %8s s  %8s\n' "  the same, --no-phases" "$nophases" "$(ratio "$nophases")"
+printf '  %-44s %8s s  %8s\n' "  the thesis: --no-phases --finalists 0" "$thesis" "$(ratio "$thesis")"
 printf '  %-44s %8s s  %8s\n' "  the same, nothing tagged (the tool alone)" "$untagged" "$(ratio "$untagged")"
 printf '  %-44s %8s s  %8s\n' "  valgrind --tool=none" "$none" "$(ratio "$none")"
 printf '  %-44s %8s s  %8s\n' "  the sancov build under emm run (native)" "$sancov" "$(ratio "$sancov")"
 printf '  %-44s %8s s  %8s\n' "valgrind --tool=cachegrind" "$cg" "$(ratio "$cg")"
 printf '  %-44s %8s s  %8s\n' "valgrind --tool=lackey --trace-mem=yes" "$lackey" "$(ratio "$lackey")"
 awk -v e="$emm" -v c="$cg" 'BEGIN { printf "  emm over Cachegrind: %.2fx (target: at most 1x)\n", e / c }'
+awk -v n="$nophases" -v t="$thesis" -v c="$cg" \
+  'BEGIN { printf "  over Cachegrind: %.2fx with --no-phases, %.2fx with the thesis method\n", n / c, t / c }'
 
 # 2. A real program.
 DEC=$(command -v OpenMesh-commandlineDecimater) || DEC=
