@@ -30,7 +30,7 @@ check: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 # The test suite again, built with clang under AddressSanitizer and
-# UndefinedBehaviorSanitizer (STYLE.md §10), with the fuzz harnesses
+# UndefinedBehaviorSanitizer, with the fuzz harnesses
 # replaying their corpora and regression files (tests/fuzz).
 asan-build: deps
 	@CC=clang CXX=clang++ cmake -S . -B build-asan -DEMM_SANITIZE=address,undefined >/dev/null
@@ -49,7 +49,8 @@ bench: build
 	@scripts/bench.sh $(BUILD)
 
 # The reproduction of the thesis' chapter 6: tables of Figs. 6.1-6.9, a verdict
-# per claim of DESIGN.md "What the thesis reports", figures, and the
+# per claim of docs/design.md "What the thesis reports, and what emm
+# reproduces", figures, and the
 # calibration of compute.per_access (docs/calibration.md). A report, not a test.
 thesis: build
 	@bench/thesis --calibrate $(BUILD)

@@ -1,4 +1,4 @@
-/* Replay throughput of the machine models (DESIGN.md "The machine model"):
+/* Replay throughput of the machine models (docs/machine.md):
  * writes a trace of N accesses (a random walk mixing sequential and random
  * element accesses over a vertex and a triangle array) with the trace
  * writer into a temporary directory, then times

@@ -1,10 +1,10 @@
 /* The tables and verdicts of bench/thesis: reads the JSON reports
  * (docs/report.md) of the four workloads run with EMM_COMPARE=all and prints
  * the table behind each of the thesis' Figs. 6.1–6.9 (chapter 6.3), checks
- * each claim of DESIGN.md "What the thesis reports", and says what the
- * distance profiler chose (thesis §5) and how far that is from the best of
- * the sweep. A report, not a test: it exits 0 whatever the verdicts, and 1
- * only when a report cannot be read.
+ * each claim of docs/design.md "What the thesis reports, and what emm reproduces", and
+ * says what the distance profiler chose (thesis §5) and how far that is from the best of
+ * the sweep. A report, not a test: it exits 0 whatever the verdicts, and 1 only when a
+ * report cannot be read.
  *
  * "The EMM strategy" of a layout and fetch scheme is, as in thesis §6.3
  * ("we pick the EMM strategy with best performance"), the one with the best
@@ -336,7 +336,7 @@ static void refetch(const report *reps)
 static void claims(report *reps, double tol)
 {
     const report *sh = &reps[0], *lo = &reps[1], *rg = &reps[2], *ra = &reps[3];
-    printf("\n== Claims of DESIGN.md \"What the thesis reports\" (tolerance ±%.0f%% on the "
+    printf("\n== Claims of docs/design.md \"What the thesis reports\" (tolerance ±%.0f%% on the "
            "thesis' ratios)\n", tol * 100);
     printf("   (the EMM strategy of a layout+fetch = its best cell size, thesis §6.3)\n");
     int reproduced = 0;

@@ -1,4 +1,4 @@
-/* The configuration table (include/emm/config.h; STYLE.md §8, after
+/* The configuration table (include/emm/config.h; after
  * mimalloc's options.c). Each row names a variable, its `emm run` option,
  * what it accepts, its default, its help and the function that parses it;
  * everything else — the environment, the options, validation messages,

@@ -1,4 +1,4 @@
-/* Status codes and error messages (STYLE.md §3). */
+/* Status codes and error messages. */
 #include "error.h"
 
 #include <stdarg.h>

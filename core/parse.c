@@ -1,5 +1,5 @@
 /* Strict number parsing shared by the command line, machine files, tables
- * and the shim's environment (STYLE.md §8: sizes accept K/M/G and are checked
+ * and the shim's environment (sizes accept K/M/G and are checked
  * for overflow). */
 #include "parse.h"
 

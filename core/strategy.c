@@ -1,4 +1,4 @@
-/* Strategy strings (DESIGN.md "Strategies"; thesis Table 4.1: a strategy is a
+/* Strategy strings (docs/design.md "Strategies"; thesis Table 4.1: a strategy is a
  * layout, a fetch scheme and a transfer size). One parser for the
  * environment, the command line, the tables and the reports. */
 #include "emm/strategy.h"

@@ -1,5 +1,5 @@
-/* EMM_TAG's grammar (DESIGN.md "The shim", Tagging): which allocations are
- * mesh arrays and where the coordinates or vertex indices sit in each
+/* EMM_TAG's grammar (docs/design.md "The shim and the session", Tagging): which
+ * allocations are mesh arrays and where the coordinates or vertex indices sit in each
  * record.
  *
  *   vertices:site=read_mesh,stride=80,xyz=8:f64;triangles:site=read_mesh,stride=28,vidx=4:i32

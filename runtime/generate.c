@@ -1,4 +1,4 @@
-/* The mesh generator (DESIGN.md "Workloads"): a planar Delaunay
+/* The mesh generator (docs/design.md "Workloads"): a planar Delaunay
  * triangulation of non-uniformly distributed points, like the thesis' test
  * mesh (§6.1: a 2D triangle mesh of 20,000 faces whose elements are not
  * uniformly distributed).

@@ -1,7 +1,7 @@
 /* The session behind libemmshim.so: profile → decide → simulate → report
- * (DESIGN.md "The shim": Session, Output; thesis §5, Fig. 5.6). This file:
- * its lifecycle, the tagged arrays, the window and the stream of records
- * through the models; session_decide.c decides, session_report.c writes.
+ * (docs/design.md "The shim and the session": Session, Output; thesis §5, Fig. 5.6). This
+ * file: its lifecycle, the tagged arrays, the window and the stream of records through
+ * the models; session_decide.c decides, session_report.c writes.
  *
  * Raw accesses become trace records by address: the few tagged arrays sit in
  * a small table searched linearly (a program tags two or three arrays), the

@@ -1,8 +1,8 @@
-/* The session's decision (DESIGN.md "The shim", Session; thesis §5): at
- * the end of the window, "freeze the data" — read the positions and the
- * triangles' vertex indices from the tagged arrays — profile the window
- * (Eq. 5.1), choose the strategy (runtime/table.c, docs/profile.md "The
- * decision"), build the models and replay the window through them. */
+/* The session's decision (docs/design.md "The shim and the session", Session; thesis §5):
+ * at the end of the window, "freeze the data" — read the positions and the triangles'
+ * vertex indices from the tagged arrays — profile the window (Eq. 5.1), choose the
+ * strategy (runtime/table.c, docs/profile.md "The decision"), build the models and replay
+ * the window through them. */
 #include "session_internal.h"
 
 #include <math.h>

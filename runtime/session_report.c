@@ -1,4 +1,4 @@
-/* The session's output (DESIGN.md "The shim", Output): the summary on
+/* The session's output (docs/design.md "The shim and the session", Output): the summary on
  * stderr, the JSON report of docs/report.md with the session's own keys
  * (program, capture, pattern, strategy, decision, window, profile), and the
  * CSV of the window's profile. Files are written whole or not at all

@@ -1,4 +1,4 @@
-/* The api capture backend (DESIGN.md "Mesh model", the thesis' interface of
+/* The api capture backend (docs/design.md "The mesh", the thesis' interface of
  * §5): a program that reads its mesh only through emm_mesh_vertex,
  * emm_mesh_triangle, emm_vertex_triangles, emm_triangle_vertices and
  * emm_triangle_neighbors is traced without tags. The shim interposes those

@@ -1,6 +1,6 @@
-/* The fault capture backend (DESIGN.md "The shim", Capture backends: fault):
- * an unmodified binary's accesses to the tagged arrays, seen by protecting
- * their pages and single-stepping each access.
+/* The fault capture backend (docs/design.md "The shim and the session", Capture backends:
+ * fault): an unmodified binary's accesses to the tagged arrays, seen by protecting their
+ * pages and single-stepping each access.
  *
  * - Arrays that EMM_TAG rules select get pages of their own (the allocator
  *   serves them with mmap); the whole mapping is protected. An array tagged

@@ -1,4 +1,4 @@
-/* The sancov capture backend (DESIGN.md "The shim", Capture backends:
+/* The sancov capture backend (docs/design.md "The shim and the session", Capture backends:
  * sancov). A program compiled with
  *   clang -fsanitize-coverage=trace-pc-guard,trace-loads,trace-stores
  *         -fno-vectorize -fno-slp-vectorize

@@ -1,5 +1,5 @@
-/* The valgrind capture backend (DESIGN.md "The shim", Capture backends:
- * valgrind): an unmodified binary's whole run, seen by emm's Valgrind tool
+/* The valgrind capture backend (docs/design.md "The shim and the session", Capture
+ * backends: valgrind): an unmodified binary's whole run, seen by emm's Valgrind tool
  * (shim/vgtool/emm_tool.c; `emm run --capture valgrind` starts it).
  *
  * The shim keeps tagging inside the client by interposition, as with every

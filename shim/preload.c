@@ -1,5 +1,5 @@
 /* libemmshim.so: allocator interposition, the tag table, start-up and exit
- * (DESIGN.md "The shim"; STYLE.md §6–§7, after heaptrack's preload layer).
+ * (docs/design.md "The shim and the session"; after heaptrack's preload layer).
  * Interposition and forwarding only: the settings are core's configuration
  * table, the analysis is the runtime's session, and each capture backend is
  * an ops table in its own file (capture_*.c).

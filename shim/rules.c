@@ -1,8 +1,7 @@
-/* EMM_TAG rules at allocation time (DESIGN.md "The shim", Tagging): which
- * allocation a rule selects, by a function on its call stack, by size or by
- * rank. The grammar, the names a frame answers to and the messages are
- * below the shim (core/tag_rules.c, emm/config.h); what stays here needs the
- * live call stack.
+/* EMM_TAG rules at allocation time (docs/design.md "The shim and the session", Tagging):
+ * which allocation a rule selects, by a function on its call stack, by size or by rank.
+ * The grammar, the names a frame answers to and the messages are below the shim
+ * (core/tag_rules.c, emm/config.h); what stays here needs the live call stack.
  *
  * Call-site names come from libunwind (unw_get_proc_name reads .symtab, so a
  * static function is found in a binary that is not stripped), demangled by

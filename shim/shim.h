@@ -1,5 +1,5 @@
 /* Internal to libemmshim.so: the one process-wide context the preloaded
- * library needs (DESIGN.md "The shim"; STYLE.md §6–§7).
+ * library needs (docs/design.md "The shim and the session").
  *
  * A preloaded allocator cannot take an explicit context: malloc has no
  * handle argument. So the shim keeps exactly one struct, `shim`, and every

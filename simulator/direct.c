@@ -1,4 +1,4 @@
-/* Direct remote access (thesis §3.2, DESIGN.md "The machine model"): every
+/* Direct remote access (thesis §3.2, docs/machine.md): every
  * access moves the words it spans one at a time; a read costs
  * direct.cycles_per_word per word, a write direct.write_cycles per word
  * (writes to main memory are buffered, thesis §3.2).

@@ -16,7 +16,7 @@
  *
  * The layout is shared by every model of the same layout and cell size
  * (simulator/share.h) and read directly; a model keeps only per-cell state:
- * residency, the LRU list, DMA bytes (STYLE.md §5, §12). */
+ * residency, the LRU list, DMA bytes. */
 #include "emm_fetch.h"
 
 #include <assert.h>

@@ -1,6 +1,6 @@
-/* The machine's configuration: one descriptor table (STYLE.md §8) that the
+/* The machine's configuration: one descriptor table that the
  * INI reader, --set, validation, `emm machine show` and docs/machine.md all
- * follow. Defaults are DESIGN.md's table (thesis §3.2 and §6.1). */
+ * follow. Defaults are docs/machine.md's table (thesis §3.2 and §6.1). */
 #include "machine.h"
 
 #include <assert.h>

@@ -1,6 +1,6 @@
 /* Internal: what every model implements. A model sees records in batches;
  * the dispatch through `ops` happens once per batch, never per access, so
- * each model's loop stays tight (STYLE.md §5, §12).
+ * each model's loop stays tight.
  *
  * A later model (an EMM strategy, or the cache on a reordered layout) embeds
  * `struct emm_model` as its first member, fills `ops`, and is created from

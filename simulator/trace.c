@@ -1,5 +1,5 @@
-/* emm — trace files: a streaming writer and a streaming reader (DESIGN.md
- * "Traces"; the byte format is docs/trace-format.md, constants in
+/* emm — trace files: a streaming writer and a streaming reader; the
+ * byte format is docs/trace-format.md, constants in
  * trace_format.h).
  *
  * Records are kept in blocks of up to 64Ki. A block is columnar: each field

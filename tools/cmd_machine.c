@@ -1,4 +1,4 @@
-/* emm machine: show the simulated machine (DESIGN.md "The machine model",
+/* emm machine: show the simulated machine (docs/machine.md,
  * thesis §3.2) and the cost of one DMA transfer. */
 #include <stdio.h>
 #include <stdlib.h>

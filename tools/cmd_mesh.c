@@ -1,4 +1,4 @@
-/* emm mesh: generate meshes (DESIGN.md "Workloads": the thesis' non-uniform
+/* emm mesh: generate meshes (docs/design.md "Workloads": the thesis' non-uniform
  * 2D mesh, §6.1) and describe mesh files. */
 #include <stdio.h>
 #include <string.h>

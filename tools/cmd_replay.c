@@ -1,5 +1,5 @@
 /* emm replay: simulate a trace under one or more strategies on the machine
- * model (DESIGN.md "The machine model", thesis §3.2, §6.2) and print where
+ * model (docs/machine.md, thesis §3.2, §6.2) and print where
  * the cycles went; --json writes the report of docs/report.md. */
 #include <stdio.h>
 #include <stdlib.h>

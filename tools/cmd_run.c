@@ -1,4 +1,4 @@
-/* emm run: runs a program under libemmshim.so (DESIGN.md "The shim").
+/* emm run: runs a program under libemmshim.so (docs/design.md "The shim and the session").
  *
  * It only prepares the environment: the shim found beside this executable
  * goes first in LD_PRELOAD, each option becomes its EMM_* variable, and the

@@ -1,5 +1,5 @@
 /* emm trace: describe a trace, export it to Dinero IV's din text format,
- * import din text as an address-only trace (DESIGN.md "Traces";
+ * import din text as an address-only trace (docs/trace-format.md;
  * docs/trace-format.md says how multi-byte accesses and labels map), and
  * synthesise traces of canonical traversals (include/emm/synth.h). */
 #include <errno.h>

@@ -1,4 +1,4 @@
-/* emm — the command line (DESIGN.md "The command line"). One table of
+/* emm — the command line (docs/design.md "The command line"). One table of
  * subcommands; each lives in its own cmd_*.c. */
 #include <stdio.h>
 #include <string.h>

@@ -1,5 +1,5 @@
 /* emm — the configuration: every EMM_* variable and `emm run` option, one
- * table (STYLE.md §8, after mimalloc's options.c; DESIGN.md "The shim").
+ * table (after mimalloc's options.c; docs/design.md "The shim and the session").
  *
  * Each row names the environment variable, the `emm run` option, what it
  * accepts, its default and its help, and parses its value into an
@@ -114,13 +114,12 @@ EMM_API int emm_tag_rule_fits(const emm_tag_rule *r, uint64_t size);
  * name reduced to its unqualified identifier (_ZN4mesh4loadEv -> load).
  * Writes at most cap bytes (NUL included) into out. */
 EMM_API void emm_tag_site_name(const char *symbol, char *out, size_t cap);
-/* A frame's two names for site= (DESIGN.md "The shim", Tagging): `name`,
- * the function's own (a method's name without its class, a template's
- * without its arguments), and `qualified`, with its namespaces and classes
- * ("OpenMesh::PropertyT::resize"; template arguments dropped). `demangled`
- * is the symbol as the C++ runtime demangles it, or NULL (a C symbol, or no
- * demangler): the names then come from the symbol as emm_tag_site_name
- * reads it. */
+/* A frame's two names for site= (docs/design.md "The shim and the session", Tagging):
+ * `name`, the function's own (a method's name without its class, a template's without its
+ * arguments), and `qualified`, with its namespaces and classes
+ * ("OpenMesh::PropertyT::resize"; template arguments dropped). `demangled` is the symbol
+ * as the C++ runtime demangles it, or NULL (a C symbol, or no demangler): the names then
+ * come from the symbol as emm_tag_site_name reads it. */
 EMM_API void emm_tag_site_names(const char *symbol, const char *demangled, char *name,
                                 size_t ncap, char *qualified, size_t qcap);
 /* Whether a rule's site= names a frame: its name, its qualified name, or a

@@ -1,4 +1,4 @@
-/* emm — EMM mesh layouts (thesis §4.1; DESIGN.md "Layouts").
+/* emm — EMM mesh layouts (thesis §4.1; docs/layouts.md).
  *
  * A layout splits a triangle mesh into cells. A cell holds the triangles
  * whose centroids fall in it and a copy of every vertex of those triangles,

@@ -92,7 +92,7 @@ EMM_API void *emm_vertex_data(const emm_mesh *m, uint32_t v);
 EMM_API void emm_triangle_set_data(emm_mesh *m, uint32_t t, void *data);
 EMM_API void *emm_triangle_data(const emm_mesh *m, uint32_t t);
 
-/* The generator (DESIGN.md "Workloads"): a planar (z = 0) Delaunay
+/* The generator (docs/design.md "Workloads"): a planar (z = 0) Delaunay
  * triangulation, computed with libqhull, of points drawn in the unit square.
  * `clustered` draws most points around a few Gaussian clusters over a uniform
  * background (the thesis' non-uniform mesh); `uniform` draws them all

@@ -1,5 +1,4 @@
-/* emm — the distance profile (thesis §5, Eq. 5.1; DESIGN.md "Distance
- * profile and the strategy table").
+/* emm — the distance profile (thesis §5, Eq. 5.1; docs/profile.md).
  *
  * For the i-th element access with position p_i,
  *

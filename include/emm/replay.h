@@ -1,8 +1,8 @@
-/* emm — replaying traces and writing reports (DESIGN.md "Traces", "The
- * command line"): the driver that feeds a trace file's records to one model
- * per strategy (include/emm/sim.h) and the JSON report of docs/report.md.
- * Part of the runtime layer: the models are the simulator's, the trace
- * reading and the report are built on top of them. */
+/* emm — replaying traces and writing reports (docs/trace-format.md;
+ * docs/design.md "The command line"): the driver that feeds a trace file's records to one
+ * model per strategy (include/emm/sim.h) and the JSON report of docs/report.md. Part of
+ * the runtime layer: the models are the simulator's, the trace reading and the report are
+ * built on top of them. */
 #ifndef EMM_REPLAY_H
 #define EMM_REPLAY_H
 

@@ -1,5 +1,5 @@
-/* emm — the session: profile → decide → simulate → report (DESIGN.md "The
- * shim", "Session" and "Output"; thesis Fig. 5.6).
+/* emm — the session: profile → decide → simulate → report (docs/design.md "The shim and
+ * the session", "Session" and "Output"; thesis Fig. 5.6).
  *
  * libemmshim.so is thin: it interposes the allocator, applies the tag rules,
  * captures accesses into per-thread buffers and forwards them here. The

@@ -1,4 +1,4 @@
-/* emm — the machine model (DESIGN.md "The machine model"; thesis §3.2, §6.1–6.2).
+/* emm — the machine model (docs/machine.md; thesis §3.2, §6.1–6.2).
  *
  * A simulated STHORM-class core: a local store, a remote store reached by
  * word-by-word direct reads or by an asynchronous 2-channel DMA engine, and,

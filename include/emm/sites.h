@@ -1,5 +1,5 @@
 /* emm — the candidate arrays of a program (`emm run --list-sites`,
- * EMM_LIST_SITES; DESIGN.md "The shim", Tagging).
+ * EMM_LIST_SITES; docs/design.md "The shim and the session", Tagging).
  *
  * libemmshim.so, in list mode, hands every large block the program
  * allocates to a site table with its call stack; when a block is freed,

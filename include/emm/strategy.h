@@ -1,4 +1,4 @@
-/* emm — strategy strings (DESIGN.md "Strategies"), one parser used
+/* emm — strategy strings (docs/design.md "Strategies"), one parser used
  * everywhere: environment, command line, tables, reports.
  *
  *   direct                      word-by-word remote reads

@@ -1,5 +1,5 @@
-/* emm — synthetic traces of canonical traversals over a mesh (DESIGN.md
- * "Distance profile and the strategy table"; thesis §5, Table 5.1, Figs
+/* emm — synthetic traces of canonical traversals over a mesh
+ * (docs/profile.md; thesis §5, Table 5.1, Figs
  * 5.2–5.3). They feed the tests, the profiler's table and users who want to
  * see how a pattern fares without writing the program.
  *

@@ -1,5 +1,5 @@
 /* emm — the strategy table and the nearest-neighbour decision (thesis §5,
- * Table 5.1; DESIGN.md "Distance profile and the strategy table").
+ * Table 5.1; docs/profile.md).
  *
  * A table is a plain text file of samples, each a name, a pattern class, a
  * synthetic recipe, a strategy and a feature vector (emm_profile_features):

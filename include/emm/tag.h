@@ -1,4 +1,4 @@
-/* emm — tagging a program's mesh arrays (DESIGN.md "The shim").
+/* emm — tagging a program's mesh arrays (docs/design.md "The shim and the session").
  *
  * A program calls these after it has allocated (and usually filled) its
  * vertex and triangle arrays. In libemm they do nothing, so a program linked

@@ -1,4 +1,4 @@
-/* emm — trace files (DESIGN.md "Traces").
+/* emm — trace files (docs/trace-format.md).
  *
  * A trace is self-contained: a versioned header, the tagged arrays'
  * descriptions, a snapshot of the geometry the layouts need (vertex

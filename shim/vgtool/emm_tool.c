@@ -1,6 +1,6 @@
-/* emm's Valgrind tool (DESIGN.md "The shim", Capture backends: valgrind):
- * the whole run of an unmodified binary, every load and store that falls in
- * an array the shim tagged.
+/* emm's Valgrind tool (docs/design.md "The shim and the session", Capture backends:
+ * valgrind): the whole run of an unmodified binary, every load and store that falls in an
+ * array the shim tagged.
  *
  * Built out of tree against Debian's valgrind package (its tool headers and
  * static core libraries) as the static binary emm-amd64-linux, which

@@ -1,5 +1,5 @@
-# The outputs are whole or absent however the program ends (DESIGN.md "The
-# shim", "Output"): SIGTERM and SIGINT mid-run (also while the program is
+# The outputs are whole or absent however the program ends (docs/design.md "The shim and
+# the session", "Output"): SIGTERM and SIGINT mid-run (also while the program is
 # inside malloc), _exit, a report directory that is read-only from the start
 # or becomes so mid-run, and a full disk. Each time: the exit status is the
 # one of the native run, and a report that exists is complete JSON with the

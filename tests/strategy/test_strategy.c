@@ -1,4 +1,4 @@
-/* The strategy grammar of DESIGN.md "Strategies": every accepted form parses
+/* The strategy grammar of docs/design.md "Strategies": every accepted form parses
  * to the right fields and formats back to itself; every bad form is refused
  * with a message naming the bad part. */
 #include <string.h>
