@@ -19,14 +19,29 @@
  * <accepts>"). */
 typedef bool (*row_parser)(emm_config *c, const char *v, long pid, char *why, size_t cap);
 
-static const char *const capture_names[EMM_CAPTURE_COUNT] = {"auto", "sancov", "fault", "api",
-                                                                    "valgrind"};
+static const char *const capture_names[EMM_CAPTURE_COUNT] = {
+    "auto",
+#define CAPTURE_NAME(N, n, caps, help) #n,
+    EMM_CAPTURE_LIST(CAPTURE_NAME)
+#undef CAPTURE_NAME
+};
+static const unsigned capture_caps[EMM_CAPTURE_COUNT] = {
+    0,
+#define CAPTURE_CAPS(N, n, caps, help) caps,
+    EMM_CAPTURE_LIST(CAPTURE_CAPS)
+#undef CAPTURE_CAPS
+};
 static const char *const compare_names[EMM_COMPARE_COUNT] = {"baselines", "all", "none"};
 static const char *const log_words[] = {"quiet", "summary", "verbose"};
 
 const char *emm_capture_name(emm_capture c)
 {
     return (unsigned)c < EMM_CAPTURE_COUNT ? capture_names[c] : "?";
+}
+
+unsigned emm_capture_caps(emm_capture c)
+{
+    return (unsigned)c < EMM_CAPTURE_COUNT ? capture_caps[c] : 0;
 }
 
 const char *emm_compare_name(emm_compare c)
@@ -70,6 +85,8 @@ static bool parse_list_sites(emm_config *c, const char *v, long pid, char *why, 
     return parse_01(v, &c->list_sites);
 }
 
+/* The rules replace c's (emm_config_set frees the old ones once the value
+ * is taken). */
 static bool parse_tag(emm_config *c, const char *v, long pid, char *why, size_t cap)
 {
     (void)pid;
@@ -283,6 +300,10 @@ struct row {
     row_parser parse;
 };
 
+/* EMM_CAPTURE's accepted words and help, from the list of backends. */
+#define CAPTURE_ACCEPTS(N, n, caps, help) ", " #n
+#define CAPTURE_HELP(N, n, caps, help) "  " #n ": " help "\n"
+
 /* The table, in emm_config_key order. */
 static const struct row rows[EMM_CONFIG_COUNT] = {
     [EMM_CONFIG_STRICT] = {{"EMM_STRICT", NULL, NULL, "0 or 1", "0",
@@ -294,12 +315,10 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
         "(none)", "tag arrays by rule, e.g. vertices:site=read_mesh,stride=80,xyz=8:f64", {{0}}},
         parse_tag},
     [EMM_CONFIG_CAPTURE] = {{"EMM_CAPTURE", "--capture", "C",
-        "auto, sancov, fault, api or valgrind", "auto",
-        "how accesses are seen: sancov (a build with emm_sancov_executable), fault (page\n"
-        "protection, profiling window only), api (programs using emm_mesh_*), valgrind\n"
-        "(emm's Valgrind tool, the whole run of an unmodified binary; emm run starts it);\n"
-        "auto picks, and emm run picks valgrind for a binary without coverage hooks or\n"
-        "emm calls when Valgrind and the tool are there", {{0}}},
+        "auto" EMM_CAPTURE_LIST(CAPTURE_ACCEPTS), "auto",
+        "how accesses are seen:\n" EMM_CAPTURE_LIST(CAPTURE_HELP)
+        "auto: the first of these that suits the program (emm run picks valgrind for a binary\n"
+        "without coverage hooks or emm calls when Valgrind and the tool are there)", {{0}}},
         parse_capture},
     [EMM_CONFIG_PROFILE] = {{"EMM_PROFILE", "--profile", "N",
         "a count of accesses (16384, 16K) or of iterations (5it), at least 1", "16384",
@@ -374,6 +393,26 @@ void emm_config_init(emm_config *c)
     c->log = 1;
 }
 
+void emm_config_free(emm_config *c)
+{
+    emm_tag_rules_free(&c->tags);
+    emm_config_init(c);
+}
+
+emm_status emm_config_copy(emm_config *dst, const emm_config *src)
+{
+    *dst = *src;
+    if (src->tags.n == 0)
+        return EMM_OK;
+    dst->tags.rule = malloc(src->tags.n * sizeof *dst->tags.rule);
+    if (!dst->tags.rule) {
+        emm_config_init(dst);
+        return EMM_ERR_NOMEM;
+    }
+    memcpy(dst->tags.rule, src->tags.rule, src->tags.n * sizeof *dst->tags.rule);
+    return EMM_OK;
+}
+
 emm_status emm_config_set(emm_config *c, emm_config_key k, const char *value, const char *source,
                           long pid, emm_error *err)
 {
@@ -392,6 +431,10 @@ emm_status emm_config_set(emm_config *c, emm_config_key k, const char *value, co
         t = &local;
     *t = *c;
     bool ok = *value != '\0' && r->parse(t, value, pid, why, sizeof why);
+    /* A row that made new rules: the old ones go with the value taken, the
+     * new ones with the value refused. */
+    if (t->tags.rule != c->tags.rule)
+        free(ok ? c->tags.rule : t->tags.rule);
     if (ok) {
         t->source[k] = source;
         *c = *t;
@@ -480,6 +523,67 @@ void emm_config_help(FILE *out, int options)
     fprintf(out, "\n");
     emm_tag_rules_help(out);
     fprintf(out, "A bad value gets one line on stderr and the program runs without emm.\n");
+}
+
+/* path with every % doubled. */
+static bool format_output(const char *path, char *out, size_t cap)
+{
+    size_t o = 0;
+    for (const char *p = path; *p; p++) {
+        if (o + (*p == '%' ? 2 : 1) >= cap)
+            return false;
+        if (*p == '%')
+            out[o++] = '%';
+        out[o++] = *p;
+    }
+    out[o] = '\0';
+    return cap > 0;
+}
+
+int emm_config_format(const emm_config *c, emm_config_key k, char *out, size_t cap)
+{
+    int n = -1;
+    switch (k) {
+    case EMM_CONFIG_STRICT: n = snprintf(out, cap, "%d", c->strict ? 1 : 0); break;
+    case EMM_CONFIG_TAG: {
+        size_t o = 0;
+        if (cap)
+            out[0] = '\0';
+        for (size_t i = 0; i < c->tags.n; i++) {
+            char r[512];
+            emm_tag_rule_format(&c->tags.rule[i], r, sizeof r);
+            int w = snprintf(out + o, cap - o, "%s%s", i ? ";" : "", r);
+            if (w < 0 || (size_t)w >= cap - o)
+                return false;
+            o += (size_t)w;
+        }
+        return c->tags.n > 0;
+    }
+    case EMM_CONFIG_CAPTURE: n = snprintf(out, cap, "%s", emm_capture_name(c->capture)); break;
+    case EMM_CONFIG_PROFILE:
+        n = c->window_accesses
+                ? snprintf(out, cap, "%llu", (unsigned long long)c->window_accesses)
+                : snprintf(out, cap, "%lluit", (unsigned long long)c->window_iterations);
+        break;
+    case EMM_CONFIG_STRATEGY:
+        if (!c->has_strategy || cap < 96)
+            return false;
+        emm_strategy_format(&c->strategy, out, cap);
+        return true;
+    case EMM_CONFIG_COMPARE: n = snprintf(out, cap, "%s", emm_compare_name(c->compare)); break;
+    case EMM_CONFIG_FINALISTS: n = snprintf(out, cap, "%u", c->finalists); break;
+    case EMM_CONFIG_PHASES: n = snprintf(out, cap, "%d", c->phases ? 1 : 0); break;
+    case EMM_CONFIG_MACHINE: n = snprintf(out, cap, "%s", c->machine); break;
+    case EMM_CONFIG_TABLE: n = snprintf(out, cap, "%s", c->table); break;
+    case EMM_CONFIG_REPORT: return format_output(c->report, out, cap);
+    case EMM_CONFIG_PROFILE_DUMP: return format_output(c->profile_dump, out, cap);
+    case EMM_CONFIG_TRACE: return format_output(c->trace, out, cap);
+    case EMM_CONFIG_TIMELINE: return format_output(c->timeline, out, cap);
+    case EMM_CONFIG_LOG: n = snprintf(out, cap, "%d", c->log); break;
+    case EMM_CONFIG_LIST_SITES: n = snprintf(out, cap, "%d", c->list_sites ? 1 : 0); break;
+    default: return false;
+    }
+    return n >= 0 && (size_t)n < cap;
 }
 
 void emm_config_dump(const emm_config *c, FILE *out)

@@ -87,10 +87,7 @@ static void *helper(void *arg)
     return NULL;
 }
 
-/* Starts a thread of the library's. The program's signals must never land
- * on it: every signal is blocked while it is created, so it inherits a full
- * mask. Returns pthread_create's status. */
-static int spawn(pthread_t *tid, void *(*fn)(void *), void *arg)
+int emm_thread_start(pthread_t *tid, void *(*fn)(void *), void *arg)
 {
     sigset_t all, old;
     sigfillset(&all);
@@ -109,7 +106,7 @@ static void start(emm_pool *p)
     p->tids = calloc(p->want, sizeof *p->tids);
     if (!p->tids)
         return;
-    while (p->started < p->want && spawn(&p->tids[p->started], helper, p) == 0)
+    while (p->started < p->want && emm_thread_start(&p->tids[p->started], helper, p) == 0)
         p->started++;
 }
 
@@ -169,7 +166,7 @@ emm_task *emm_task_start(const emm_threads *t, void (*fn)(void *ctx), void *ctx)
             k->t = *t;
         k->fn = fn;
         k->ctx = ctx;
-        if (spawn(&k->tid, task_main, k) == 0)
+        if (emm_thread_start(&k->tid, task_main, k) == 0)
             return k;
         free(k);
     }

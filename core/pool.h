@@ -7,9 +7,16 @@
 #ifndef EMM_INTERNAL_POOL_H
 #define EMM_INTERNAL_POOL_H
 
+#include <pthread.h>
 #include <stddef.h>
 
 #include "emm/common.h"
+
+/* Starts a thread of emm's: the program's signals must never land on it, so
+ * every signal is blocked while it is created and it inherits a full mask.
+ * Returns pthread_create's status; the caller joins it. Every thread the
+ * library (and emm-session) starts comes from here. */
+int emm_thread_start(pthread_t *tid, void *(*fn)(void *), void *arg);
 
 typedef struct emm_pool emm_pool;
 

@@ -11,6 +11,7 @@
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "emm/config.h"
@@ -277,30 +278,50 @@ static emm_status check_axes(const emm_tag_rules *rs, emm_error *err)
     return EMM_OK;
 }
 
+void emm_tag_rules_free(emm_tag_rules *rs)
+{
+    free(rs->rule);
+    rs->rule = NULL;
+    rs->n = 0;
+}
+
 emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *err)
 {
-    emm_tag_rules rs;
-    memset(&rs, 0, sizeof rs);
+    emm_tag_rules rs = {0, NULL};
+    size_t cap = 0;
+    emm_status st = EMM_OK;
     const char *p = text;
-    while (*p) {
+    while (*p && st == EMM_OK) {
         const char *semi = strchr(p, ';');
         size_t len = semi ? (size_t)(semi - p) : strlen(p);
         if (len > 0) {
-            if (rs.n == EMM_TAG_RULES_MAX)
-                return emm_fail(err, EMM_ERR_INVALID, "more than %d rules", EMM_TAG_RULES_MAX);
-            emm_status st = parse_rule(p, len, &rs.rule[rs.n], err);
-            if (st != EMM_OK)
-                return st;
-            rs.n++;
+            /* A rule is at least a few bytes of text: the rules take a
+             * small multiple of the text's size. */
+            if (rs.n == cap) {
+                size_t ncap = cap ? 2 * cap : 4;
+                emm_tag_rule *r = realloc(rs.rule, ncap * sizeof *r);
+                if (!r) {
+                    st = emm_fail(err, EMM_ERR_NOMEM, "out of memory for %zu rules", ncap);
+                    break;
+                }
+                rs.rule = r;
+                cap = ncap;
+            }
+            st = parse_rule(p, len, &rs.rule[rs.n], err);
+            if (st == EMM_OK)
+                rs.n++;
         }
         p += len + (semi ? 1 : 0);
     }
-    if (rs.n == 0)
-        return emm_fail(err, EMM_ERR_INVALID,
-                        "expected rules KIND:key=value,... split by ';' (see emm run --help)");
-    emm_status st = check_axes(&rs, err);
-    if (st != EMM_OK)
+    if (st == EMM_OK && rs.n == 0)
+        st = emm_fail(err, EMM_ERR_INVALID,
+                      "expected rules KIND:key=value,... split by ';' (see emm run --help)");
+    if (st == EMM_OK)
+        st = check_axes(&rs, err);
+    if (st != EMM_OK) {
+        emm_tag_rules_free(&rs);
         return st;
+    }
     *out = rs;
     return EMM_OK;
 }
@@ -316,6 +337,24 @@ static const char *scalar_name(emm_scalar t)
     case EMM_U16: return "u16";
     default: return "?";
     }
+}
+
+void emm_tag_rule_describe(const emm_tag_rule *r, size_t index, const void *base,
+                           uint64_t bytes, emm_array_desc *d, char *origin_buf, size_t cap)
+{
+    char text[512];
+    emm_tag_rule_format(r, text, sizeof text);
+    snprintf(origin_buf, cap, "EMM_TAG rule %zu (%s)", index + 1, text);
+    *d = (emm_array_desc){.kind = r->kind,
+                          .shape = r->shape,
+                          .axis = r->shape == EMM_TAG_AXIS ? (int)r->axis : -1,
+                          .base = base,
+                          .count = r->stride ? bytes / r->stride : 0,
+                          .stride = r->stride,
+                          .offset = r->offset,
+                          .type = r->type,
+                          .rule = (unsigned)(index + 1),
+                          .origin = origin_buf};
 }
 
 void emm_tag_rule_format(const emm_tag_rule *r, char *out, size_t cap)

@@ -20,6 +20,7 @@
 #include "session_internal.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,7 +43,7 @@
  * of writes opens the window anyway. */
 #define SESSION_LOADER_ELEMENTS 65536u
 
-static uint64_t loader_allowance(const emm_session *s)
+static uint64_t loader_allowance(const session *s)
 {
     return s->tagged_records > SESSION_LOADER_ELEMENTS ? s->tagged_records
                                                        : SESSION_LOADER_ELEMENTS;
@@ -50,20 +51,29 @@ static uint64_t loader_allowance(const emm_session *s)
 /* Element writes in the window after which it ends, in windows. */
 #define SESSION_WRITE_WINDOWS 2
 
-emm_status emm_session_new(const emm_session_config *sc, emm_session **out, emm_error *err)
+static const struct session_transport engine_transport;
+
+emm_status session_engine_new(const emm_session_config *sc, emm_session **out, emm_error *err)
 {
     emm_status st;
     emm_error e;
     *out = NULL;
-    if (sc->server)
-        return session_remote_new(sc, out, err);
-    emm_session *s = calloc(1, sizeof *s);
+    session *s = calloc(1, sizeof *s);
     if (!s)
         return emm_fail(err, EMM_ERR_NOMEM, "session: out of memory");
+    s->handle.transport = &engine_transport;
     if (sc->config)
         s->cfg = *sc->config;
     else
         emm_config_init(&s->cfg);
+    /* Each array's description comes whole (emm_array_desc): the rules
+     * stay with the caller. */
+    s->cfg.tags.n = 0;
+    s->cfg.tags.rule = NULL;
+    if (sc->memory) {
+        s->mem = *sc->memory;
+        s->memory = &s->mem;
+    }
     s->program = strdup(sc->program ? sc->program : "program");
     s->capture = sc->capture;
     s->threads = sc->threads;
@@ -117,14 +127,14 @@ emm_status emm_session_new(const emm_session_config *sc, emm_session **out, emm_
         emm_table_free(s->table);
         s->table = NULL;
     }
-    *out = s;
+    *out = &s->handle;
     return EMM_OK;
 fail:
-    emm_session_free(s);
+    engine_transport.free(&s->handle);
     return st;
 }
 
-static emm_session_state public_state(const emm_session *s)
+static emm_session_state public_state(const session *s)
 {
     switch (s->phase) {
     case PHASE_PROFILING:
@@ -163,7 +173,7 @@ static void forget_view(session_array *a)
  * copied first — a program that frees its mesh before exit still gets its
  * short run decided at finish; without memory for that, those records are
  * dropped at the decision. */
-static void drop_slot(emm_session *s, int i, bool keep)
+static void drop_slot(session *s, int i, bool keep)
 {
     session_array *a = &s->arrays[i];
     const unsigned char *bytes = session_bytes(s, a);
@@ -186,27 +196,19 @@ static void drop_slot(emm_session *s, int i, bool keep)
         s->last2 = -1;
 }
 
-const char *session_origin(const emm_session *s, const session_array *a, char *buf, size_t cap)
+const char *session_origin(const session *s, const session_array *a, char *buf, size_t cap)
 {
-    if (a->rule >= 0 && (size_t)a->rule < s->cfg.tags.n) {
-        char text[256];
-        emm_tag_rule_format(&s->cfg.tags.rule[a->rule], text, sizeof text);
-        snprintf(buf, cap, "EMM_TAG rule %d (%s)", a->rule + 1, text);
-    } else {
+    (void)s;
+    if (a->origin)
+        snprintf(buf, cap, "%s", a->origin);
+    else
         snprintf(buf, cap, "the emm_tag_%s call",
                  a->kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles");
-    }
     return buf;
 }
 
-int emm_session_tag(emm_session *s, emm_array_kind kind, const void *base, size_t count,
-                    size_t stride, size_t field_offset, emm_scalar type)
-{
-    return emm_session_tag_rule(s, kind, base, count, stride, field_offset, type, -1);
-}
-
 /* Drops the live arrays other than `keep` that overlap [lo, hi). */
-static void drop_overlaps(emm_session *s, uint64_t lo, uint64_t hi, int keep)
+static void drop_overlaps(session *s, uint64_t lo, uint64_t hi, int keep)
 {
     for (int i = 0; i < s->narrays; i++)
         if (i != keep && s->arrays[i].live && s->arrays[i].base < hi && lo < s->arrays[i].end)
@@ -214,7 +216,7 @@ static void drop_overlaps(emm_session *s, uint64_t lo, uint64_t hi, int keep)
 }
 
 /* Whether slot i is the lead of another slot's group (it must then stay). */
-static bool leads_others(const emm_session *s, int i)
+static bool leads_others(const session *s, int i)
 {
     for (int j = 0; j < s->narrays; j++) {
         const session_array *b = &s->arrays[j];
@@ -228,7 +230,7 @@ static bool leads_others(const emm_session *s, int i)
  * joins: that of a live axis block of another axis, the same count,
  * stride and type, whose group has no live block of slot i's axis yet; or
  * its own. */
-static int group_of(const emm_session *s, int i)
+static int group_of(const session *s, int i)
 {
     const session_array *a = &s->arrays[i];
     for (int j = 0; j < s->narrays; j++) {
@@ -246,30 +248,33 @@ static int group_of(const emm_session *s, int i)
     return i;
 }
 
-int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, size_t count,
-                         size_t stride, size_t field_offset, emm_scalar type, int rule)
+static int engine_tag(emm_session *h, const emm_array_desc *d)
 {
-    if (s->remote)
-        return session_remote_tag(s, kind, base, count, stride, field_offset, type, rule);
-    uint64_t lo = (uint64_t)(uintptr_t)base, span;
-    /* A rule's shape: a column-major block's `count` entries are three
-     * columns of count / 3. */
-    emm_tag_shape shape =
-        rule >= 0 && (size_t)rule < s->cfg.tags.n ? s->cfg.tags.rule[rule].shape : EMM_TAG_RECORDS;
+    session *s = (session *)h;
+    emm_array_kind kind = d->kind;
+    emm_tag_shape shape = d->shape;
+    emm_scalar type = d->type;
+    uint64_t lo = (uint64_t)(uintptr_t)d->base, count = d->count, stride = d->stride,
+             field_offset = d->offset, span;
+    /* A column-major block's `count` entries are three columns of
+     * count / 3. */
     uint64_t plane = 0;
     if (shape == EMM_TAG_COLUMNS) {
         count /= 3;
-        plane = (uint64_t)count * stride;
+        plane = count * stride;
     }
-    int axis = shape == EMM_TAG_AXIS ? (int)s->cfg.tags.rule[rule].axis : -1;
+    int axis = shape == EMM_TAG_AXIS ? d->axis : -1;
+    int rule = (int)d->rule - 1;
     unsigned field_scalars = shape == EMM_TAG_SOUP                           ? 9
                              : shape == EMM_TAG_COLUMNS || shape == EMM_TAG_AXIS ? 1
                                                                                : 3;
-    if (s->phase == PHASE_FAILED || s->phase == PHASE_DONE || !base || count == 0 ||
+    if (axis > 2 || d->rule > INT_MAX)
+        return -1;
+    if (s->phase == PHASE_FAILED || s->phase == PHASE_DONE || !lo || count == 0 ||
         stride == 0 || ((plane || axis >= 0) && stride > UINT32_MAX / 3) || !valid_field(kind, shape, type) ||
         field_offset > stride ||
         field_scalars * session_scalar_bytes(type) > stride - field_offset ||
-        __builtin_mul_overflow((uint64_t)count, (uint64_t)stride * (plane ? 3 : 1), &span) ||
+        __builtin_mul_overflow(count, stride * (plane ? 3 : 1), &span) ||
         lo > UINT64_MAX - span)
         return -1;
     drop_overlaps(s, lo, lo + span, -1);
@@ -306,12 +311,28 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
             }
         }
     }
+    char *origin = d->origin ? strdup(d->origin) : NULL;
+    if (d->origin && !origin)
+        return -1;
     if (slot < 0) {
-        if (s->narrays == SESSION_MAX_ARRAYS)
-            return -1;
+        if (s->narrays == s->carrays) {
+            int cap = s->carrays ? 2 * s->carrays : 8;
+            session_array *grown = cap > s->carrays && (size_t)cap < SIZE_MAX / sizeof *grown
+                                       ? realloc(s->arrays, (size_t)cap * sizeof *grown)
+                                       : NULL;
+            if (!grown) {
+                free(origin);
+                return -1;
+            }
+            s->arrays = grown;
+            s->carrays = cap;
+        }
         slot = s->narrays++;
+        memset(&s->arrays[slot], 0, sizeof s->arrays[slot]);
     }
     session_array *a = &s->arrays[slot];
+    free(a->origin);
+    a->origin = origin;
     a->kind = kind;
     a->base = lo;
     a->end = lo + span;
@@ -341,20 +362,18 @@ int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base, 
     return slot;
 }
 
-emm_session_state emm_session_move(emm_session *s, const void *old, const void *base,
-                                   size_t count)
+static emm_session_state engine_move(emm_session *h, uint64_t from, uint64_t lo, uint64_t count)
 {
-    if (s->remote)
-        return session_remote_move(s, old, base, count);
-    uint64_t from = (uint64_t)(uintptr_t)old, lo = (uint64_t)(uintptr_t)base, span;
+    session *s = (session *)h;
+    uint64_t span;
     for (int i = 0; i < s->narrays; i++) {
         session_array *a = &s->arrays[i];
         if (!a->live || a->base != from)
             continue;
         if (a->shape == EMM_TAG_COLUMNS)
             count /= 3; /* entries: three columns */
-        if (!base || count == 0 ||
-            __builtin_mul_overflow((uint64_t)count, session_record_bytes(a), &span) ||
+        if (!lo || count == 0 ||
+            __builtin_mul_overflow(count, session_record_bytes(a), &span) ||
             lo > UINT64_MAX - span) {
             drop_slot(s, i, false);
             break;
@@ -378,11 +397,9 @@ emm_session_state emm_session_move(emm_session *s, const void *old, const void *
     return public_state(s);
 }
 
-emm_session_state emm_session_untag(emm_session *s, const void *base)
+static emm_session_state engine_untag(emm_session *h, uint64_t lo)
 {
-    if (s->remote)
-        return session_remote_untag(s, base);
-    uint64_t lo = (uint64_t)(uintptr_t)base;
+    session *s = (session *)h;
     for (int i = 0; i < s->narrays; i++) {
         session_array *a = &s->arrays[i];
         if (!a->live || a->base != lo)
@@ -402,11 +419,10 @@ emm_session_state emm_session_untag(emm_session *s, const void *base)
     return public_state(s);
 }
 
-size_t emm_session_ranges(const emm_session *s, uint64_t *lo, uint64_t *hi, size_t cap)
+static size_t engine_ranges(const emm_session *h, uint64_t *lo, uint64_t *hi, size_t cap)
 {
+    const session *s = (const session *)h;
     size_t n = 0;
-    if (s->remote)
-        return session_remote_ranges(s, lo, hi, cap);
     if (s->phase == PHASE_FAILED || s->phase == PHASE_DONE || s->phase == PHASE_DEFERRED)
         return 0;
     for (int i = 0; i < s->narrays; i++) {
@@ -424,12 +440,12 @@ size_t emm_session_ranges(const emm_session *s, uint64_t *lo, uint64_t *hi, size
 
 /* ---- accesses ------------------------------------------------------------ */
 
-static inline bool in_slot(const emm_session *s, int i, uint64_t addr)
+static inline bool in_slot(const session *s, int i, uint64_t addr)
 {
     return i >= 0 && addr - s->arrays[i].base < s->arrays[i].end - s->arrays[i].base;
 }
 
-static inline int find_array(emm_session *s, uint64_t addr)
+static inline int find_array(session *s, uint64_t addr)
 {
     int last = s->last;
     if (in_slot(s, last, addr))
@@ -465,7 +481,7 @@ static inline uint64_t div_stride(const session_array *a, uint64_t n)
 
 /* Converts one raw access into *r (array = the slot); false when it is not
  * a mesh access (its work is carried to the next one). */
-static inline bool convert(emm_session *s, const emm_raw_access *raw, emm_trace_record *r)
+static inline bool convert(session *s, const emm_raw_access *raw, emm_trace_record *r)
 {
     uint32_t bytes = raw->bytes_write & ~EMM_RAW_WRITE;
     int i = find_array(s, raw->addr);
@@ -503,7 +519,7 @@ static inline bool convert(emm_session *s, const emm_raw_access *raw, emm_trace_
     return true;
 }
 
-static void window_full_check(emm_session *s)
+static void window_full_check(session *s)
 {
     if (s->phase != PHASE_PROFILING)
         return;
@@ -520,7 +536,7 @@ static void window_full_check(emm_session *s)
         s->phase = PHASE_DECIDE;
 }
 
-static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
+static void window_add(session *s, const emm_raw_access *a, size_t n)
 {
     for (size_t k = 0; k < n; k++) {
         emm_trace_record r;
@@ -607,7 +623,7 @@ static void window_add(emm_session *s, const emm_raw_access *a, size_t n)
     }
 }
 
-void session_simulate(emm_session *s, const emm_trace_record *recs, size_t n)
+void session_simulate(session *s, const emm_trace_record *recs, size_t n)
 {
     if (s->contest)
         contest_run(s->contest, recs, n);
@@ -631,7 +647,7 @@ void session_simulate(emm_session *s, const emm_trace_record *recs, size_t n)
         session_phases_see(s, recs, n);
 }
 
-static void flush_chunk(emm_session *s)
+static void flush_chunk(session *s)
 {
     if (s->nchunk) {
         session_simulate(s, s->chunk, s->nchunk);
@@ -639,10 +655,9 @@ static void flush_chunk(emm_session *s)
     }
 }
 
-emm_session_state emm_session_access(emm_session *s, const emm_raw_access *a, size_t n)
+static emm_session_state engine_access(emm_session *h, const emm_raw_access *a, size_t n)
 {
-    if (s->remote)
-        return session_remote_access(s, a, n);
+    session *s = (session *)h;
     if (s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE) {
         window_add(s, a, n);
         return public_state(s);
@@ -671,10 +686,9 @@ emm_session_state emm_session_access(emm_session *s, const emm_raw_access *a, si
     return EMM_SESSION_SIMULATING;
 }
 
-emm_session_state emm_session_iteration(emm_session *s)
+static emm_session_state engine_iteration(emm_session *h)
 {
-    if (s->remote)
-        return session_remote_iteration(s);
+    session *s = (session *)h;
     s->iterations++;
     window_full_check(s);
     return public_state(s);
@@ -682,7 +696,7 @@ emm_session_state emm_session_iteration(emm_session *s)
 
 /* The end of a decision (st: how it went): the window and the snapshots
  * are done with, and the session simulates or steps aside. */
-static emm_status decide_done(emm_session *s, emm_status st, emm_error *err)
+static emm_status decide_done(session *s, emm_status st, emm_error *err)
 {
     for (int i = 0; i < s->narrays; i++) {
         free(s->arrays[i].snap);
@@ -702,8 +716,11 @@ static emm_status decide_done(emm_session *s, emm_status st, emm_error *err)
     return EMM_OK;
 }
 
-emm_status session_decide_begin(emm_session *s, emm_error *err)
+/* Reads (or defers the decision, or fails); when it leaves s->deciding
+ * set, engine_decide_rest completes it. */
+static emm_status engine_decide_read(emm_session *h, emm_error *err)
 {
+    session *s = (session *)h;
     s->deciding = false;
     if (s->phase == PHASE_SIMULATING || s->phase == PHASE_DONE || s->phase == PHASE_DEFERRED)
         return EMM_OK;
@@ -737,27 +754,26 @@ emm_status session_decide_begin(emm_session *s, emm_error *err)
     return decide_done(s, st, err);
 }
 
-emm_status session_decide_end(emm_session *s, emm_error *err)
+static emm_status engine_decide_rest(emm_session *h, emm_error *err)
 {
+    session *s = (session *)h;
     if (!s->deciding)
         return EMM_OK;
     s->deciding = false;
     return decide_done(s, session_decide_rest(s, &s->failure), err);
 }
 
-emm_status emm_session_decide(emm_session *s, emm_error *err)
+static emm_status engine_decide(session *s, emm_error *err)
 {
-    if (s->remote)
-        return session_remote_decide(s, err);
-    emm_status st = session_decide_begin(s, err);
+    emm_status st = engine_decide_read(&s->handle, err);
     if (st != EMM_OK || !s->deciding)
         return st;
-    return session_decide_end(s, err);
+    return engine_decide_rest(&s->handle, err);
 }
 
 /* An output that could not be written is said on the summary stream: the
  * program's user would otherwise look for a file that is not there. */
-static void output_failed(const emm_session *s, FILE *summary, const emm_error *e)
+static void output_failed(const session *s, FILE *summary, const emm_error *e)
 {
     if (summary && s->cfg.log >= 1) {
         fprintf(summary, "emm: %s\n", e->message);
@@ -765,18 +781,17 @@ static void output_failed(const emm_session *s, FILE *summary, const emm_error *
     }
 }
 
-emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
+static emm_status engine_finish(emm_session *h, FILE *summary, emm_error *err)
 {
+    session *s = (session *)h;
     emm_status first = EMM_OK;
     emm_error e;
-    if (s->remote)
-        return session_remote_finish(s, summary, err);
     if (s->phase == PHASE_DONE)
         return EMM_OK;
     if (s->phase == PHASE_DEFERRED)
         s->phase = PHASE_DECIDE;
     if (s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE)
-        emm_session_decide(s, NULL);
+        engine_decide(s, NULL);
     if (s->phase == PHASE_FAILED) {
         if (summary && s->cfg.log >= 1)
             session_print_summary(s, summary, NULL, 0);
@@ -881,20 +896,16 @@ emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
     return first;
 }
 
-void emm_session_forked(emm_session *s)
+/* A forked child's copy of an engine in this process: nothing to let go
+ * (the shim keeps the child from calling it). */
+static void engine_forked(emm_session *h)
 {
-    if (s && s->remote)
-        session_remote_forked(s);
+    (void)h;
 }
 
-void emm_session_free(emm_session *s)
+static void engine_free(emm_session *h)
 {
-    if (!s)
-        return;
-    if (s->remote) {
-        session_remote_free(s);
-        return;
-    }
+    session *s = (session *)h;
     contest_free(s->contest);
     session_lines_free(s);
     emm_runner_free(s->runner);
@@ -905,7 +916,9 @@ void emm_session_free(emm_session *s)
     for (int i = 0; i < s->narrays; i++) {
         free(s->arrays[i].snap);
         free(s->arrays[i].view);
+        free(s->arrays[i].origin);
     }
+    free(s->arrays);
     free(s->modules);
     emm_machine_free(s->machine);
     emm_table_free(s->table);
@@ -922,3 +935,9 @@ void emm_session_free(emm_session *s)
     free(s->program);
     free(s);
 }
+
+static const struct session_transport engine_transport = {
+    engine_tag,         engine_move,      engine_untag,  engine_ranges,
+    engine_access,      engine_iteration, engine_decide_read,
+    engine_decide_rest, engine_finish,    engine_forked, engine_free,
+};

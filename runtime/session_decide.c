@@ -62,7 +62,7 @@ static bool better_mesh(const session_array *a, const session_array *b)
  * kind are per-element data beside it (normals, colours), or gone. When
  * one rule selected several live arrays, the summary says which was taken
  * (s->pick_note): a rule's nth= or min= picks another. */
-static int mesh_array(emm_session *s, emm_array_kind kind)
+static int mesh_array(session *s, emm_array_kind kind)
 {
     int best = -1, same_rule = 0;
     for (int i = 0; i < s->narrays; i++) {
@@ -125,7 +125,7 @@ static void shrink_to(session_array *a, uint64_t count)
  * mesh without a z block): a vertex's (corner < 0), or a soup's corner
  * (0..2). A value that cannot be a coordinate refuses the block it is in,
  * in one line that names the rule or call that tagged it. */
-static emm_status read_position(emm_session *s, session_array *const src[3], uint64_t i,
+static emm_status read_position(session *s, session_array *const src[3], uint64_t i,
                                 int corner, double *p, emm_error *err)
 {
     static const char axis[] = "xyz";
@@ -169,7 +169,7 @@ static emm_status read_position(emm_session *s, session_array *const src[3], uin
  * vertices are the corners, those at exactly the same position (-0 and 0
  * alike) one vertex: the layouts then see the connectivity an indexed mesh
  * of the same surface has. */
-static emm_status read_soup(emm_session *s, session_array *t, emm_error *err)
+static emm_status read_soup(session *s, session_array *t, emm_error *err)
 {
     char to[512];
     session_origin(s, t, to, sizeof to);
@@ -240,7 +240,7 @@ static emm_status read_soup(emm_session *s, session_array *t, emm_error *err)
  * blocks of the group of `best` into src (z may be NULL: 0). A missing x or
  * y block, or blocks whose counts came to disagree, refuse the mesh in one
  * line naming the rule of each block concerned. */
-static emm_status axis_blocks(emm_session *s, session_array *best, session_array *src[3],
+static emm_status axis_blocks(session *s, session_array *best, session_array *src[3],
                               emm_error *err)
 {
     static const char axis[] = "xyz";
@@ -300,7 +300,7 @@ static emm_status axis_blocks(emm_session *s, session_array *best, session_array
 /* The summary's and the report's line on a mesh whose vertices are axis
  * blocks: "the vertices are 3 blocks (x, y, z) of 4,000 f32 each (EMM_TAG
  * rules 1, 2, 3)". */
-static void note_axis_blocks(emm_session *s, session_array *const src[3], uint64_t nv)
+static void note_axis_blocks(session *s, session_array *const src[3], uint64_t nv)
 {
     char num[32], rules[64] = "";
     int n = 0;
@@ -321,7 +321,7 @@ static void note_axis_blocks(emm_session *s, session_array *const src[3], uint64
  * out of the program's arrays, checking them. Without a triangle array the
  * geometry is the vertices alone (nt = 0: the layouts cut cells of
  * vertices). */
-static emm_status read_geometry(emm_session *s, emm_error *err)
+static emm_status read_geometry(session *s, emm_error *err)
 {
     int gv = mesh_array(s, EMM_ARRAY_VERTICES), gt = mesh_array(s, EMM_ARRAY_TRIANGLES);
     char vo[512], to[512];
@@ -428,7 +428,7 @@ static emm_status read_geometry(emm_session *s, emm_error *err)
 
 /* The coordinates a record of the axis blocks of group `lead` has: up to
  * the highest axis among them (x and y: two). */
-static unsigned group_axes(const emm_session *s, int lead)
+static unsigned group_axes(const session *s, int lead)
 {
     unsigned n = 1;
     for (int i = 0; i < s->narrays; i++)
@@ -442,13 +442,16 @@ static unsigned group_axes(const emm_session *s, int lead)
  * axis blocks of one group one trace array (its records their x, y, z
  * entries side by side); the window's records are renumbered and those of
  * other slots dropped. */
-static emm_status freeze_arrays(emm_session *s, emm_error *err)
+static emm_status freeze_arrays(session *s, emm_error *err)
 {
-    int32_t group_trace[SESSION_MAX_ARRAYS];
+    /* The trace array of each group's lead slot, or -1. */
+    int32_t *group_trace = malloc(((size_t)s->narrays + 1) * sizeof *group_trace);
     s->tarrays = calloc((size_t)s->narrays + 1, sizeof *s->tarrays);
-    if (!s->tarrays)
+    if (!s->tarrays || !group_trace) {
+        free(group_trace);
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", s->program);
-    for (int i = 0; i < SESSION_MAX_ARRAYS; i++)
+    }
+    for (int i = 0; i < s->narrays; i++)
         group_trace[i] = -1;
     for (int i = 0; i < s->narrays; i++) {
         session_array *a = &s->arrays[i];
@@ -473,6 +476,7 @@ static emm_status freeze_arrays(emm_session *s, emm_error *err)
         s->tarrays[s->ntarrays++] = (emm_trace_array){
             .kind = a->kind, .record_size = (uint32_t)record, .count = a->count, .base = a->base};
     }
+    free(group_trace);
     s->info.version = 1;
     s->info.narrays = s->ntarrays;
     s->info.arrays = s->tarrays;
@@ -501,7 +505,7 @@ static emm_status freeze_arrays(emm_session *s, emm_error *err)
 }
 
 /* Eq. 5.1 over the window, its features and the table's nearest sample. */
-static emm_status profile_window(emm_session *s, emm_error *err)
+static emm_status profile_window(session *s, emm_error *err)
 {
     emm_profiler *p;
     emm_status st = emm_profiler_new(&s->info, s->welements ? s->welements : 1, s->program, &p, err);
@@ -543,7 +547,7 @@ static emm_status profile_window(emm_session *s, emm_error *err)
 /* The decision (runtime/table.c, docs/profile.md "The decision"): the
  * nearest sample, its pattern simulated over this mesh and weighed with the
  * window, or the sweep on the window when the profile is novel. */
-static emm_status choose(emm_session *s, emm_error *err)
+static emm_status choose(session *s, emm_error *err)
 {
     emm_window_decision wd;
     emm_decide_options opt = {0, 0, &s->threads};
@@ -574,7 +578,7 @@ static bool same_strategy(const emm_strategy *a, const emm_strategy *b)
 /* Whether the run confirms the choice (docs/profile.md "The contest"): the
  * session decided (no configured strategy), finalists are asked for, and
  * the capture sees the run past the window. */
-static bool wants_contest(const emm_session *s)
+static bool wants_contest(const session *s)
 {
     return s->has_chosen && s->source != FROM_CONFIG && s->cfg.finalists > 0 &&
            !session_window_only(s);
@@ -584,7 +588,7 @@ static bool wants_contest(const emm_session *s)
  * contest's other candidates. A comparison strategy that cannot run on
  * this mesh is skipped; the chosen one failing is reported, and the
  * baselines still run. */
-static emm_status build_models(emm_session *s, emm_error *err)
+static emm_status build_models(session *s, emm_error *err)
 {
     bool racing = wants_contest(s);
     size_t sweep = emm_strategy_sweep(NULL, 0);
@@ -680,7 +684,7 @@ out:
     return st;
 }
 
-emm_status session_decide_read(emm_session *s, emm_error *err)
+emm_status session_decide_read(session *s, emm_error *err)
 {
     emm_status st;
     s->geometry_failed = false;
@@ -694,7 +698,7 @@ emm_status session_decide_read(emm_session *s, emm_error *err)
     return EMM_OK;
 }
 
-emm_status session_decide_rest(emm_session *s, emm_error *err)
+emm_status session_decide_rest(session *s, emm_error *err)
 {
     emm_status st;
     if (!(s->layouts = emm_model_share_new()))

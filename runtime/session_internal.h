@@ -1,10 +1,14 @@
-/* Internal to the session (runtime/session*.c): its state, shared by the
- * three files that split its jobs —
+/* Internal to the session engine: its state, shared by the files that
+ * split its jobs —
  *   session.c         lifecycle, tagged arrays, the window, the stream of
- *                     records through the models
+ *                     records through the models; the in-process transport
  *   session_decide.c  "freeze the data", the profile, the decision, the models
+ *   session_phase.c   the run's phases, probed after the window
+ *   session_lines.c   the trace, the timeline, the stall lines by source line
  *   session_report.c  the summary, the JSON report, the CSV
- * include/emm/session.h has the contract. */
+ * The engine is reached through the transport seam of session_transport.h
+ * (in this process, or in emm-session through session_proxy.c); it never
+ * asks which. include/emm/session.h has the contract. */
 #ifndef EMM_RUNTIME_SESSION_INTERNAL_H
 #define EMM_RUNTIME_SESSION_INTERNAL_H
 
@@ -20,15 +24,13 @@
 #include "json.h"
 #include "lead_sweep.h"
 #include "runner.h"
+#include "session_transport.h"
 #include "share.h"
 #include "table_internal.h"
 
 /* The source lines of the chosen strategy's stalls the summary and the
  * report name (when the capture knows program counters). */
 #define SESSION_STALL_LINES 3
-
-/* Arrays the session keeps at once (live or still referenced by the window). */
-#define SESSION_MAX_ARRAYS 16
 
 /* PHASE_DEFERRED: the geometry did not check out when the window closed
  * (an array the program had yet to finish): the window is kept, nothing
@@ -98,28 +100,27 @@ typedef struct session_array {
                             decision while the window named it; else NULL */
     uint64_t refs;       /* window records that name this slot */
     int32_t trace_index; /* the trace array it feeds after the decision, or -1 */
-    int rule;            /* the EMM_TAG rule that selected the block (count is its
+    int rule;            /* the EMM_TAG rule that selected the block, from 0 (count is its
                             capacity), or -1 for an emm_tag_* call */
+    char *origin;        /* who described it (emm_array_desc.origin), malloc'ed, or NULL */
     uint64_t top;        /* 1 + the highest element accessed since it was tagged */
     unsigned moves;      /* reallocations since it was tagged */
-    unsigned char *view; /* a session serving another process (session_remote.c): a copy
-                            of [base, end) as the program last sent it, owned; else NULL */
+    unsigned char *view; /* a program in another process (emm_session_config.memory): a
+                            copy of [base, end) as it was last read, owned; else NULL */
 } session_array;
 
-struct emm_session {
-    /* A proxy for a session in another process (session_remote.c): every
-     * entry point forwards to it and nothing below is used. */
-    struct session_remote *remote;
-    /* A session serving another process: the tagged arrays are readable only
-     * through their views, and the program's objects are those it sent. */
-    bool foreign;
-    emm_trace_module *modules; /* malloc'ed, one block */
+/* The engine behind an emm_session handle in this process. */
+typedef struct session {
+    emm_session handle;  /* first: the public handle is the engine's address */
+    /* A program in another process (emm_session_config.memory): the tagged
+     * arrays are readable only through copies of them, and the program's
+     * objects are those it reports; NULL: this process. */
+    const emm_session_memory *memory;
+    emm_session_memory mem; /* the copy memory points to */
+    emm_trace_module *modules; /* the objects it reported: malloc'ed, one block */
     uint32_t nmodules;
-    /* ...and asks the program for them, inside a call it waits on */
-    void (*pull)(emm_session *s, session_array *a);
-    void (*pull_modules)(emm_session *s);
-    void *pull_ctx;
-    emm_config cfg;      /* the settings, parsed (a copy) */
+    emm_config cfg;      /* the settings, parsed (a copy, without the tag rules: each
+                            array's description comes whole) */
     char *program;
     emm_capture capture;
     emm_threads threads;
@@ -133,8 +134,8 @@ struct emm_session {
     bool deciding;       /* session_decide_begin read the program: _end is due */
     emm_error deferred_why; /* what the geometry was when the window closed */
 
-    session_array arrays[SESSION_MAX_ARRAYS];
-    int narrays;
+    session_array *arrays; /* narrays of them in use, carrays allocated */
+    int narrays, carrays;
     int last;            /* the slot the previous access hit */
     int last2;           /* and the one before it, of another slot (a triangle's index
                             and then its vertices: two arrays by turns) */
@@ -246,11 +247,11 @@ struct emm_session {
         char function[128];
         uint64_t cycles;
     } stall_lines[SESSION_STALL_LINES];
-};
+} session;
 
 /* The window's choice (model 0) when the run's contest answered otherwise,
  * else NULL (and NULL until the session's finish). */
-static inline const emm_strategy *session_overruled(const emm_session *s)
+static inline const emm_strategy *session_overruled(const session *s)
 {
     return s->answer_model != SIZE_MAX && s->answer_model != 0 ? &s->mstrat[0] : NULL;
 }
@@ -276,7 +277,7 @@ static inline unsigned session_scalars(const session_array *a)
 /* The window's name for the array of slot i: its group's lead, so that
  * vertex k's x, y and z in three blocks are one element, as after the
  * decision, when they feed one trace array. */
-static inline uint32_t session_group(const emm_session *s, uint32_t i)
+static inline uint32_t session_group(const session *s, uint32_t i)
 {
     return (uint32_t)s->arrays[i].lead;
 }
@@ -295,22 +296,22 @@ static inline uint64_t session_array_end(const session_array *a)
     return a->base + (a->plane ? 3 * a->plane : a->count * a->stride);
 }
 
-/* The array's bytes: the program's memory, or the copy a program in another
- * process sent (NULL when it sent none). */
-static inline const unsigned char *session_bytes(emm_session *s, session_array *a)
+/* The array's bytes: the program's memory, or a copy of a program's in
+ * another process, read through the memory seam (NULL when there is none). */
+static inline const unsigned char *session_bytes(session *s, session_array *a)
 {
-    if (!a->view && s->foreign && s->pull)
-        s->pull(s, a);
-    if (a->view)
-        return a->view;
-    return s->foreign ? NULL : (const unsigned char *)(uintptr_t)a->base;
+    if (!s->memory)
+        return (const unsigned char *)(uintptr_t)a->base;
+    if (!a->view && s->memory->read)
+        a->view = s->memory->read(s->memory->ctx, a->base, a->end - a->base);
+    return a->view;
 }
 
 /* The address of record i's first scalar, in the program's memory (or the
  * copy of it) or in the slot's snapshot (which holds each record's scalars
  * in a row). The caller makes sure the array is readable
  * (session_readable). */
-static inline const unsigned char *session_field_at(emm_session *s, session_array *a, uint64_t i)
+static inline const unsigned char *session_field_at(session *s, session_array *a, uint64_t i)
 {
     if (a->snap)
         return a->snap + i * session_scalars(a) * session_scalar_bytes(a->type);
@@ -319,7 +320,7 @@ static inline const unsigned char *session_field_at(emm_session *s, session_arra
 
 /* The address of scalar c (< session_scalars(a)) of record i: in a row, or
  * for a column-major array in column c. */
-static inline const unsigned char *session_scalar_at(emm_session *s, session_array *a,
+static inline const unsigned char *session_scalar_at(session *s, session_array *a,
                                                      uint64_t i, unsigned c)
 {
     uint64_t step = a->plane && !a->snap ? a->plane : session_scalar_bytes(a->type);
@@ -327,36 +328,17 @@ static inline const unsigned char *session_scalar_at(emm_session *s, session_arr
 }
 
 /* Whether the array's fields can be read: a snapshot, or its bytes. */
-static inline bool session_readable(emm_session *s, session_array *a)
+static inline bool session_readable(session *s, session_array *a)
 {
     return a->snap || session_bytes(s, a);
 }
 
-/* session_remote.c: the proxy's side of each entry point. */
-struct session_remote;
-emm_status session_remote_new(const emm_session_config *sc, emm_session **out, emm_error *err);
-int session_remote_tag(emm_session *s, emm_array_kind kind, const void *base, size_t count,
-                       size_t stride, size_t field_offset, emm_scalar type, int rule);
-emm_session_state session_remote_move(emm_session *s, const void *old, const void *base,
-                                      size_t count);
-emm_session_state session_remote_untag(emm_session *s, const void *base);
-size_t session_remote_ranges(const emm_session *s, uint64_t *lo, uint64_t *hi, size_t cap);
-emm_session_state session_remote_access(emm_session *s, const emm_raw_access *a, size_t n);
-emm_session_state session_remote_iteration(emm_session *s);
-emm_status session_remote_decide(emm_session *s, emm_error *err);
-emm_status session_remote_finish(emm_session *s, FILE *summary, emm_error *err);
-void session_remote_forked(emm_session *s);
-/* The first frame a proxy sends (its start), whole: for the wire's fuzz
- * harness, which serves it and then its input. */
-emm_status session_wire_start(const emm_session_config *sc, unsigned char **frame, size_t *len);
-void session_remote_free(emm_session *s);
-
 /* Who described array a, for messages: "EMM_TAG rule 2 (triangles:...)" or
  * "the emm_tag_triangles call". */
-const char *session_origin(const emm_session *s, const session_array *a, char *buf, size_t cap);
+const char *session_origin(const session *s, const session_array *a, char *buf, size_t cap);
 
 /* The name a setting was given by (the variable or the option), for messages. */
-static inline const char *session_source(const emm_session *s, emm_config_key k)
+static inline const char *session_source(const session *s, emm_config_key k)
 {
     return s->cfg.source[k] ? s->cfg.source[k] : emm_config_row_get(k)->var;
 }
@@ -373,37 +355,33 @@ static inline const char *session_path(const char *p)
  * program in another process may go on once it returns. session_decide_rest:
  * the profile, the choice and the models, from the session's own copies;
  * the window's records then go through them. A failure of either leaves
- * the session to step aside. */
-emm_status session_decide_read(emm_session *s, emm_error *err);
-emm_status session_decide_rest(emm_session *s, emm_error *err);
-/* The two parts of emm_session_decide in-process: _begin reads (or defers
- * the decision, or fails), and when it leaves s->deciding set, _end
- * completes it. */
-emm_status session_decide_begin(emm_session *s, emm_error *err);
-emm_status session_decide_end(emm_session *s, emm_error *err);
+ * the session to step aside. (session.c wraps them as the engine's
+ * emm_session_decide_read and _rest: deferral, the window's end.) */
+emm_status session_decide_read(session *s, emm_error *err);
+emm_status session_decide_rest(session *s, emm_error *err);
 
-/* Only the window was captured and simulated: the fault backend stops at
- * the decision. */
-static inline bool session_window_only(const emm_session *s)
+/* Only the window was captured and simulated: a backend that sees the
+ * window alone stops at the decision. */
+static inline bool session_window_only(const session *s)
 {
-    return s->capture == EMM_CAPTURE_FAULT || s->deferred;
+    return !(emm_capture_caps(s->capture) & EMM_CAP_WHOLE_RUN) || s->deferred;
 }
 
 /* The bytes of the traced mesh's records. */
-uint64_t session_mesh_bytes(const emm_session *s);
+uint64_t session_mesh_bytes(const session *s);
 
 /* session_phase.c: the first phase (the window's) and the probes of the
  * records simulated after it; session_phases_close ends the last phase. */
-void session_phases_start(emm_session *s);
-void session_phases_see(emm_session *s, const emm_trace_record *recs, size_t n);
-void session_phases_close(emm_session *s);
+void session_phases_start(session *s);
+void session_phases_see(session *s, const emm_trace_record *recs, size_t n);
+void session_phases_close(session *s);
 /* Once the answer is known (the contest's, or the chosen strategy): each
  * phase's kept cycles become the answer's over the phase. */
-void session_phases_answer(emm_session *s);
-void session_phases_free(emm_session *s);
+void session_phases_answer(session *s);
+void session_phases_free(session *s);
 /* The cycles a switch costs: the mesh's bytes in by DMA and the new layout
  * out (2 x one DMA of the mesh's bytes). */
-uint64_t session_switch_cycles(const emm_session *s);
+uint64_t session_switch_cycles(const session *s);
 
 /* session_lines.c: the trace (with the program counters and the program's
  * modules when the capture records them), the timeline and the stall
@@ -413,27 +391,27 @@ uint64_t session_switch_cycles(const emm_session *s);
  * timeline is closed by session_timeline_close; session_lines_free frees.
  * session_outputs_prepare, in the decision's reading part, fetches what
  * the outputs will need of a program in another process (its objects). */
-void session_outputs_prepare(emm_session *s);
-void session_outputs_start(emm_session *s);
-void session_window_done(emm_session *s);
-void session_stall_lines(emm_session *s);
-void session_print_stall_lines(const emm_session *s, FILE *out);
-void session_write_stall_lines(json_writer *w, const emm_session *s);
-emm_status session_timeline_close(emm_session *s, emm_error *err);
-void session_lines_free(emm_session *s);
+void session_outputs_prepare(session *s);
+void session_outputs_start(session *s);
+void session_window_done(session *s);
+void session_stall_lines(session *s);
+void session_print_stall_lines(const session *s, FILE *out);
+void session_write_stall_lines(json_writer *w, const session *s);
+emm_status session_timeline_close(session *s, emm_error *err);
+void session_lines_free(session *s);
 
 /* session.c: runs records through the models and the trace writer. */
-void session_simulate(emm_session *s, const emm_trace_record *recs, size_t n);
+void session_simulate(session *s, const emm_trace_record *recs, size_t n);
 
 /* session_report.c: the summary on `out`, with the results of the models
  * that ran (res[0..nres), the chosen strategy first when there is one;
  * NULL when the session failed). */
-void session_print_summary(const emm_session *s, FILE *out, const emm_result *res, size_t nres);
+void session_print_summary(const session *s, FILE *out, const emm_result *res, size_t nres);
 /* The JSON report at cfg.report: res[0..nres) are the models in order, and
  * skipped[i].status != EMM_OK marks one that could not be built. */
-emm_status session_write_report(const emm_session *s, const emm_result *res,
+emm_status session_write_report(const session *s, const emm_result *res,
                                 const emm_error *skipped, size_t nres, emm_error *err);
 /* The CSV of the window's profile at cfg.profile_dump. */
-emm_status session_write_csv(const emm_session *s, emm_error *err);
+emm_status session_write_csv(const session *s, emm_error *err);
 
 #endif

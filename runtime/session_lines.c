@@ -20,25 +20,37 @@
 /* A DMA stall of the chosen model (on the thread running it). */
 static void on_stall(void *ctx, const emm_trace_record *r, uint64_t cycles)
 {
-    emm_session *s = ctx;
+    session *s = ctx;
     emm_annotation_add_stall(s->annotation, r->pc, cycles);
 }
 
 /* The capture records program counters: sancov's hooks' return addresses,
  * the valgrind tool's instruction addresses. */
-static bool has_pcs(const emm_session *s)
+static bool has_pcs(const session *s)
 {
-    return s->capture == EMM_CAPTURE_SANCOV || s->capture == EMM_CAPTURE_VALGRIND;
+    return (emm_capture_caps(s->capture) & EMM_CAP_PCS) != 0;
+}
+
+/* A program in another process: asks for its objects again; those it
+ * reported last stay when it cannot answer now (it no longer waits). */
+static void refresh_modules(session *s)
+{
+    emm_trace_module *m = NULL;
+    uint32_t n = 0;
+    if (s->memory->modules && s->memory->modules(s->memory->ctx, &m, &n)) {
+        free(s->modules);
+        s->modules = m;
+        s->nmodules = n;
+    }
 }
 
 /* The program's loaded objects: this process's, or those a program in
- * another process sent (s->modules, borrowed: *owned is false). */
-static bool program_modules(emm_session *s, emm_trace_module **mods, uint32_t *n, bool *owned)
+ * another process reported (s->modules, borrowed: *owned is false). */
+static bool program_modules(session *s, emm_trace_module **mods, uint32_t *n, bool *owned)
 {
-    *owned = !s->foreign;
-    if (s->foreign) {
-        if (s->pull_modules)
-            s->pull_modules(s);
+    *owned = !s->memory;
+    if (s->memory) {
+        refresh_modules(s);
         *mods = s->modules;
         *n = s->nmodules;
         return s->modules != NULL;
@@ -46,13 +58,13 @@ static bool program_modules(emm_session *s, emm_trace_module **mods, uint32_t *n
     return emm_process_modules(mods, n, NULL) == EMM_OK;
 }
 
-void session_outputs_prepare(emm_session *s)
+void session_outputs_prepare(session *s)
 {
-    if (s->cfg.trace[0] && has_pcs(s) && s->foreign && s->pull_modules)
-        s->pull_modules(s);
+    if (s->cfg.trace[0] && has_pcs(s) && s->memory)
+        refresh_modules(s);
 }
 
-void session_outputs_start(emm_session *s)
+void session_outputs_start(session *s)
 {
     emm_trace_module *mods = NULL;
     uint32_t nmods = 0;
@@ -88,7 +100,7 @@ void session_outputs_start(emm_session *s)
     }
 }
 
-void session_window_done(emm_session *s)
+void session_window_done(session *s)
 {
     emm_model *chosen = s->has_chosen ? emm_runner_model(s->runner, 0) : NULL;
     if (!chosen)
@@ -98,7 +110,7 @@ void session_window_done(emm_session *s)
     s->window_cycles = r.total;
 }
 
-void session_stall_lines(emm_session *s)
+void session_stall_lines(session *s)
 {
     if (s->stall_lines_done || !s->annotation)
         return;
@@ -134,7 +146,7 @@ static const char *base_name(const char *path)
     return slash ? slash + 1 : path;
 }
 
-void session_print_stall_lines(const emm_session *s, FILE *out)
+void session_print_stall_lines(const session *s, FILE *out)
 {
     if (!s->nstall_lines || !s->stall_total)
         return;
@@ -158,7 +170,7 @@ void session_print_stall_lines(const emm_session *s, FILE *out)
     fprintf(out, "   (emm annotate TRACE for every line)\n");
 }
 
-void session_write_stall_lines(json_writer *w, const emm_session *s)
+void session_write_stall_lines(json_writer *w, const session *s)
 {
     if (!has_pcs(s) || !s->stall_lines_done)
         return;
@@ -184,7 +196,7 @@ void session_write_stall_lines(json_writer *w, const emm_session *s)
     json_end_array(w);
 }
 
-emm_status session_timeline_close(emm_session *s, emm_error *err)
+emm_status session_timeline_close(session *s, emm_error *err)
 {
     if (s->timeline_failed)
         return emm_fail(err, s->timeline_error.status, "%s: %s",
@@ -214,7 +226,7 @@ emm_status session_timeline_close(emm_session *s, emm_error *err)
     return st;
 }
 
-void session_lines_free(emm_session *s)
+void session_lines_free(session *s)
 {
     if (s->timeline)
         emm_timeline_abort(s->timeline, emm_runner_model(s->runner, 0));

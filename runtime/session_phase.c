@@ -19,9 +19,9 @@
 #include "error.h"
 #include "pool.h"
 
-static void finish_probe(emm_session *s);
+static void finish_probe(session *s);
 
-static uint64_t model_total(const emm_session *s, size_t i)
+static uint64_t model_total(const session *s, size_t i)
 {
     emm_model *m = emm_runner_model(s->runner, i);
     if (!m)
@@ -33,7 +33,7 @@ static uint64_t model_total(const emm_session *s, size_t i)
     return t;
 }
 
-uint64_t session_mesh_bytes(const emm_session *s)
+uint64_t session_mesh_bytes(const session *s)
 {
     uint64_t bytes = 0;
     for (uint32_t a = 0; a < s->ntarrays; a++)
@@ -42,12 +42,12 @@ uint64_t session_mesh_bytes(const emm_session *s)
     return bytes;
 }
 
-uint64_t session_switch_cycles(const emm_session *s)
+uint64_t session_switch_cycles(const session *s)
 {
     return 2 * emm_machine_dma_cycles(s->machine, session_mesh_bytes(s));
 }
 
-void session_phases_start(emm_session *s)
+void session_phases_start(session *s)
 {
     program_phase *p = &s->phases[0];
     memset(p, 0, sizeof *p);
@@ -71,7 +71,7 @@ void session_phases_start(emm_session *s)
 
 /* Every model's cycles now (those of a retired model stopped where it
  * was dropped; only the answer's, which never is, are read). */
-static uint64_t *totals(const emm_session *s, size_t n)
+static uint64_t *totals(const session *s, size_t n)
 {
     uint64_t *t = malloc((n ? n : 1) * sizeof *t);
     for (size_t i = 0; t && i < n; i++)
@@ -79,7 +79,7 @@ static uint64_t *totals(const emm_session *s, size_t n)
     return t;
 }
 
-static void close_phase(emm_session *s, program_phase *p)
+static void close_phase(session *s, program_phase *p)
 {
     if (p->closed)
         return;
@@ -96,7 +96,7 @@ static void close_phase(emm_session *s, program_phase *p)
     emm_runner_retire(s->runner, p->model);
 }
 
-void session_phases_close(emm_session *s)
+void session_phases_close(session *s)
 {
     finish_probe(s);
     if (s->nphases > 0)
@@ -111,7 +111,7 @@ void session_phases_close(emm_session *s)
  * phases' alone by then, the layouts' share locks itself); its outcome is
  * applied (apply) on the session's thread. */
 struct probe_job {
-    emm_session *s;
+    session *s;
     emm_task *task;
     emm_trace_record *recs; /* the probe's records (owned) */
     size_t n;
@@ -134,7 +134,7 @@ static const char *job_pattern(const struct probe_job *j)
 static void evaluate(void *ctx)
 {
     struct probe_job *j = ctx;
-    const emm_session *s = j->s;
+    const session *s = j->s;
     emm_profiler *pr = NULL;
     emm_error e;
     double *D = NULL, f[EMM_FEATURES];
@@ -174,7 +174,7 @@ off:
 /* The probe's outcome: a new phase when its pattern differs. Failures
  * (memory) end the probing quietly: phases are an addition to the answer,
  * never a reason to lose it. */
-static void apply(emm_session *s, struct probe_job *j)
+static void apply(session *s, struct probe_job *j)
 {
     if (j->off) {
         s->probing = false;
@@ -229,7 +229,7 @@ static void apply(emm_session *s, struct probe_job *j)
 
 /* The probe in flight, waited for and no longer the session's; NULL when
  * there is none. Free it with free_probe. */
-static struct probe_job *take_probe(emm_session *s)
+static struct probe_job *take_probe(session *s)
 {
     struct probe_job *j = s->probe_job;
     if (j) {
@@ -247,7 +247,7 @@ static void free_probe(struct probe_job *j)
 }
 
 /* The probe in flight, if any: waited for, applied, freed. */
-static void finish_probe(emm_session *s)
+static void finish_probe(session *s)
 {
     struct probe_job *j = take_probe(s);
     if (j)
@@ -257,7 +257,7 @@ static void finish_probe(emm_session *s)
 
 /* The probe is full: its records go to a job evaluated beside the run, the
  * probe starts empty. Without memory for that, probing ends. */
-static void launch_probe(emm_session *s)
+static void launch_probe(session *s)
 {
     finish_probe(s); /* never in flight here: a probe is over in SESSION_PROBE_LAG records */
     struct probe_job *j = calloc(1, sizeof *j);
@@ -280,7 +280,7 @@ static void launch_probe(emm_session *s)
     j->task = emm_task_start(&s->threads, evaluate, j);
 }
 
-void session_phases_see(emm_session *s, const emm_trace_record *recs, size_t n)
+void session_phases_see(session *s, const emm_trace_record *recs, size_t n)
 {
     for (size_t k = 0; k < n && s->probing; k++) {
         const emm_trace_record *r = &recs[k];
@@ -324,7 +324,7 @@ void session_phases_see(emm_session *s, const emm_trace_record *recs, size_t n)
         finish_probe(s);
 }
 
-void session_phases_answer(emm_session *s)
+void session_phases_answer(session *s)
 {
     size_t a = s->answer_model != SIZE_MAX ? s->answer_model : 0;
     if (!s->mstrat || a >= s->nmodels)
@@ -339,7 +339,7 @@ void session_phases_answer(emm_session *s)
     }
 }
 
-void session_phases_free(emm_session *s)
+void session_phases_free(session *s)
 {
     free_probe(take_probe(s));
     for (int i = 0; i < s->nphases; i++) {

@@ -31,7 +31,7 @@ static const char *source_name(enum decision_source src)
 }
 
 typedef struct report_ctx {
-    const emm_session *s;
+    const session *s;
     const emm_result *res;    /* every model, in order */
     const emm_error *skipped; /* status != EMM_OK: could not be built */
     size_t n;
@@ -57,7 +57,7 @@ static void write_features(json_writer *w, const double f[EMM_FEATURES])
  * mean of D_i / i over the last n/32 accesses that features 11-16 divide
  * by (docs/profile.md), so a plot can draw a sample's shape at this
  * window's scale; the features, and the nearest sample's. */
-static void write_profile(json_writer *w, const emm_session *s)
+static void write_profile(json_writer *w, const session *s)
 {
     const size_t head = REPORT_PROFILE_HEAD, rest = REPORT_PROFILE_POINTS - REPORT_PROFILE_HEAD;
     size_t n = s->nD, step = n > REPORT_PROFILE_POINTS ? (n - head + rest - 1) / rest : 1;
@@ -120,14 +120,14 @@ static const emm_result *find_result(const emm_result *res, size_t n, const emm_
 /* Whether switching to the phase's best candidate pays: its cycles from the
  * detection on, plus re-laying out the mesh, against the chosen strategy's
  * over the same span. */
-static bool phase_pays(const emm_session *s, const program_phase *p)
+static bool phase_pays(const session *s, const program_phase *p)
 {
     return p->model != SIZE_MAX && !p->best_is_answer &&
            p->best_span + session_switch_cycles(s) < p->chosen_span;
 }
 
 /* "phases" (docs/report.md): the program's phases as the probes found them. */
-static void write_phases(json_writer *w, const emm_session *s)
+static void write_phases(json_writer *w, const session *s)
 {
     char name[64];
     json_key(w, "phases_probed");
@@ -176,7 +176,7 @@ static void write_phases(json_writer *w, const emm_session *s)
 
 /* The summary's tie: the choice and the runner-up within the margin over
  * the run (the window's scores when the runner-up was not simulated). */
-static bool answer_tie(const emm_session *s, const emm_result *res, const emm_error *skipped,
+static bool answer_tie(const session *s, const emm_result *res, const emm_error *skipped,
                        size_t n)
 {
     if (s->contest) {
@@ -198,7 +198,7 @@ static bool answer_tie(const emm_session *s, const emm_result *res, const emm_er
 static void report_extra(json_writer *w, void *ctx)
 {
     const report_ctx *c = ctx;
-    const emm_session *s = c->s;
+    const session *s = c->s;
     char name[64];
     json_key(w, "program");
     json_string(w, s->program);
@@ -408,7 +408,7 @@ static const char *versus(uint64_t a, uint64_t b, char *buf, size_t cap)
     return buf;
 }
 
-static const char *how_predicted(const emm_session *s)
+static const char *how_predicted(const session *s)
 {
     switch (s->source) {
     case FROM_CONFIG:
@@ -423,7 +423,7 @@ static const char *how_predicted(const emm_session *s)
 }
 
 /* How the answer was reached: the window's prediction, or the contest. */
-static const char *how_decided(const emm_session *s, char *buf, size_t cap)
+static const char *how_decided(const session *s, char *buf, size_t cap)
 {
     if (!s->contest || s->answer_model == SIZE_MAX)
         return how_predicted(s);
@@ -442,7 +442,7 @@ static const char *how_decided(const emm_session *s, char *buf, size_t cap)
  * chosen strategy in words with its cycles against direct reads, the
  * runner-up, the reference cache, what was simulated, what was skipped,
  * and the next command. */
-void session_print_summary(const emm_session *s, FILE *out, const emm_result *res, size_t nres)
+void session_print_summary(const session *s, FILE *out, const emm_result *res, size_t nres)
 {
     char name[64], words[320], num[32], num2[32], vs[48];
     if (s->phase == PHASE_FAILED) {
@@ -651,7 +651,7 @@ void session_print_summary(const emm_session *s, FILE *out, const emm_result *re
                 (unsigned long long)s->dropped);
 }
 
-emm_status session_write_csv(const emm_session *s, emm_error *err)
+emm_status session_write_csv(const session *s, emm_error *err)
 {
     emm_outfile o;
     emm_error e;
@@ -665,7 +665,7 @@ emm_status session_write_csv(const emm_session *s, emm_error *err)
     return st == EMM_OK ? EMM_OK : emm_fail(err, st, "%s: %s", session_source(s, EMM_CONFIG_PROFILE_DUMP), e.message);
 }
 
-emm_status session_write_report(const emm_session *s, const emm_result *res,
+emm_status session_write_report(const session *s, const emm_result *res,
                                 const emm_error *skipped, size_t nres, emm_error *err)
 {
     report_ctx ctx = {s, res, skipped, nres};

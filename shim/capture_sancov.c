@@ -19,26 +19,18 @@
 
 #include "shim.h"
 
-#define MAX_RANGES SHIM_MAX_TAGS
+/* The agent's snapshot of the tagged ranges (emm_agent_filter_of), read
+ * on every access without a lock. */
+static const emm_agent_filter *filter; /* atomic */
 
-static uint64_t range_lo[MAX_RANGES], range_len[MAX_RANGES];
-static size_t nranges; /* atomic: the filter's snapshot */
-
-static void ranges_locked(void)
+static void ranges(emm_agent *a)
 {
-    uint64_t lo[MAX_RANGES], hi[MAX_RANGES];
-    __atomic_store_n(&nranges, 0, __ATOMIC_RELEASE);
-    size_t n = shim_ranges_locked(lo, hi, MAX_RANGES);
-    for (size_t i = 0; i < n; i++) {
-        __atomic_store_n(&range_lo[i], lo[i], __ATOMIC_RELAXED);
-        __atomic_store_n(&range_len[i], hi[i] - lo[i], __ATOMIC_RELAXED);
-    }
-    __atomic_store_n(&nranges, n, __ATOMIC_RELEASE);
+    __atomic_store_n(&filter, emm_agent_filter_of(a), __ATOMIC_RELEASE);
 }
 
 static void fork_child(void)
 {
-    __atomic_store_n(&nranges, 0, __ATOMIC_RELEASE);
+    __atomic_store_n(&filter, NULL, __ATOMIC_RELEASE);
 }
 
 /* A program built with emm_sancov_executable links libemmhooks.so. */
@@ -47,9 +39,10 @@ static bool wanted(void)
     return dlsym(RTLD_DEFAULT, "emm_sancov_hooks_present") != NULL;
 }
 
-static bool init(char *msg, size_t cap)
+static bool init(char *msg, size_t msg_cap)
 {
-    (void)msg; (void)cap;
+    (void)msg;
+    (void)msg_cap;
     if (!wanted() && shim.config.log >= 1)
         shim_log("EMM_CAPTURE=sancov, but %s was not built with emm_sancov_executable: "
                  "no accesses will be seen", program_invocation_short_name);
@@ -57,20 +50,24 @@ static bool init(char *msg, size_t cap)
 }
 
 const struct shim_capture_ops shim_capture_sancov = {
-    .kind = EMM_CAPTURE_SANCOV,
     .wanted = wanted,
     .init = init,
-    .ranges_locked = ranges_locked,
+    .hooks = {.ranges = ranges},
     .fork_child = fork_child,
 };
 
 static inline void hit(const void *p, uint32_t bytes, bool write, const void *pc)
 {
     uint64_t a = (uint64_t)(uintptr_t)p;
-    size_t n = __atomic_load_n(&nranges, __ATOMIC_ACQUIRE);
+    const emm_agent_filter *f = __atomic_load_n(&filter, __ATOMIC_ACQUIRE);
+    if (!f)
+        return;
+    size_t n = __atomic_load_n(&f->n, __ATOMIC_ACQUIRE);
+    const uint64_t *lo = __atomic_load_n(&f->lo, __ATOMIC_ACQUIRE),
+                   *len = __atomic_load_n(&f->len, __ATOMIC_ACQUIRE);
     for (size_t i = 0; i < n; i++) {
-        if (a - __atomic_load_n(&range_lo[i], __ATOMIC_RELAXED)
-            < __atomic_load_n(&range_len[i], __ATOMIC_RELAXED)) {
+        if (a - __atomic_load_n(&lo[i], __ATOMIC_RELAXED) <
+            __atomic_load_n(&len[i], __ATOMIC_RELAXED)) {
             if (!shim_busy)
                 shim_record_pc(a, bytes, write, (uint64_t)(uintptr_t)pc);
             return;

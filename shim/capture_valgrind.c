@@ -4,7 +4,7 @@
  *
  * The shim keeps tagging inside the client by interposition, as with every
  * backend; this file tells the tool the tagged ranges and takes its records
- * (shim/vgtool/protocol.h is the channel):
+ * (shim/vgtool/protocol.h is the channel), at the agent's events:
  * - at start-up it registers a buffer of records and the drain function;
  * - the tool appends every access inside a tagged range to the buffer, in
  *   the order the threads ran (Valgrind runs one at a time: exact with
@@ -22,6 +22,7 @@
 #include <stddef.h>
 #include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <sys/mman.h>
 #include <valgrind/valgrind.h>
 
@@ -70,27 +71,17 @@ __asm__(".text\n"
         "  fxsave64 (%rsp)\n"
         "  cmpb $0, shim_vg_avx(%rip)\n"
         "  je 1f\n"
-        "  vmovdqu %ymm0, 512(%rsp)\n  vmovdqu %ymm1, 544(%rsp)\n"
-        "  vmovdqu %ymm2, 576(%rsp)\n  vmovdqu %ymm3, 608(%rsp)\n"
-        "  vmovdqu %ymm4, 640(%rsp)\n  vmovdqu %ymm5, 672(%rsp)\n"
-        "  vmovdqu %ymm6, 704(%rsp)\n  vmovdqu %ymm7, 736(%rsp)\n"
-        "  vmovdqu %ymm8, 768(%rsp)\n  vmovdqu %ymm9, 800(%rsp)\n"
-        "  vmovdqu %ymm10, 832(%rsp)\n  vmovdqu %ymm11, 864(%rsp)\n"
-        "  vmovdqu %ymm12, 896(%rsp)\n  vmovdqu %ymm13, 928(%rsp)\n"
-        "  vmovdqu %ymm14, 960(%rsp)\n  vmovdqu %ymm15, 992(%rsp)\n"
+        "  .irp n,0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15\n"
+        "  vmovdqu %ymm\\n, 512+32*\\n(%rsp)\n"
+        "  .endr\n"
         "1:\n"
         "  fninit\n"
         "  call shim_vg_drain\n"
         "  cmpb $0, shim_vg_avx(%rip)\n"
         "  je 2f\n"
-        "  vmovdqu 512(%rsp), %ymm0\n  vmovdqu 544(%rsp), %ymm1\n"
-        "  vmovdqu 576(%rsp), %ymm2\n  vmovdqu 608(%rsp), %ymm3\n"
-        "  vmovdqu 640(%rsp), %ymm4\n  vmovdqu 672(%rsp), %ymm5\n"
-        "  vmovdqu 704(%rsp), %ymm6\n  vmovdqu 736(%rsp), %ymm7\n"
-        "  vmovdqu 768(%rsp), %ymm8\n  vmovdqu 800(%rsp), %ymm9\n"
-        "  vmovdqu 832(%rsp), %ymm10\n  vmovdqu 864(%rsp), %ymm11\n"
-        "  vmovdqu 896(%rsp), %ymm12\n  vmovdqu 928(%rsp), %ymm13\n"
-        "  vmovdqu 960(%rsp), %ymm14\n  vmovdqu 992(%rsp), %ymm15\n"
+        "  .irp n,0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15\n"
+        "  vmovdqu 512+32*\\n(%rsp), %ymm\\n\n"
+        "  .endr\n"
         "2:\n"
         "  fxrstor64 (%rsp)\n"
         "  mov %rbp, %rsp\n"
@@ -105,7 +96,7 @@ void shim_vg_drain(void)
 {
     /* Inside the shim or the allocator the session cannot be entered (the
      * thread may hold the lock): the records wait for the next time. */
-    if (shim_busy || shim_in_alloc || !shim.enabled) {
+    if (shim_busy || shim_in_alloc || !emm_agent_active(shim.agent)) {
         REQUEST(EMM_VG_LATER, 0, 0, 0);
         return;
     }
@@ -150,34 +141,41 @@ static void tell_ranges(size_t n, const uint64_t *lo, const uint64_t *hi)
     REQUEST(EMM_VG_RANGES, lo, hi, n);
 }
 
-static void ranges_locked(void)
+static void ranges(emm_agent *a)
 {
-    uint64_t lo[SHIM_MAX_TAGS], hi[SHIM_MAX_TAGS];
-    if (connected)
-        tell_ranges(shim_ranges_locked(lo, hi, SHIM_MAX_TAGS), lo, hi);
+    if (!connected)
+        return;
+    size_t n = emm_agent_ranges_locked(a, NULL, NULL, 0);
+    uint64_t *lo = malloc((n ? n : 1) * sizeof *lo), *hi = malloc((n ? n : 1) * sizeof *hi);
+    if (lo && hi) {
+        n = emm_agent_ranges_locked(a, lo, hi, n);
+        tell_ranges(n, lo, hi);
+    }
+    free(lo);
+    free(hi);
 }
 
 /* The session is about to read the arrays itself (a snapshot of the one
- * leaving, the decision's geometry): no ranges until ranges_locked. */
-static void pause_locked(void)
+ * leaving, the decision's geometry): no ranges until the next ranges. */
+static void pause_ranges(void)
 {
     if (connected)
         tell_ranges(0, NULL, NULL);
 }
 
-static void on_untag_locked(struct shim_tag *t)
+static void on_untag(const emm_agent_block *b)
 {
-    (void)t;
-    pause_locked();
+    (void)b;
+    pause_ranges();
 }
 
-static void drain_locked(void)
+static void drain(emm_agent *a)
 {
     if (!connected)
         return;
     REQUEST(EMM_VG_BUSY, 1, 0, 0);
     for (size_t n = REQUEST(EMM_VG_TAKE, 0, 0, 0); n > 0; n = REQUEST(EMM_VG_RELEASE, 0, 0, 0))
-        shim_feed_locked((const emm_raw_access *)channel.rec, n);
+        emm_agent_feed_locked(a, (const emm_raw_access *)channel.rec, n);
     REQUEST(EMM_VG_BUSY, 0, 0, 0);
 }
 
@@ -189,12 +187,8 @@ static void fork_child(void)
 }
 
 const struct shim_capture_ops shim_capture_valgrind = {
-    .kind = EMM_CAPTURE_VALGRIND,
     .wanted = on_emm_tool,
     .init = init,
-    .on_untag_locked = on_untag_locked,
-    .ranges_locked = ranges_locked,
-    .before_decide_locked = pause_locked,
-    .drain_locked = drain_locked,
+    .hooks = {.on_untag = on_untag, .ranges = ranges, .before_decide = pause_ranges, .drain = drain},
     .fork_child = fork_child,
 };

@@ -226,6 +226,16 @@ static char *valgrind_setup(char *launcher, size_t lcap, char *why, size_t wcap)
     return tool;
 }
 
+/* The backend that runs under emm's Valgrind tool, the one auto picks for
+ * an unmodified binary. */
+static emm_capture valgrind_capture(void)
+{
+    for (int c = 0; c < EMM_CAPTURE_COUNT; c++)
+        if (emm_capture_caps((emm_capture)c) & EMM_CAP_VALGRIND)
+            return (emm_capture)c;
+    return EMM_CAPTURE_AUTO;
+}
+
 static const char *get_env(const char *name)
 {
     return getenv(name);
@@ -272,7 +282,7 @@ int emm_cmd_run(int argc, char **argv)
      * samples), as the shim will start it. */
     if (emm_config_from_env(&cfg, get_env, (long)getpid(), given, &err) != EMM_OK)
         return cli_bad_value("run", &err);
-    emm_session_config sc = {&cfg, cfg.capture, argv[i], 0, {1, NULL, NULL}, NULL};
+    emm_session_config sc = {&cfg, cfg.capture, argv[i], 0, {1, NULL, NULL}, NULL, NULL};
     emm_session *probe;
     if (emm_session_new(&sc, &probe, &err) != EMM_OK)
         return cli_bad_value("run", &err);
@@ -281,7 +291,7 @@ int emm_cmd_run(int argc, char **argv)
     /* Valgrind when asked, or for an unmodified binary under auto. */
     char launcher[PATH_MAX], program[PATH_MAX], why[8192];
     char *vgdir = NULL;
-    if (cfg.capture == EMM_CAPTURE_VALGRIND) {
+    if (emm_capture_caps(cfg.capture) & EMM_CAP_VALGRIND) {
         if (!(vgdir = valgrind_setup(launcher, sizeof launcher, why, sizeof why))) {
             cli_error("run: --capture valgrind is unavailable: %s", why);
             return EMM_EXIT_FAIL;
@@ -296,7 +306,8 @@ int emm_cmd_run(int argc, char **argv)
     bool under_valgrind = vgdir != NULL;
     if (vgdir) {
         bad |= setenv("VALGRIND_LIB", vgdir, 1);
-        values[EMM_CONFIG_CAPTURE] = "valgrind";
+        values[EMM_CONFIG_CAPTURE] =
+            emm_capture_name(cfg.capture != EMM_CAPTURE_AUTO ? cfg.capture : valgrind_capture());
         free(vgdir);
     } else {
         char tried[4096];
@@ -333,7 +344,7 @@ int emm_cmd_run(int argc, char **argv)
         /* valgrind --tool=emm -q --trace-children=yes PROGRAM ARGS...: exec'd
          * programs are captured too, as LD_PRELOAD carries the shim for the
          * other backends; not the session's own process, which runs
-         * natively beside the program (runtime/session_remote.c). */
+         * natively beside the program (server/, runtime/session_proxy.c). */
         static const char *const pre[] = {"valgrind", "--tool=emm", "-q", "--trace-children=yes",
                                           "--trace-children-skip=*/emm-session"};
         size_t np = sizeof pre / sizeof *pre, na = (size_t)(argc - i);

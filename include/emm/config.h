@@ -23,18 +23,50 @@
 extern "C" {
 #endif
 
-/* How accesses are captured (the shim's backends). */
+/* What a capture backend gives. The layers above the shim ask these
+ * (emm_capture_caps), never which backend it is. */
+typedef enum emm_capture_cap {
+    EMM_CAP_WHOLE_RUN = 1u << 0,     /* it sees the run past the profiling window: the whole run
+                                        is simulated (without it, the window only) */
+    EMM_CAP_PCS = 1u << 1,           /* each access carries its program counter (source lines,
+                                        emm annotate) */
+    EMM_CAP_WORK = 1u << 2,          /* each access carries the work done since the previous one
+                                        (instructions or instrumented edges) */
+    EMM_CAP_THREADS_EXACT = 1u << 3, /* the accesses of several threads come in the order they
+                                        ran (without it, approximately) */
+    EMM_CAP_VALGRIND = 1u << 4       /* the program runs under emm's Valgrind tool, which emm run
+                                        starts; the session then runs natively in a process of
+                                        its own (emm-session) */
+} emm_capture_cap;
+
+/* The capture backends, one X(NAME, name, capabilities, help) each, in the
+ * order EMM_CAPTURE=auto tries them; the last is the one it falls back to.
+ * The enum, the names EMM_CAPTURE accepts, its help and the shim's table of
+ * backends (one shim/capture_name.c each) follow this list. */
+#define EMM_CAPTURE_LIST(X)                                                                   \
+    X(VALGRIND, valgrind,                                                                     \
+      EMM_CAP_WHOLE_RUN | EMM_CAP_PCS | EMM_CAP_WORK | EMM_CAP_THREADS_EXACT | EMM_CAP_VALGRIND, \
+      "emm's Valgrind tool, the whole run of an unmodified binary; emm run starts it")       \
+    X(SANCOV, sancov, EMM_CAP_WHOLE_RUN | EMM_CAP_PCS | EMM_CAP_WORK,                          \
+      "a build with emm_sancov_executable")                                                   \
+    X(API, api, EMM_CAP_WHOLE_RUN, "programs using emm_mesh_*")                              \
+    X(FAULT, fault, 0, "page protection, profiling window only")
+
+/* How accesses are captured: EMM_CAPTURE_AUTO (the shim picks), then the
+ * list's backends. */
 typedef enum emm_capture {
-    EMM_CAPTURE_AUTO = 0, /* the shim picks */
-    EMM_CAPTURE_SANCOV,   /* a build with emm_sancov_executable */
-    EMM_CAPTURE_FAULT,    /* page protection, the profiling window only */
-    EMM_CAPTURE_API,      /* programs using emm_mesh_* */
-    EMM_CAPTURE_VALGRIND, /* emm's Valgrind tool, the whole run of an unmodified binary */
+    EMM_CAPTURE_AUTO = 0,
+#define EMM_CAPTURE_ENUM_(N, n, caps, help) EMM_CAPTURE_##N,
+    EMM_CAPTURE_LIST(EMM_CAPTURE_ENUM_)
+#undef EMM_CAPTURE_ENUM_
     EMM_CAPTURE_COUNT
 } emm_capture;
 
 /* "auto", "sancov", ... ("?" for other values). */
 EMM_API const char *emm_capture_name(emm_capture c);
+/* The backend's capabilities (emm_capture_cap bits); 0 for auto and for
+ * other values. */
+EMM_API unsigned emm_capture_caps(emm_capture c);
 
 /* What the session simulates beside the chosen strategy. */
 typedef enum emm_compare {
@@ -49,7 +81,6 @@ EMM_API const char *emm_compare_name(emm_compare c);
 
 /* ---- EMM_TAG rules ------------------------------------------------------- */
 
-#define EMM_TAG_RULES_MAX 16
 #define EMM_TAG_SITE_MAX 128
 
 /* How a rule's block holds its records. */
@@ -86,9 +117,11 @@ typedef struct emm_tag_rule {
                                      triangles */
 } emm_tag_rule;
 
+/* The rules, as many as EMM_TAG has: rule[0..n), malloc'ed (NULL when n is
+ * 0), owned by whoever parsed them (emm_tag_rules_free). */
 typedef struct emm_tag_rules {
     size_t n;
-    emm_tag_rule rule[EMM_TAG_RULES_MAX];
+    emm_tag_rule *rule;
 } emm_tag_rules;
 
 /* Parses EMM_TAG's grammar: rules split by ';', each KIND:key=value,...
@@ -97,6 +130,8 @@ typedef struct emm_tag_rules {
  * z=) come in sets: every axis rule needs an x rule and a y rule of its
  * stride and type (z is optional: the layouts work in the plane). */
 EMM_API emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *err);
+/* Frees the rules emm_tag_rules_parse made; *rs is then empty. */
+EMM_API void emm_tag_rules_free(emm_tag_rules *rs);
 /* A rule as EMM_TAG spells it ("vertices:site=read_mesh,stride=24,xyz=0:f64"),
  * into out (cap bytes, NUL included; cut when it does not fit). */
 EMM_API void emm_tag_rule_format(const emm_tag_rule *r, char *out, size_t cap);
@@ -125,6 +160,38 @@ EMM_API void emm_tag_site_names(const char *symbol, const char *demangled, char 
 /* Whether a rule's site= names a frame: its name, its qualified name, or a
  * tail of that ("PropertyT::resize"). */
 EMM_API int emm_tag_site_matches(const char *site, const char *name, const char *qualified);
+
+/* One tagged block, described whole: what the shim resolved of an
+ * emm_tag_* call or of the EMM_TAG rule that selected the block. The
+ * session (emm_session_tag) needs nothing else to read it: no rule to look
+ * up again. */
+typedef struct emm_array_desc {
+    emm_array_kind kind;  /* VERTICES or TRIANGLES (a soup's records are triangles) */
+    emm_tag_shape shape;  /* records, three columns, a soup, or one coordinate's block */
+    int axis;             /* EMM_TAG_AXIS: the coordinate, 0 x, 1 y, 2 z; else ignored */
+    const void *base;     /* the block's address in the program */
+    uint64_t count;       /* records (EMM_TAG_COLUMNS: entries, three columns of count / 3) */
+    uint64_t stride;      /* bytes per record (per entry) */
+    uint64_t offset;      /* where the scalars start in a record: three coordinates or vertex
+                             indices, a soup's nine corner coordinates, an axis block's one */
+    emm_scalar type;
+    unsigned rule;        /* the EMM_TAG rule that selected the block, from 1: `count` is then
+                             the block's capacity, and the records the mesh has are those the
+                             program writes or indexes (the highest element accessed, and for
+                             vertices the highest index the triangles hold), taken when the
+                             geometry is read; blocks of one rule are told apart from others'.
+                             0: an emm_tag_* call, `count` records exactly */
+    const char *origin;   /* who described it, for messages: "EMM_TAG rule 2 (triangles:...)"
+                             (copied); NULL: "the emm_tag_vertices call" or its triangles' */
+} emm_array_desc;
+
+/* The description of a block of `bytes` bytes at `base` that rule r (the
+ * index-th of its rules, from 0) selected: count = bytes / stride, and
+ * origin "EMM_TAG rule N (TEXT)" written into origin_buf (cap bytes), to
+ * which d->origin then points. */
+EMM_API void emm_tag_rule_describe(const emm_tag_rule *r, size_t index, const void *base,
+                                   uint64_t bytes, emm_array_desc *d, char *origin_buf,
+                                   size_t cap);
 
 /* An allocation site the shim saw while looking for a rule's blocks. */
 typedef struct emm_tag_site_seen {
@@ -183,7 +250,8 @@ typedef enum emm_config_key {
 #define EMM_CONFIG_DEFAULT_WINDOW 16384u
 
 /* Every setting, parsed. Paths are "" when unset; output paths have %p
- * (the pid) and %% expanded. */
+ * (the pid) and %% expanded. A config owns its tag rules: emm_config_free
+ * releases them, emm_config_copy copies them. */
 typedef struct emm_config {
     int strict;                   /* EMM_STRICT */
     emm_tag_rules tags;           /* EMM_TAG; tags.n == 0 when unset */
@@ -233,6 +301,11 @@ EMM_API const emm_config_row *emm_config_row_get(emm_config_key k);
 
 /* Every row at its default. */
 EMM_API void emm_config_init(emm_config *c);
+/* Releases what c owns (its tag rules); c is then at its defaults. */
+EMM_API void emm_config_free(emm_config *c);
+/* *dst becomes a copy of *src that owns its own rules (dst is not freed
+ * first). EMM_ERR_NOMEM leaves dst at its defaults. */
+EMM_API emm_status emm_config_copy(emm_config *dst, const emm_config *src);
 
 /* Sets row k from `value`, given as `source` (the variable or the option:
  * it names the value in messages and is recorded in c->source[k]; it must
@@ -258,6 +331,12 @@ EMM_API emm_config_key emm_config_find_option(const char *arg, const char **fixe
 /* The table for --help: `options` nonzero lists the `emm run` options with
  * their variables, zero the variables alone. */
 EMM_API void emm_config_help(FILE *out, int options);
+
+/* Row k's value in c as text that emm_config_set turns back into the same
+ * value (output paths with their % doubled, so that a second expansion
+ * leaves them as they are), into out (cap bytes, NUL included). Returns
+ * false when it does not fit, or for EMM_STRATEGY when none is set. */
+EMM_API int emm_config_format(const emm_config *c, emm_config_key k, char *out, size_t cap);
 
 /* The values in force, one "emm:   EMM_X=value" line each (EMM_LOG=2). */
 EMM_API void emm_config_dump(const emm_config *c, FILE *out);

@@ -19,11 +19,17 @@
  *   emm_session_free()
  * The caller must make the tagged arrays readable before emm_session_decide
  * (the fault backend lifts its page protection first). Nothing grows with the
- * run's length unless the config asks for a trace. */
+ * run's length unless the config asks for a trace.
+ *
+ * The session's work happens in one engine, reached in this process or, with
+ * config.server, in a native process of its own (emm-session) that serves
+ * the calls made here; both give the same results. */
 #ifndef EMM_SESSION_H
 #define EMM_SESSION_H
 
 #include <stdio.h>
+
+#include <stdint.h>
 
 #include "emm/common.h"
 #include "emm/config.h"
@@ -34,6 +40,19 @@ extern "C" {
 #endif
 
 typedef struct emm_session emm_session;
+
+/* How a session reads a program that is not this process (emm-session
+ * serving a program under Valgrind). */
+typedef struct emm_session_memory {
+    /* A copy of the program's bytes [addr, addr + len), malloc'ed (the
+     * session frees it), or NULL when they cannot be had now. */
+    void *(*read)(void *ctx, uint64_t addr, uint64_t len);
+    /* The program's loaded objects (emm/trace.h), malloc'ed as one block
+     * the session frees, into *out and *n; false when they cannot be had
+     * now (the session keeps those it had). May be NULL. */
+    int (*modules)(void *ctx, emm_trace_module **out, uint32_t *n);
+    void *ctx;
+} emm_session_memory;
 
 typedef struct emm_session_config {
     const emm_config *config; /* the settings (emm/config.h), copied; NULL: the defaults */
@@ -48,6 +67,8 @@ typedef struct emm_session_config {
                                * own, and this handle forwards every call to it (the valgrind
                                * capture, whose program runs under Valgrind). Its summary goes
                                * to this process's stderr. */
+    const emm_session_memory *memory; /* NULL: the tagged arrays are this process's memory;
+                               * else how to read the program's (copied) */
 } emm_session_config;
 
 /* One captured access, as the capture backends record it: the address, the
@@ -80,21 +101,11 @@ typedef enum emm_session_state {
 EMM_API emm_status emm_session_new(const emm_session_config *cfg, emm_session **out,
                                    emm_error *err);
 
-/* A tagged array: `count` records of `stride` bytes at `base`; the
- * coordinates (vertices) or vertex indices (triangles) are consecutive
- * scalars of `type` at `field_offset`. Returns the array's index (>= 0) or
- * -1 when the session takes no more arrays (it then ignores this one). A
- * range already tagged is re-tagged (realloc keeps tags right). */
-EMM_API int emm_session_tag(emm_session *s, emm_array_kind kind, const void *base, size_t count,
-                            size_t stride, size_t field_offset, emm_scalar type);
-/* emm_session_tag for a block an EMM_TAG rule selected (config->tags.rule[rule],
- * rule >= 0): `count` is the block's capacity, and the records the mesh has
- * are those the program writes or indexes (the highest element accessed,
- * and for vertices the highest index the triangles hold), taken when the
- * geometry is read. Messages about the array name the rule. */
-EMM_API int emm_session_tag_rule(emm_session *s, emm_array_kind kind, const void *base,
-                                 size_t count, size_t stride, size_t field_offset,
-                                 emm_scalar type, int rule);
+/* A tagged array. Returns the array's index (>= 0), or -1 when the session
+ * ignores it (a description that does not hold together: a field past the
+ * stride, a type the kind cannot have, no records; or the session is off).
+ * A range already tagged is re-tagged (realloc keeps tags right). */
+EMM_API int emm_session_tag(emm_session *s, const emm_array_desc *d);
 /* The array at `old` moved to `base` and now holds `count` records (realloc):
  * the same array, its window records and its place kept — the window does
  * not close. Nothing happens when `old` is not a tagged array. */
@@ -135,6 +146,14 @@ EMM_API emm_session_state emm_session_iteration(emm_session *s);
  * as they are then or as they were freed; the summary and the report
  * (coverage.geometry_read "end") say so, or why it failed again. */
 EMM_API emm_status emm_session_decide(emm_session *s, emm_error *err);
+/* emm_session_decide in its two parts, for a caller that lets the program
+ * go on between them: _read reads everything the decision needs of the
+ * program (the geometry, the arrays frozen, the objects a trace will name)
+ * — after it the program's memory is not read again until the next call
+ * that changes the tags — and _rest profiles, decides, builds the models
+ * and replays the window. A failure of either is as emm_session_decide's. */
+EMM_API emm_status emm_session_decide_read(emm_session *s, emm_error *err);
+EMM_API emm_status emm_session_decide_rest(emm_session *s, emm_error *err);
 
 /* Ends the session: decides if the window never filled, writes the summary
  * to `summary` (NULL: none; nothing at log 0), the JSON report, the CSV and
@@ -160,12 +179,6 @@ EMM_API void emm_session_free(emm_session *s);
  * another process (config.server) lets go of its connection; every later
  * call does nothing. Call it before anything else in the child. */
 EMM_API void emm_session_forked(emm_session *s);
-
-/* emm-session's body: serves one program's session over the socket `fd`
- * (the other end is a handle made with config.server) until the program
- * closes it. Returns when the program has gone; the session's outputs were
- * written at its finish. */
-EMM_API emm_status emm_session_serve(int fd, emm_error *err);
 
 #ifdef __cplusplus
 }

@@ -29,7 +29,7 @@ static void set(const char *name, const char *value)
 static bool parse(emm_config *e, char *msg)
 {
     emm_error err;
-    emm_config_init(e);
+    emm_config_free(e); /* the rules of the previous parse, if any */
     msg[0] = '\0';
     if (emm_config_from_env(e, fake_get, 4242, 0, &err) == EMM_OK)
         return true;
@@ -37,10 +37,39 @@ static bool parse(emm_config *e, char *msg)
     return false;
 }
 
+/* EMM_TAG takes as many rules as it is given, and a copy of a config owns
+ * rules of its own. */
+static void many_rules(void)
+{
+    char text[40 * 48] = "";
+    for (int i = 0; i < 40; i++)
+        snprintf(text + strlen(text), sizeof text - strlen(text),
+                 "%svertices:nth=%d,stride=24,xyz=0:f64", i ? ";" : "", i + 1);
+    emm_config c, d;
+    emm_error err;
+    emm_config_init(&c);
+    CHECKF(emm_config_set(&c, EMM_CONFIG_TAG, text, NULL, 1, &err) == EMM_OK, "%s", err.message);
+    CHECK(c.tags.n == 40 && c.tags.rule[39].nth == 40);
+    REQUIRE(emm_config_copy(&d, &c) == EMM_OK);
+    CHECK(d.tags.n == 40 && d.tags.rule != c.tags.rule && d.tags.rule[39].nth == 40);
+    /* A second value replaces the rules; a bad one leaves them. */
+    CHECK(emm_config_set(&c, EMM_CONFIG_TAG, "triangles:stride=12,vidx=0:i32", NULL, 1, &err) ==
+          EMM_OK);
+    CHECK(c.tags.n == 1 && c.tags.rule[0].kind == EMM_ARRAY_TRIANGLES);
+    CHECK(emm_config_set(&c, EMM_CONFIG_TAG, "garbage", NULL, 1, &err) != EMM_OK);
+    CHECK(c.tags.n == 1 && c.tags.rule[0].kind == EMM_ARRAY_TRIANGLES);
+    emm_config_free(&c);
+    CHECK(c.tags.n == 0 && c.tags.rule == NULL);
+    CHECK(d.tags.rule[0].nth == 1);
+    emm_config_free(&d);
+}
+
 int main(void)
 {
     emm_config e;
     char msg[600];
+    emm_config_init(&e);
+    many_rules();
 
     nvars = 0;
     CHECK(parse(&e, msg));
@@ -129,7 +158,7 @@ int main(void)
           strcmp(fixed, "1") == 0);
     CHECK(emm_config_find_option("--nonsense", &fixed) == EMM_CONFIG_COUNT);
     emm_error err;
-    emm_config_init(&e);
+    emm_config_free(&e);
     CHECK(emm_config_set(&e, EMM_CONFIG_REPORT, "nodir/x.json", "--report", 1, &err) ==
           EMM_ERR_INVALID);
     CHECKF(strcmp(err.message, "--report='nodir/x.json': directory nodir does not exist") == 0,
@@ -147,5 +176,6 @@ int main(void)
         emm_config_dump(&e, devnull);
         fclose(devnull);
     }
+    emm_config_free(&e);
     return check_done();
 }

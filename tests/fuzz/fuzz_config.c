@@ -22,6 +22,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         fprintf(stderr, "fuzz: a refused value changed the configuration\n");
         abort();
     }
+    emm_config_free(c);
     free(c);
     free(before);
     free(s);

@@ -1,4 +1,4 @@
-/* The session server's frames (runtime/session_remote.c): what emm-session
+/* The session server's frames (runtime/session_wire.h): what emm-session
  * reads from the shim's socket. The harness starts a session as the shim
  * would (a valid start frame, the default settings, so no file is
  * written), then sends the input as the rest of the stream: calls, the
@@ -6,7 +6,8 @@
  * stream ends, whatever came, without a crash, a hang or an allocation the
  * bytes did not pay for. */
 #include "fuzz.h"
-#include "session_internal.h"
+#include "server.h"
+#include "session_wire.h"
 
 #include <pthread.h>
 #include <sys/socket.h>
@@ -54,17 +55,24 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         abort();
     emm_config cfg;
     emm_config_init(&cfg);
-    emm_session_config sc = {&cfg, EMM_CAPTURE_VALGRIND, "fuzz", 0, {1, NULL, NULL}, NULL};
-    unsigned char *start;
-    size_t nstart;
-    if (session_wire_start(&sc, &start, &nstart) != EMM_OK)
+    emm_session_config sc = {&cfg, EMM_CAPTURE_VALGRIND, "fuzz", 0, {1, NULL, NULL}, NULL, NULL};
+    unsigned char *payload, *start;
+    size_t npayload;
+    if (!wire_start_encode(&sc, 4242, &payload, &npayload))
         abort();
+    struct wire_frame head = {.op = WIRE_NEW, .wait = 1, .len = npayload};
+    size_t nstart = sizeof head + npayload;
+    if (!(start = malloc(nstart)))
+        abort();
+    memcpy(start, &head, sizeof head);
+    memcpy(start + sizeof head, payload, npayload);
+    free(payload);
     struct feed f = {sv[0], start, data, nstart, size};
     pthread_t w, d;
     if (pthread_create(&w, NULL, writer, &f) != 0 || pthread_create(&d, NULL, drain, &sv[0]) != 0)
         abort();
     emm_error err;
-    emm_status st = emm_session_serve(sv[1], &err);
+    emm_status st = emm_server_serve(sv[1], &err);
     fuzz_check_error(st, &err);
     close(sv[1]); /* the drain sees the end */
     pthread_join(w, NULL);

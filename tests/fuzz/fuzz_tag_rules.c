@@ -7,7 +7,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     char *s = fuzz_string(data, size);
     emm_tag_rules rules;
     emm_error err;
-    fuzz_check_error(emm_tag_rules_parse(s, &rules, &err), &err);
+    emm_status st = emm_tag_rules_parse(s, &rules, &err);
+    fuzz_check_error(st, &err);
+    if (st == EMM_OK)
+        emm_tag_rules_free(&rules);
     free(s);
     return 0;
 }

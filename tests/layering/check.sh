@@ -1,6 +1,7 @@
 #!/bin/sh
 # The layering rule of docs/architecture.md: core < simulator < runtime <
-# shim < tools, and no source includes a header of a layer above its own.
+# shim < tools (and server, emm-session, beside tools), and no source
+# includes a header of a layer above its own.
 # Internal headers belong to the folder they sit in; each public header in
 # include/emm/ belongs to the layer that implements it (the table below: a
 # public header missing from it is an error, so a new one gets a layer).
@@ -13,7 +14,8 @@ cd "$root"
 # layer ranks
 rank() {
   case $1 in
-    core) echo 0 ;; simulator) echo 1 ;; runtime) echo 2 ;; shim) echo 3 ;; tools) echo 4 ;;
+    core) echo 0 ;; simulator) echo 1 ;; runtime) echo 2 ;; shim) echo 3 ;;
+    tools|server) echo 4 ;;
     *) echo '' ;;
   esac
 }
@@ -22,8 +24,9 @@ rank() {
 public_layer() {
   case $1 in
     common.h|strategy.h|config.h) echo core ;;
-    sim.h|trace.h|layout.h|runner.h) echo simulator ;;
-    mesh.h|profile.h|table.h|synth.h|session.h|replay.h|tag.h|sites.h) echo runtime ;;
+    sim.h|trace.h|layout.h) echo simulator ;;
+    mesh.h|profile.h|table.h|synth.h|session.h|replay.h|tag.h|sites.h|agent.h|guard.h)
+      echo runtime ;;
     *) echo '' ;;
   esac
 }
@@ -37,7 +40,7 @@ for h in include/emm/*.h; do
   fi
 done
 
-for layer in core simulator runtime shim tools; do
+for layer in core simulator runtime shim tools server; do
   [ -d "$layer" ] || continue
   mine=$(rank $layer)
   for f in $(find "$layer" -type f \( -name '*.c' -o -name '*.cpp' -o -name '*.h' \) | sort); do
@@ -50,7 +53,7 @@ for layer in core simulator runtime shim tools; do
         */*) owner='' ;;  # a path into another tree (a system or package header)
         *)
           owner=''
-          for l in core simulator runtime shim tools; do
+          for l in core simulator runtime shim tools server; do
             if [ -f "$l/$inc" ]; then owner=$l; break; fi
           done
           ;;

@@ -167,6 +167,26 @@ static emm_session_config base_config(void)
     return c;
 }
 
+/* An emm_tag_* call's array, as the shim hands it over. */
+static int tag_call(emm_session *s, emm_array_kind kind, const void *base, size_t count,
+                    size_t stride, size_t offset, emm_scalar type)
+{
+    emm_array_desc d = {kind, EMM_TAG_RECORDS, -1, base, count, stride, offset, type, 0, NULL};
+    return emm_session_tag(s, &d);
+}
+
+/* A block of `count` entries that rule `rule` (from 0) of the session's
+ * EMM_TAG selected, described as the shim describes it. */
+static int tag_rule(emm_session *s, const void *base, uint64_t count, size_t rule)
+{
+    emm_array_desc d;
+    char origin[600];
+    REQUIRE(rule < tcfg.tags.n);
+    const emm_tag_rule *r = &tcfg.tags.rule[rule];
+    emm_tag_rule_describe(r, rule, base, count * r->stride, &d, origin, sizeof origin);
+    return emm_session_tag(s, &d);
+}
+
 static void set_strategy(const char *text)
 {
     emm_error err;
@@ -175,8 +195,8 @@ static void set_strategy(const char *text)
 
 static void tag_all(emm_session *s)
 {
-    CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_F64) >= 0);
-    CHECK(emm_session_tag(s, EMM_ARRAY_TRIANGLES, tmem, nt, TSTRIDE, 4, EMM_I32) >= 0);
+    CHECK(tag_call(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_F64) >= 0);
+    CHECK(tag_call(s, EMM_ARRAY_TRIANGLES, tmem, nt, TSTRIDE, 4, EMM_I32) >= 0);
 }
 
 /* Feeds every record as raw accesses in batches of `batch`, deciding when
@@ -698,8 +718,8 @@ static void test_bad_geometry(void)
     strcpy(tcfg.report, "bad.json");
     remove("bad.json");
     REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
-    CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_F64) >= 0);
-    CHECK(emm_session_tag(s, EMM_ARRAY_TRIANGLES, tmem, nt, TSTRIDE, 0, EMM_I64) >= 0);
+    CHECK(tag_call(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_F64) >= 0);
+    CHECK(tag_call(s, EMM_ARRAY_TRIANGLES, tmem, nt, TSTRIDE, 0, EMM_I64) >= 0);
     /* Not in index order: no leading sweep. */
     emm_raw_access a[WINDOW];
     for (size_t i = 0; i < WINDOW; i++)
@@ -729,11 +749,11 @@ static void test_tags(void)
     emm_session_config c = base_config();
     set_strategy("direct");
     REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
-    CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 78, EMM_F64) < 0);
-    CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_I32) < 0);
-    CHECK(emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, 0, VSTRIDE, 8, EMM_F64) < 0);
-    int a = emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv / 2, VSTRIDE, 8, EMM_F64);
-    int b = emm_session_tag(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_F64);
+    CHECK(tag_call(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 78, EMM_F64) < 0);
+    CHECK(tag_call(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_I32) < 0);
+    CHECK(tag_call(s, EMM_ARRAY_VERTICES, vmem, 0, VSTRIDE, 8, EMM_F64) < 0);
+    int a = tag_call(s, EMM_ARRAY_VERTICES, vmem, nv / 2, VSTRIDE, 8, EMM_F64);
+    int b = tag_call(s, EMM_ARRAY_VERTICES, vmem, nv, VSTRIDE, 8, EMM_F64);
     CHECK(a >= 0 && b >= 0);
     uint64_t lo[4], hi[4];
     CHECK(emm_session_ranges(s, lo, hi, 4) == 1 && hi[0] == vbase + nv * VSTRIDE);
@@ -792,6 +812,7 @@ static emm_session *new_tagged(const char *rules, const char *trace, const char 
     emm_session *s;
     emm_session_config c = base_config();
     set_strategy("direct");
+    emm_tag_rules_free(&tcfg.tags);
     REQUIRE(emm_tag_rules_parse(rules, &tcfg.tags, &err) == EMM_OK);
     if (trace)
         strcpy(tcfg.trace, trace);
@@ -823,8 +844,8 @@ static void test_shapes(void)
     s = new_tagged("vertices:order=columns,xyz=0:f64;triangles:order=columns,vidx=0:i32",
                    "shapes.emmt", NULL);
     /* The shim hands a rule's block over as entries of `stride` bytes. */
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, V, 12, 8, 0, EMM_F64, 0) >= 0);
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_TRIANGLES, F, 6, 4, 0, EMM_I32, 1) >= 0);
+    CHECK(tag_rule(s, V, 12, 0) >= 0);
+    CHECK(tag_rule(s, F, 6, 1) >= 0);
     uint64_t lo[4], hi[4];
     CHECK(emm_session_ranges(s, lo, hi, 4) == 2 && lo[0] == (uintptr_t)V &&
           hi[0] == (uintptr_t)(V + 12));
@@ -860,7 +881,7 @@ static void test_shapes(void)
     static struct facet soup[2] = {{7, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}},
                                    {8, {{0, 0, 0}, {1, 1, -0.0f}, {0, 1, 0}}}};
     s = new_tagged("soup:stride=40,corners=4:f32", "soup.emmt", NULL);
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_TRIANGLES, soup, 2, 40, 4, EMM_F32, 0) >= 0);
+    CHECK(tag_rule(s, soup, 2, 0) >= 0);
     emm_raw_access b[] = {
         {(uintptr_t)&soup[1].id, 4, 0, 0},      /* triangle 1, not a corner */
         {(uintptr_t)&soup[0].c[2][1], 4, 0, 0}, /* triangle 0's third corner's y */
@@ -882,7 +903,7 @@ static void test_shapes(void)
                        "triangle %d corner %d: %g, not %g", t, k, xyz[3 * tri[3 * t + k] + d],
                        (double)soup[t].c[k][d]);
     CHECK(tri[3] == tri[0] && tri[4] == tri[2]); /* the shared edge's corners are shared */
-    memset(&tcfg.tags, 0, sizeof tcfg.tags);
+    emm_tag_rules_free(&tcfg.tags);
 }
 
 /* finish's summary into text (cap bytes); returns finish's status. */
@@ -932,10 +953,10 @@ static void test_axes(void)
                    "vertices:stride=16,z=8:f64;triangles:stride=12,vidx=0:i32",
                    "axes.emmt", NULL);
     /* The blocks in another order than their axes: the rules say which is which. */
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, Z, 4, 16, 8, EMM_F64, 2) >= 0);
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, X, 4, 16, 8, EMM_F64, 0) >= 0);
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, Y, 4, 16, 8, EMM_F64, 1) >= 0);
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_TRIANGLES, F, 2, 12, 0, EMM_I32, 3) >= 0);
+    CHECK(tag_rule(s, Z, 4, 2) >= 0);
+    CHECK(tag_rule(s, X, 4, 0) >= 0);
+    CHECK(tag_rule(s, Y, 4, 1) >= 0);
+    CHECK(tag_rule(s, F, 2, 3) >= 0);
     uint64_t lo[8], hi[8];
     CHECK(emm_session_ranges(s, lo, hi, 8) == 4);
     emm_raw_access a[] = {
@@ -969,8 +990,8 @@ static void test_axes(void)
      * before the decision, which reads the copies the session kept. */
     static float x2[4] = {0, 1, 1, 0}, y2[4] = {0, 0, 1, 1};
     s = new_tagged("vertices:x=0:f32;vertices:y=0:f32", "axes2.emmt", NULL);
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, x2, 4, 4, 0, EMM_F32, 0) >= 0);
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, y2, 4, 4, 0, EMM_F32, 1) >= 0);
+    CHECK(tag_rule(s, x2, 4, 0) >= 0);
+    CHECK(tag_rule(s, y2, 4, 1) >= 0);
     emm_raw_access b[] = {{(uintptr_t)&x2[3], 4, 0, 0}, {(uintptr_t)&y2[3], 4, 0, 0}};
     emm_session_access(s, b, 2);
     CHECK(emm_session_untag(s, x2) == EMM_SESSION_PROFILING); /* y is left */
@@ -991,8 +1012,8 @@ static void test_axes(void)
     static float y3[3] = {0, 0, 1};
     remove("axes.json");
     s = new_tagged("vertices:x=0:f32;vertices:y=0:f32", NULL, "axes.json");
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, x2, 4, 4, 0, EMM_F32, 0) >= 0);
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, y3, 3, 4, 0, EMM_F32, 1) >= 0);
+    CHECK(tag_rule(s, x2, 4, 0) >= 0);
+    CHECK(tag_rule(s, y3, 3, 1) >= 0);
     emm_session_access(s, b, 1);
     CHECK(emm_session_decide(s, &err) != EMM_OK);
     CHECK(finish_summary(s, text, sizeof text) != EMM_OK);
@@ -1009,8 +1030,8 @@ static void test_axes(void)
     static float y4[4] = {0, 0, 1, 1};
     y4[1] = (float)NAN;
     s = new_tagged("vertices:x=0:f32;vertices:y=0:f32", NULL, NULL);
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, x2, 4, 4, 0, EMM_F32, 0) >= 0);
-    CHECK(emm_session_tag_rule(s, EMM_ARRAY_VERTICES, y4, 4, 4, 0, EMM_F32, 1) >= 0);
+    CHECK(tag_rule(s, x2, 4, 0) >= 0);
+    CHECK(tag_rule(s, y4, 4, 1) >= 0);
     emm_session_access(s, b, 1);
     emm_session_decide(s, &err);
     CHECK(finish_summary(s, text, sizeof text) == EMM_ERR_MESH);
@@ -1019,7 +1040,7 @@ static void test_axes(void)
                          "coordinate (is stride or y's offset or type wrong?)"),
            "%s", text);
     emm_session_free(s);
-    memset(&tcfg.tags, 0, sizeof tcfg.tags);
+    emm_tag_rules_free(&tcfg.tags);
 }
 
 int main(void)

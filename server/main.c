@@ -1,14 +1,14 @@
 /* emm-session: the session of a program that runs under Valgrind, run
- * natively beside it (runtime/session_remote.c). libemmshim.so starts it
- * inside the client with a socket as fd 3; `emm run --capture valgrind`
- * tells Valgrind not to trace it (--trace-children-skip). Not for users:
- * started by hand it says so. */
+ * natively beside it (runtime/session_proxy.c starts it). libemmshim.so
+ * starts it inside the client with a socket as fd 3; `emm run --capture
+ * valgrind` tells Valgrind not to trace it (--trace-children-skip). Not
+ * for users: started by hand it says so. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
 
-#include "emm/session.h"
+#include "server.h"
 
 int main(int argc, char **argv)
 {
@@ -21,7 +21,7 @@ int main(int argc, char **argv)
         return 2;
     }
     emm_error err;
-    if (emm_session_serve(3, &err) != EMM_OK) {
+    if (emm_server_serve(3, &err) != EMM_OK) {
         fprintf(stderr, "emm: %s\n", err.message);
         return 1;
     }

@@ -1,0 +1,88 @@
+/* emm — page protection for the fault capture (docs/design.md "The shim
+ * and the session", Capture backends: fault).
+ *
+ * The fault backend (shim/capture_fault.c) sees an unmodified program's
+ * accesses to its tagged arrays by protecting their pages and
+ * single-stepping each access its SIGSEGV handler catches. The guard holds
+ * what that needs beside the signal plumbing: the protected regions (as
+ * many as there are tagged blocks), which pages a fault belongs to, the
+ * pages opened for good when the window closed, and the windows a system
+ * call on protected memory opens. The calls marked signal-safe only read
+ * atomics and call mprotect: a handler may make them. */
+#ifndef EMM_GUARD_H
+#define EMM_GUARD_H
+
+#include <signal.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "emm/common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct emm_guard emm_guard;
+
+/* A guard that watches (protects what it is given); NULL without memory. */
+EMM_API emm_guard *emm_guard_new(void);
+/* Opens every page and frees the guard. NULL is allowed. */
+EMM_API void emm_guard_free(emm_guard *g);
+
+/* While it watches, protects the block at base: its own mapping [map,
+ * map + map_len) whole, or without one the pages wholly inside [base,
+ * base + bytes) (an array tagged after its allocation shares its first and
+ * last pages with other data, which the C library may touch). A block
+ * already protected is opened first. */
+EMM_API void emm_guard_protect(emm_guard *g, uintptr_t base, size_t bytes, void *map,
+                               size_t map_len);
+/* Opens the block at base and forgets it. */
+EMM_API void emm_guard_unprotect(emm_guard *g, uintptr_t base);
+/* Stops watching: every page opens for good. */
+EMM_API void emm_guard_lift(emm_guard *g);
+/* Whether it still watches. Signal-safe. */
+EMM_API int emm_guard_watching(const emm_guard *g);
+
+/* A fault at addr on a protected page: the region it belongs to, and in
+ * *in_array whether addr is inside the array's bytes (else a byte of its
+ * pages beside it). NULL when no region claims the page. Regions stay where
+ * they are for the guard's life, so a handler may hold one. Signal-safe. */
+typedef struct emm_guard_region emm_guard_region;
+EMM_API emm_guard_region *emm_guard_find(emm_guard *g, uintptr_t addr, int *in_array);
+/* A fault no region claims, on pages opened lately: the handler ran after
+ * the window closed or the block left, and the access is to be retried,
+ * once per address and thread (*retried: the thread's last retried
+ * address, updated). Signal-safe. */
+EMM_API int emm_guard_retry(const emm_guard *g, uintptr_t addr, uintptr_t *retried);
+/* After the single step of an access on `page` of region r: protects the
+ * page again unless the guard stopped watching, the region left, or a
+ * system call has it open. Signal-safe. */
+EMM_API void emm_guard_step_done(emm_guard *g, emm_guard_region *r, uintptr_t page);
+
+/* The signals: the C library's sigaction (`real`; the shim interposes
+ * sigaction), on_segv and on_trap installed for SIGSEGV and SIGTRAP
+ * (SA_SIGINFO), the program's own handlers of them kept. False when they
+ * cannot be installed. */
+typedef int (*emm_sigaction_fn)(int sig, const struct sigaction *act, struct sigaction *old);
+EMM_API int emm_guard_install(emm_guard *g, emm_sigaction_fn real,
+                              void (*on_segv)(int, siginfo_t *, void *),
+                              void (*on_trap)(int, siginfo_t *, void *));
+/* The program's sigaction for SIGSEGV or SIGTRAP once installed: its
+ * handler is kept for emm_guard_chain, ours stays in place. */
+EMM_API int emm_guard_sigaction(emm_guard *g, int sig, const struct sigaction *act,
+                                struct sigaction *old);
+/* A SIGSEGV or SIGTRAP that is not the guard's: the program's handler, or
+ * the default action (a real fault re-runs and faults again without us; a
+ * sent or trap-made signal is raised again). From the handler. */
+EMM_API void emm_guard_chain(emm_guard *g, int sig, siginfo_t *si, void *uctx);
+
+/* Opens the protected pages [p, p + n) touches for a system call (read,
+ * write, fread, ...), which would fail with EFAULT on them; returns a
+ * token for emm_guard_io_end, NULL when nothing was opened. */
+EMM_API void *emm_guard_io_begin(emm_guard *g, const void *p, size_t n);
+EMM_API void emm_guard_io_end(emm_guard *g, void *token);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

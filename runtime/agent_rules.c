@@ -1,0 +1,334 @@
+/* EMM_TAG rules at allocation time (runtime/agent_rules.h; docs/design.md
+ * "The shim and the session", Tagging).
+ *
+ * Call-site names come from libunwind (unw_get_proc_name reads .symtab, so a
+ * static function is found in a binary that is not stripped), demangled by
+ * the C++ runtime's __cxa_demangle when the process has one (libemm brings
+ * libstdc++). libunwind is dlopen'ed RTLD_LOCAL rather than linked:
+ * libunwind.so.8 also defines the _Unwind_* ABI, and a dependency of the
+ * preloaded shim would put those ahead of libgcc_s's for the program's C++
+ * exceptions. Names are cached by return address, so each frame is named
+ * once.
+ *
+ * The stack is unwound from inside this library: its own frames come first
+ * and are left out, then the shim's and the allocator's (library frames),
+ * then the program's. site= matches any frame of the program's, by its name
+ * or its qualified name. A rule follows the first call path (the return
+ * addresses from the innermost frame of the program's to the frame it
+ * names) it selects: a growing array reallocates from that same path, and
+ * the site's other allocations are left to later rules. What the rules saw
+ * is kept for the line at exit that says a rule matched nothing. */
+#define UNW_LOCAL_ONLY
+#include <libunwind.h>
+
+#include "agent_rules.h"
+
+#include <dlfcn.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "error.h"
+
+/* The name cache: return address -> the frame's two names in a pool. */
+#define CACHE_SLOTS 4096
+#define POOL_BYTES (256 * 1024)
+
+struct unwinder {
+    int (*getcontext)(unw_context_t *);
+    int (*init_local)(unw_cursor_t *, unw_context_t *);
+    int (*step)(unw_cursor_t *);
+    int (*get_reg)(unw_cursor_t *, int, unw_word_t *);
+    int (*get_proc_name)(unw_cursor_t *, char *, size_t, unw_word_t *);
+    char *(*demangle)(const char *, char *, size_t *, int *);
+};
+
+struct agent_rules {
+    const emm_tag_rules *rs;
+    /* Per rule: blocks the other selectors selected (nth=), the call path
+     * the rule follows (a hash; 0: none yet) and the blocks it selected.
+     * Atomic. */
+    uint64_t *seen, *bound, *selected;
+    bool have_unwinder;
+    struct unwinder unw;
+    const void *own_base; /* this library's load address: its frames are left out */
+    pthread_mutex_t lock; /* the cache and the sites seen */
+    uintptr_t ip[CACHE_SLOTS];
+    uint32_t name[CACHE_SLOTS]; /* offset in pool of "name\0qualified\0"; UINT32_MAX: none */
+    bool skip[CACHE_SLOTS];     /* an allocator or standard-library frame */
+    char pool[POOL_BYTES];
+    size_t used;
+    /* the sites seen: the innermost frame of the program's, by name */
+    emm_tag_site_seen *sites;
+    size_t nsites, csites;
+};
+
+static emm_status open_unwinder(agent_rules *m, bool stacks, emm_error *err)
+{
+#if defined(__x86_64__)
+    void *h = dlopen("libunwind.so.8", RTLD_NOW | RTLD_LOCAL);
+    if (!h)
+        return emm_fail(err, EMM_ERR_IO, "%s needs libunwind.so.8: %s",
+                        stacks ? "EMM_LIST_SITES" : "EMM_TAG: site=", dlerror());
+    struct unwinder *u = &m->unw;
+    *(void **)&u->getcontext = dlsym(h, "_Ux86_64_getcontext");
+    *(void **)&u->init_local = dlsym(h, "_ULx86_64_init_local");
+    *(void **)&u->step = dlsym(h, "_ULx86_64_step");
+    *(void **)&u->get_reg = dlsym(h, "_ULx86_64_get_reg");
+    *(void **)&u->get_proc_name = dlsym(h, "_ULx86_64_get_proc_name");
+    if (!u->getcontext || !u->init_local || !u->step || !u->get_reg || !u->get_proc_name)
+        return emm_fail(err, EMM_ERR_IO,
+                        "EMM_TAG: site= needs libunwind.so.8, which lacks the local unwinder");
+    *(void **)&u->demangle = dlsym(RTLD_DEFAULT, "__cxa_demangle");
+    Dl_info self;
+    if (dladdr((void *)open_unwinder, &self))
+        m->own_base = self.dli_fbase;
+    m->have_unwinder = true;
+    return EMM_OK;
+#else
+    (void)m;
+    (void)stacks;
+    return emm_fail(err, EMM_ERR_INVALID, "EMM_TAG: site= is supported on x86-64 only");
+#endif
+}
+
+emm_status agent_rules_new(const emm_tag_rules *rs, bool stacks, agent_rules **out,
+                           emm_error *err)
+{
+    *out = NULL;
+    agent_rules *m = calloc(1, sizeof *m);
+    size_t n = rs->n ? rs->n : 1;
+    if (m) {
+        m->seen = calloc(n, sizeof *m->seen);
+        m->bound = calloc(n, sizeof *m->bound);
+        m->selected = calloc(n, sizeof *m->selected);
+    }
+    if (!m || !m->seen || !m->bound || !m->selected) {
+        agent_rules_free(m);
+        return emm_fail(err, EMM_ERR_NOMEM, "libemmshim.so: out of memory for the rules");
+    }
+    m->rs = rs;
+    pthread_mutex_init(&m->lock, NULL);
+    bool need = stacks;
+    for (size_t i = 0; i < rs->n; i++)
+        need = need || rs->rule[i].site[0];
+    emm_status st = need ? open_unwinder(m, stacks, err) : EMM_OK;
+    if (st != EMM_OK) {
+        agent_rules_free(m);
+        return st;
+    }
+    *out = m;
+    return EMM_OK;
+}
+
+void agent_rules_free(agent_rules *m)
+{
+    if (!m)
+        return;
+    free(m->seen);
+    free(m->bound);
+    free(m->selected);
+    free(m->sites);
+    free(m);
+}
+
+size_t agent_rules_min(const agent_rules *m)
+{
+    size_t least = SIZE_MAX;
+    for (size_t i = 0; i < m->rs->n; i++)
+        if (m->rs->rule[i].min < least)
+            least = (size_t)m->rs->rule[i].min;
+    return least;
+}
+
+/* The names of the function at the cursor's frame ("name\0qualified\0"), or
+ * NULL; *skip says whether the frame belongs to an allocator or a library. */
+static const char *frame_name(agent_rules *m, unw_cursor_t *cur, uintptr_t ip, bool *skip)
+{
+    size_t h = (ip >> 2) * 2654435761u % CACHE_SLOTS;
+    pthread_mutex_lock(&m->lock);
+    for (size_t i = 0; i < CACHE_SLOTS; i++) {
+        size_t s = (h + i) % CACHE_SLOTS;
+        if (m->ip[s] == ip) {
+            uint32_t off = m->name[s];
+            *skip = m->skip[s];
+            pthread_mutex_unlock(&m->lock);
+            return off == UINT32_MAX ? NULL : m->pool + off;
+        }
+        if (m->ip[s] == 0)
+            break;
+    }
+    pthread_mutex_unlock(&m->lock);
+
+    /* Named outside the lock: unw_get_proc_name may take the loader's. */
+    char raw[1024], names[2 * EMM_TAG_SITE_MAX + 256];
+    unw_word_t off;
+    Dl_info info;
+    bool named = m->unw.get_proc_name(cur, raw, sizeof raw, &off) == 0;
+    size_t need = 0;
+    if (named) {
+        int status = -1;
+        char *dm = m->unw.demangle && raw[0] == '_' && raw[1] == 'Z'
+                       ? m->unw.demangle(raw, NULL, NULL, &status)
+                       : NULL;
+        char qual[EMM_TAG_SITE_MAX + 256];
+        emm_tag_site_names(raw, status == 0 ? dm : NULL, names, EMM_TAG_SITE_MAX, qual,
+                           sizeof qual);
+        free(dm);
+        size_t ln = strlen(names) + 1, lq = strlen(qual) + 1;
+        memcpy(names + ln, qual, lq);
+        need = ln + lq;
+    }
+    *skip = emm_tag_site_is_library(named ? raw : NULL,
+                                    dladdr((void *)ip, &info) ? info.dli_fname : NULL);
+
+    const char *result = NULL;
+    pthread_mutex_lock(&m->lock);
+    uint32_t at = UINT32_MAX;
+    if (named && m->used + need <= POOL_BYTES) {
+        at = (uint32_t)m->used;
+        memcpy(m->pool + at, names, need);
+        m->used += need;
+        result = m->pool + at;
+    }
+    for (size_t i = 0; i < CACHE_SLOTS; i++) {
+        size_t s = (h + i) % CACHE_SLOTS;
+        if (m->ip[s] == 0 && (at != UINT32_MAX || !named)) {
+            m->ip[s] = ip;
+            m->name[s] = at;
+            m->skip[s] = *skip;
+        }
+        if (m->ip[s] == 0 || m->ip[s] == ip)
+            break;
+    }
+    pthread_mutex_unlock(&m->lock);
+    /* A full pool: compare against names that live on in no cache. */
+    if (named && !result) {
+        static __thread char spill[sizeof names];
+        memcpy(spill, names, need);
+        result = spill;
+    }
+    return result;
+}
+
+int agent_rules_stack(agent_rules *m, const char **name, uintptr_t *ip)
+{
+    unw_context_t ctx;
+    unw_cursor_t cur;
+    int n = 0;
+    bool leading = true; /* still in this library's own frames */
+    if (!m->have_unwinder || m->unw.getcontext(&ctx) != 0 || m->unw.init_local(&cur, &ctx) != 0)
+        return 0;
+    for (int depth = 0; depth < AGENT_MAX_FRAMES && m->unw.step(&cur) > 0; depth++) {
+        unw_word_t w;
+        bool skip = false;
+        if (m->unw.get_reg(&cur, UNW_REG_IP, &w) != 0 || w == 0)
+            break;
+        if (leading) {
+            Dl_info info;
+            if (m->own_base && dladdr((void *)w, &info) && info.dli_fbase == m->own_base)
+                continue;
+            leading = false;
+        }
+        const char *nm = frame_name(m, &cur, (uintptr_t)w, &skip);
+        if (!skip) {
+            name[n] = nm;
+            ip[n++] = (uintptr_t)w;
+        }
+    }
+    return n;
+}
+
+/* Counts a block at the innermost frame's site, for the line at exit. */
+static void note_site(agent_rules *m, const char *name, size_t size)
+{
+    if (!name)
+        return;
+    pthread_mutex_lock(&m->lock);
+    size_t i = 0;
+    while (i < m->nsites && strcmp(m->sites[i].name, name) != 0)
+        i++;
+    if (i == m->nsites) {
+        if (m->nsites == m->csites) {
+            size_t cap = m->csites ? 2 * m->csites : 16;
+            emm_tag_site_seen *s = realloc(m->sites, cap * sizeof *s);
+            if (!s) {
+                pthread_mutex_unlock(&m->lock);
+                return;
+            }
+            m->sites = s;
+            m->csites = cap;
+        }
+        memset(&m->sites[i], 0, sizeof m->sites[i]);
+        snprintf(m->sites[i].name, sizeof m->sites[i].name, "%s", name);
+        m->nsites++;
+    }
+    m->sites[i].count++;
+    if (size > m->sites[i].largest)
+        m->sites[i].largest = size;
+    pthread_mutex_unlock(&m->lock);
+}
+
+int agent_rules_match(agent_rules *m, size_t size, const char **site)
+{
+    const char *name[AGENT_MAX_FRAMES];
+    uintptr_t ip[AGENT_MAX_FRAMES];
+    int nframes = -1;
+    *site = NULL;
+    for (size_t i = 0; i < m->rs->n; i++) {
+        const emm_tag_rule *r = &m->rs->rule[i];
+        if (size < r->min)
+            continue;
+        uint64_t path = 0;
+        if (r->site[0]) {
+            if (nframes < 0) {
+                nframes = agent_rules_stack(m, name, ip);
+                note_site(m, nframes > 0 ? name[0] : NULL, size);
+            }
+            int f = 0;
+            while (f < nframes && !(name[f] && emm_tag_site_matches(r->site, name[f],
+                                                                    name[f] + strlen(name[f]) + 1)))
+                f++;
+            if (f == nframes)
+                continue;
+            /* The call path, innermost frame of the program's to the site. */
+            path = 14695981039346656037ull;
+            for (int k = 0; k <= f; k++)
+                path = (path ^ ip[k]) * 1099511628211ull;
+            path |= 1;
+            /* Not the array, or a wrong stride (or n=): never tagged; the
+             * line at exit names the site's blocks that do not fit. */
+            if (!emm_tag_rule_fits(r, size))
+                continue;
+            /* A rule follows the first call path it selects; the site's
+             * other allocations are left to the later rules. */
+            uint64_t expect = 0;
+            if (!__atomic_compare_exchange_n(&m->bound[i], &expect, path, false,
+                                             __ATOMIC_RELAXED, __ATOMIC_RELAXED) &&
+                expect != path)
+                continue;
+            *site = name[f];
+        } else if (!emm_tag_rule_fits(r, size)) {
+            continue;
+        }
+        if (r->nth && __atomic_add_fetch(&m->seen[i], 1, __ATOMIC_RELAXED) != r->nth)
+            continue;
+        __atomic_add_fetch(&m->selected[i], 1, __ATOMIC_RELAXED);
+        return (int)i;
+    }
+    return -1;
+}
+
+void agent_rules_report(agent_rules *m, void (*say)(void *ctx, const char *line), void *ctx)
+{
+    for (size_t i = 0; i < m->rs->n; i++) {
+        if (__atomic_load_n(&m->selected[i], __ATOMIC_RELAXED))
+            continue;
+        char line[1024];
+        pthread_mutex_lock(&m->lock);
+        emm_tag_unmatched_message(&m->rs->rule[i], i, m->sites, m->nsites, line, sizeof line);
+        pthread_mutex_unlock(&m->lock);
+        say(ctx, line);
+    }
+}

@@ -1,0 +1,327 @@
+/* Page protection for the fault capture (emm/guard.h).
+ *
+ * Regions live in chunks that are never moved or freed while the guard
+ * lives, appended to a list: a signal handler walks them with atomic loads
+ * and no lock, and a region it found stays valid however many blocks are
+ * tagged meanwhile. A region's fields change under the guard's lock, with
+ * the order that keeps a racing handler right: a region's pages open
+ * before it leaves, so a thread that faults on them meanwhile still finds
+ * it; a page opened for good is noted (`lifted`) so that a handler that
+ * ran late retries the access instead of taking the fault for the
+ * program's own. */
+#include "emm/guard.h"
+
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#define CHUNK_REGIONS 64
+/* Ranges opened for good lately, kept for late handlers. */
+#define LIFTED 16
+
+struct emm_guard_region {
+    uintptr_t plo, phi; /* protected pages; plo == phi: none */
+    uintptr_t lo, hi;   /* the array's bytes */
+    uintptr_t base;     /* the block's key; 0: a free slot */
+    int io;             /* system calls that have the pages open: changed under the lock,
+                           read atomically by handlers */
+};
+
+struct chunk {
+    struct chunk *next; /* atomic */
+    struct emm_guard_region r[CHUNK_REGIONS];
+};
+
+struct emm_guard {
+    pthread_mutex_t lock;
+    struct chunk *head; /* atomic */
+    int watching;       /* atomic */
+    struct {
+        uintptr_t lo, hi;
+    } lifted[LIFTED];
+    unsigned nlifted;   /* atomic: lifted ranges ever recorded */
+    size_t page;
+    emm_sigaction_fn real;             /* the C library's sigaction */
+    struct sigaction saved_segv, saved_trap; /* the program's handlers */
+};
+
+emm_guard *emm_guard_new(void)
+{
+    emm_guard *g = calloc(1, sizeof *g);
+    if (!g)
+        return NULL;
+    pthread_mutex_init(&g->lock, NULL);
+    g->page = (size_t)sysconf(_SC_PAGESIZE);
+    g->watching = 1;
+    return g;
+}
+
+#define FOR_REGIONS(g, c, r)                                                                  \
+    for (struct chunk *c = __atomic_load_n(&(g)->head, __ATOMIC_ACQUIRE); c;                   \
+         c = __atomic_load_n(&c->next, __ATOMIC_ACQUIRE))                                       \
+        for (struct emm_guard_region *r = c->r; r < c->r + CHUNK_REGIONS; r++)
+
+int emm_guard_watching(const emm_guard *g)
+{
+    return __atomic_load_n(&g->watching, __ATOMIC_RELAXED);
+}
+
+/* The region of the block at base, or with base 0 a free one (a new chunk
+ * when none is free; NULL without memory). With the lock held. */
+static struct emm_guard_region *slot(emm_guard *g, uintptr_t base)
+{
+    FOR_REGIONS(g, c, r)
+        if (r->base == base)
+            return r;
+    if (base)
+        return NULL;
+    struct chunk *n = calloc(1, sizeof *n);
+    if (!n)
+        return NULL;
+    /* Appended last: a handler walking the list sees it whole or not. */
+    struct chunk **at = &g->head;
+    while (*at)
+        at = &(*at)->next;
+    __atomic_store_n(at, n, __ATOMIC_RELEASE);
+    return &n->r[0];
+}
+
+/* Opens r's pages and takes it out; with the lock held. */
+static void open_region(emm_guard *g, struct emm_guard_region *r)
+{
+    uintptr_t plo = r->plo, phi = r->phi;
+    /* The pages open before the region leaves: another thread that faults
+     * on them meanwhile must still find its region (a fault on a page no
+     * region claims is the program's own). */
+    if (plo < phi) {
+        mprotect((void *)plo, phi - plo, PROT_READ | PROT_WRITE);
+        unsigned k = __atomic_load_n(&g->nlifted, __ATOMIC_RELAXED) % LIFTED;
+        __atomic_store_n(&g->lifted[k].lo, 0, __ATOMIC_RELAXED);
+        __atomic_store_n(&g->lifted[k].hi, phi, __ATOMIC_RELAXED);
+        __atomic_store_n(&g->lifted[k].lo, plo, __ATOMIC_RELEASE);
+        __atomic_add_fetch(&g->nlifted, 1, __ATOMIC_RELEASE);
+    }
+    __atomic_store_n(&r->phi, 0, __ATOMIC_RELEASE);
+    __atomic_store_n(&r->plo, 0, __ATOMIC_RELAXED);
+    __atomic_store_n(&r->io, 0, __ATOMIC_RELAXED);
+}
+
+void emm_guard_protect(emm_guard *g, uintptr_t base, size_t bytes, void *map, size_t map_len)
+{
+    pthread_mutex_lock(&g->lock);
+    struct emm_guard_region *r = slot(g, base);
+    if (r)
+        open_region(g, r);
+    else
+        r = slot(g, 0);
+    if (!r || !emm_guard_watching(g)) {
+        if (r)
+            r->base = 0;
+        pthread_mutex_unlock(&g->lock);
+        return;
+    }
+    uintptr_t plo, phi;
+    if (map) {
+        plo = (uintptr_t)map;
+        phi = plo + map_len;
+    } else {
+        plo = (base + g->page - 1) & ~(uintptr_t)(g->page - 1);
+        phi = (base + bytes) & ~(uintptr_t)(g->page - 1);
+    }
+    r->base = base;
+    if (plo < phi) {
+        __atomic_store_n(&r->lo, base, __ATOMIC_RELAXED);
+        __atomic_store_n(&r->hi, base + bytes, __ATOMIC_RELAXED);
+        __atomic_store_n(&r->plo, plo, __ATOMIC_RELAXED);
+        __atomic_store_n(&r->phi, phi, __ATOMIC_RELEASE);
+        mprotect((void *)plo, phi - plo, PROT_NONE);
+    }
+    pthread_mutex_unlock(&g->lock);
+}
+
+void emm_guard_unprotect(emm_guard *g, uintptr_t base)
+{
+    pthread_mutex_lock(&g->lock);
+    struct emm_guard_region *r = base ? slot(g, base) : NULL;
+    if (r) {
+        open_region(g, r);
+        r->base = 0;
+    }
+    pthread_mutex_unlock(&g->lock);
+}
+
+void emm_guard_lift(emm_guard *g)
+{
+    pthread_mutex_lock(&g->lock);
+    /* Before the pages open: a handler that protects a page again after
+     * this store sees it and opens the page (emm_guard_step_done). */
+    __atomic_store_n(&g->watching, 0, __ATOMIC_SEQ_CST);
+    FOR_REGIONS(g, c, r)
+        if (r->base) {
+            open_region(g, r);
+            r->base = 0;
+        }
+    pthread_mutex_unlock(&g->lock);
+}
+
+void emm_guard_free(emm_guard *g)
+{
+    if (!g)
+        return;
+    emm_guard_lift(g);
+    for (struct chunk *c = g->head, *next; c; c = next) {
+        next = c->next;
+        free(c);
+    }
+    pthread_mutex_destroy(&g->lock);
+    free(g);
+}
+
+emm_guard_region *emm_guard_find(emm_guard *g, uintptr_t a, int *in_array)
+{
+    FOR_REGIONS(g, c, r) {
+        uintptr_t plo = __atomic_load_n(&r->plo, __ATOMIC_RELAXED);
+        uintptr_t phi = __atomic_load_n(&r->phi, __ATOMIC_ACQUIRE);
+        if (a >= plo && a < phi) {
+            *in_array = a >= __atomic_load_n(&r->lo, __ATOMIC_RELAXED) &&
+                        a < __atomic_load_n(&r->hi, __ATOMIC_RELAXED);
+            return r;
+        }
+    }
+    return NULL;
+}
+
+int emm_guard_retry(const emm_guard *g, uintptr_t a, uintptr_t *retried)
+{
+    if (*retried == a)
+        return 0;
+    for (unsigned k = 0; k < LIFTED; k++) {
+        uintptr_t lo = __atomic_load_n(&g->lifted[k].lo, __ATOMIC_ACQUIRE);
+        if (lo && a >= lo && a < __atomic_load_n(&g->lifted[k].hi, __ATOMIC_RELAXED)) {
+            *retried = a;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+void emm_guard_step_done(emm_guard *g, emm_guard_region *r, uintptr_t page)
+{
+    if (!emm_guard_watching(g) || __atomic_load_n(&r->io, __ATOMIC_RELAXED) != 0)
+        return;
+    int in;
+    mprotect((void *)page, g->page, PROT_NONE);
+    /* The window closed meanwhile (emm_guard_lift) or the region left: its
+     * pages stay open. */
+    if (!__atomic_load_n(&g->watching, __ATOMIC_SEQ_CST) || emm_guard_find(g, page, &in) != r)
+        mprotect((void *)page, g->page, PROT_READ | PROT_WRITE);
+}
+
+int emm_guard_install(emm_guard *g, emm_sigaction_fn real,
+                      void (*on_segv)(int, siginfo_t *, void *),
+                      void (*on_trap)(int, siginfo_t *, void *))
+{
+    g->real = real;
+    if (real(SIGSEGV, NULL, &g->saved_segv) != 0 || real(SIGTRAP, NULL, &g->saved_trap) != 0)
+        return 0;
+    struct sigaction act;
+    memset(&act, 0, sizeof act);
+    sigemptyset(&act.sa_mask);
+    act.sa_flags = SA_SIGINFO;
+    act.sa_sigaction = on_segv;
+    if (real(SIGSEGV, &act, NULL) != 0)
+        return 0;
+    act.sa_sigaction = on_trap;
+    return real(SIGTRAP, &act, NULL) == 0;
+}
+
+int emm_guard_sigaction(emm_guard *g, int sig, const struct sigaction *act, struct sigaction *old)
+{
+    struct sigaction *pa = sig == SIGSEGV ? &g->saved_segv : &g->saved_trap;
+    if (old)
+        *old = *pa;
+    if (act)
+        *pa = *act;
+    return 0;
+}
+
+void emm_guard_chain(emm_guard *g, int sig, siginfo_t *si, void *uctx)
+{
+    struct sigaction *pa = sig == SIGSEGV ? &g->saved_segv : &g->saved_trap;
+    if (pa->sa_flags & SA_SIGINFO) {
+        void (*h)(int, siginfo_t *, void *) = pa->sa_sigaction;
+        if (pa->sa_flags & SA_RESETHAND)
+            pa->sa_handler = SIG_DFL, pa->sa_flags &= ~SA_SIGINFO;
+        h(sig, si, uctx);
+        return;
+    }
+    void (*h)(int) = pa->sa_handler;
+    if (h == SIG_IGN && sig == SIGTRAP)
+        return;
+    if (h == SIG_DFL || h == SIG_IGN) {
+        struct sigaction dfl;
+        memset(&dfl, 0, sizeof dfl);
+        dfl.sa_handler = SIG_DFL;
+        g->real(sig, &dfl, NULL);
+        if (sig == SIGTRAP || si->si_code <= 0)
+            raise(sig);
+        return;
+    }
+    if (pa->sa_flags & SA_RESETHAND)
+        pa->sa_handler = SIG_DFL;
+    h(sig);
+}
+
+/* The regions a system call has open. */
+struct io_token {
+    size_t n;
+    struct emm_guard_region *r[];
+};
+
+void *emm_guard_io_begin(emm_guard *g, const void *p, size_t n)
+{
+    if (!emm_guard_watching(g) || n == 0)
+        return NULL;
+    uintptr_t a = (uintptr_t)p, b = a + n;
+    size_t hits = 0;
+    FOR_REGIONS(g, c, r)
+        hits += __atomic_load_n(&r->phi, __ATOMIC_RELAXED) > a &&
+                __atomic_load_n(&r->plo, __ATOMIC_RELAXED) < b;
+    if (hits == 0)
+        return NULL;
+    pthread_mutex_lock(&g->lock);
+    hits = 0;
+    FOR_REGIONS(g, c, r)
+        hits += r->plo < r->phi && r->phi > a && r->plo < b;
+    struct io_token *t = hits ? malloc(sizeof *t + hits * sizeof *t->r) : NULL;
+    if (t) {
+        t->n = 0;
+        FOR_REGIONS(g, c, r)
+            if (r->plo < r->phi && r->phi > a && r->plo < b && t->n < hits) {
+                if (__atomic_fetch_add(&r->io, 1, __ATOMIC_RELAXED) == 0)
+                    mprotect((void *)r->plo, r->phi - r->plo, PROT_READ | PROT_WRITE);
+                t->r[t->n++] = r;
+            }
+    }
+    pthread_mutex_unlock(&g->lock);
+    return t;
+}
+
+void emm_guard_io_end(emm_guard *g, void *token)
+{
+    struct io_token *t = token;
+    if (!t)
+        return;
+    pthread_mutex_lock(&g->lock);
+    for (size_t i = 0; i < t->n; i++) {
+        struct emm_guard_region *r = t->r[i];
+        if (r->io > 0 && __atomic_sub_fetch(&r->io, 1, __ATOMIC_RELAXED) == 0 &&
+            r->plo < r->phi && emm_guard_watching(g))
+            mprotect((void *)r->plo, r->phi - r->plo, PROT_NONE);
+    }
+    pthread_mutex_unlock(&g->lock);
+    free(t);
+}

@@ -1,0 +1,40 @@
+/* Internal to the runtime: the one seam between a session's handle and
+ * the engine that does its work (docs/architecture.md "The session").
+ *
+ * An emm_session is a pointer to a transport, chosen once by
+ * emm_session_new: the engine in this process (session.c), or a proxy that
+ * sends each call to the engine in emm-session, a native process of its own
+ * (session_proxy.c; the valgrind capture, whose program runs under
+ * Valgrind). Every public entry point (session_api.c) calls through it; the
+ * engine never asks which transport reached it. */
+#ifndef EMM_RUNTIME_SESSION_TRANSPORT_H
+#define EMM_RUNTIME_SESSION_TRANSPORT_H
+
+#include "emm/session.h"
+
+/* The calls of include/emm/session.h, each with its contract there. */
+struct session_transport {
+    int (*tag)(emm_session *s, const emm_array_desc *d);
+    emm_session_state (*move)(emm_session *s, uint64_t old, uint64_t base, uint64_t count);
+    emm_session_state (*untag)(emm_session *s, uint64_t base);
+    size_t (*ranges)(const emm_session *s, uint64_t *lo, uint64_t *hi, size_t cap);
+    emm_session_state (*access)(emm_session *s, const emm_raw_access *a, size_t n);
+    emm_session_state (*iteration)(emm_session *s);
+    emm_status (*decide_read)(emm_session *s, emm_error *err);
+    emm_status (*decide_rest)(emm_session *s, emm_error *err);
+    emm_status (*finish)(emm_session *s, FILE *summary, emm_error *err);
+    void (*forked)(emm_session *s);
+    void (*free)(emm_session *s);
+};
+
+/* The handle: what each transport's own state begins with. */
+struct emm_session {
+    const struct session_transport *transport;
+};
+
+/* The engine in this process (session.c). */
+emm_status session_engine_new(const emm_session_config *sc, emm_session **out, emm_error *err);
+/* A proxy for the engine in the process sc->server starts (session_proxy.c). */
+emm_status session_proxy_new(const emm_session_config *sc, emm_session **out, emm_error *err);
+
+#endif
