@@ -45,8 +45,4 @@ bool cli_is_help(const char *arg);
  * "emm: EMM_X='value': problem" EMM_EXIT_FAIL. */
 int cli_env_file(emm_config_key k, bool may_be_new, char path[EMM_CONFIG_PATH_MAX]);
 
-/* For an option that takes a value: returns argv[*i + 1] and advances *i, or
- * prints a usage error and returns NULL when the value is missing. */
-const char *cli_value(const char *cmd, int argc, char **argv, int *i);
-
 #endif

@@ -130,6 +130,10 @@ static bool take(const opts *o, const opts_row *r, const char *as, const char *v
             return append(r->dst, value);
         *(const char **)r->dst = value;
         return true;
+    case OPT_CALL:
+        return r->call(r->dst, as, value);
+    case OPT_REST:
+        break;
     }
     return true;
 }
@@ -174,12 +178,15 @@ bool opts_parse(opts *o, int argc, char **argv, int *rc)
                 return true;
             }
             const char *as = spelled(r->alias, a, len) ? r->alias : r->name; /* as typed */
-            if (r->kind == OPT_FLAG) {
+            if (!r->metavar) {
                 if (eq) {
                     cli_usage_error(o->cmd, "%s takes no value", as);
                     return true;
                 }
-                *(int *)r->dst = 1;
+                if (r->kind == OPT_FLAG)
+                    *(int *)r->dst = 1;
+                else if (!take(o, r, as, NULL))
+                    return true;
                 r->seen++;
                 continue;
             }
@@ -202,9 +209,13 @@ bool opts_parse(opts *o, int argc, char **argv, int *rc)
                 cli_usage_error(o->cmd, "unexpected argument '%s'", a);
             return true;
         }
+        pos->seen++;
+        if (pos->kind == OPT_REST) {
+            *(int *)pos->dst = i;
+            break;
+        }
         if (!take(o, pos, pos->metavar, a))
             return true;
-        pos->seen++;
         last = pos;
         if (!pos->repeat)
             pos++;
@@ -301,6 +312,8 @@ static bool default_text(const opts_row *r, char buf[64])
         snprintf(buf, 64, "%s", *(const char **)r->dst);
         return true;
     case OPT_FLAG:
+    case OPT_CALL:
+    case OPT_REST:
         break;
     }
     return false;

@@ -22,6 +22,10 @@ typedef enum opt_kind {
     OPT_WORD,     /* one of `words`: int, the word's index */
     OPT_STRATEGY, /* a strategy string, checked by emm_strategy_parse: the text, as
                      for OPT_TEXT */
+    OPT_CALL,     /* `call` checks and stores it (with metavar NULL, no value: NULL) */
+    OPT_REST,     /* a positional that ends the options: int, the index in argv of
+                     this argument, which with all after it is the command's as is
+                     (emm run's PROGRAM ARGS...) */
 } opt_kind;
 
 /* The values of a repeated option in the order given (--set, --strategy);
@@ -45,6 +49,9 @@ typedef struct opts_row {
     bool required;            /* "missing --mesh FILE" when absent */
     bool repeat;              /* OPT_TEXT, OPT_STRATEGY: dst is an opts_list */
     bool show_default;        /* --help appends "(default V)", V read from dst */
+    /* OPT_CALL: takes the value for dst, the option as typed naming it;
+     * false after printing why not. */
+    bool (*call)(void *dst, const char *as, const char *value);
     unsigned seen;            /* set by opts_parse: how many times it was given */
 } opts_row;
 
