@@ -16,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "emm/config.h"
 #include "emm/mesh.h"
 #include "emm/profile.h"
 #include "emm/sim.h"
@@ -62,6 +63,11 @@ static void die(const char *what, const emm_error *err)
     exit(1);
 }
 
+static const char *get_env(const char *name)
+{
+    return getenv(name);
+}
+
 static int same(const emm_strategy *a, const emm_strategy *b)
 {
     return a->kind == b->kind && a->layout == b->layout && a->fetch == b->fetch &&
@@ -88,6 +94,13 @@ int main(int argc, char **argv)
         }
     }
     emm_error err;
+    /* Without --table, EMM_TABLE as the configuration table reads it. */
+    static emm_config cfg;
+    emm_config_init(&cfg);
+    if (!user && emm_config_from_env(&cfg, get_env, 0, ~(1u << EMM_CONFIG_TABLE), &err) != EMM_OK)
+        die("table", &err);
+    if (!user && cfg.table[0])
+        user = cfg.table;
     emm_machine *m;
     emm_table *t = emm_table_new();
     if (emm_machine_new(&m, &err) != EMM_OK)

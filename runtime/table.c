@@ -406,19 +406,17 @@ emm_status emm_table_load_standard(emm_table *t, const char *user, emm_error *er
         if (st != EMM_OK)
             return st;
     }
-    const char *env = getenv("EMM_TABLE");
-    const char *path = user ? user : (env && *env ? env : NULL);
-    if (path) {
-        st = emm_table_load(t, path, err);
+    if (user) {
+        st = emm_table_load(t, user, err);
         if (st != EMM_OK)
             return st;
     }
     if (t->n == 0) {
-        if (path)
+        if (user)
             return emm_fail(err, EMM_ERR_IO,
                             "no strategy table with samples: the shipped table is not at %s, "
                             "and %s has none",
-                            tried, path);
+                            tried, user);
         return emm_fail(err, EMM_ERR_IO,
                         "no strategy table found: the shipped table (share/emm/table.txt of "
                         "an install, data/table.txt of a source tree, where `make table` makes "

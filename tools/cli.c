@@ -1,10 +1,12 @@
 /* Small helpers shared by the emm subcommands. */
 #include "cli.h"
 
+#include <assert.h>
+#include <errno.h>
 #include <stdarg.h>
+#include <stdlib.h>
 #include <string.h>
-
-#include "parse.h"
+#include <unistd.h>
 
 void cli_error(const char *fmt, ...)
 {
@@ -44,28 +46,33 @@ bool cli_is_help(const char *arg)
     return strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0;
 }
 
-bool cli_u64(const char *cmd, const char *opt, const char *value, uint64_t *out)
+/* The text the configuration table last read through env_get: a table to
+ * add to may name a file not made yet, which its row (a file to read)
+ * refuses. */
+static const char *env_text;
+
+static const char *env_get(const char *name)
 {
-    if (emm_parse_u64(value, out))
-        return true;
-    cli_usage_error(cmd, "%s expects a non-negative integer, not '%s'", opt, value);
-    return false;
+    const char *v = getenv(name);
+    /* Empty is unset, as these commands have always taken it. */
+    env_text = v && *v ? v : NULL;
+    return env_text;
 }
 
-bool cli_size(const char *cmd, const char *opt, const char *value, uint64_t *out)
+int cli_env_file(emm_config_key k, bool may_be_new, char path[EMM_CONFIG_PATH_MAX])
 {
-    if (emm_parse_size(value, out))
-        return true;
-    cli_usage_error(cmd, "%s expects a size in bytes (K, M, G suffixes allowed), not '%s'",
-                    opt, value);
-    return false;
-}
-
-const char *cli_value(const char *cmd, int argc, char **argv, int *i)
-{
-    if (*i + 1 >= argc) {
-        cli_usage_error(cmd, "%s needs a value", argv[*i]);
-        return NULL;
-    }
-    return argv[++*i];
+    assert(k == EMM_CONFIG_MACHINE || k == EMM_CONFIG_TABLE);
+    emm_config c;
+    emm_error err;
+    path[0] = '\0';
+    emm_config_init(&c);
+    env_text = NULL;
+    if (emm_config_from_env(&c, env_get, (long)getpid(), ~(1u << k), &err) == EMM_OK)
+        strcpy(path, k == EMM_CONFIG_MACHINE ? c.machine : c.table);
+    else if (may_be_new && access(env_text, F_OK) != 0 && errno == ENOENT &&
+             strlen(env_text) < EMM_CONFIG_PATH_MAX)
+        strcpy(path, env_text);
+    else
+        return cli_fail(&err);
+    return 0;
 }

@@ -3,10 +3,10 @@
 #define EMM_TOOLS_CLI_H
 
 #include <stdbool.h>
-#include <stdint.h>
 #include <stdio.h>
 
 #include "emm/common.h"
+#include "emm/config.h"
 
 /* Each subcommand gets argv starting at its own name (argv[0] == "mesh") and
  * returns the process exit status: 0 success, 1 failure on bad data, 2 bad
@@ -37,13 +37,12 @@ int cli_bad_value(const char *cmd, const emm_error *err);
 /* True when `arg` is -h or --help. */
 bool cli_is_help(const char *arg);
 
-/* Parses the value of option `opt` for command `cmd`; on failure prints a
- * usage error naming the option and the value and returns false. */
-bool cli_u64(const char *cmd, const char *opt, const char *value, uint64_t *out);
-bool cli_size(const char *cmd, const char *opt, const char *value, uint64_t *out);
-
-/* For an option that takes a value: returns argv[*i + 1] and advances *i, or
- * prints a usage error and returns NULL when the value is missing. */
-const char *cli_value(const char *cmd, int argc, char **argv, int *i);
+/* The file the variable of configuration row k names (EMM_MACHINE,
+ * EMM_TABLE), read and checked by that row alone, as the shim reads it:
+ * into path (EMM_CONFIG_PATH_MAX bytes), "" when the variable is unset or
+ * empty. With may_be_new, a file that does not exist yet is taken too (a
+ * table to add to, made when missing). Returns 0, or after printing
+ * "emm: EMM_X='value': problem" EMM_EXIT_FAIL. */
+int cli_env_file(emm_config_key k, bool may_be_new, char path[EMM_CONFIG_PATH_MAX]);
 
 #endif

@@ -11,6 +11,7 @@
 
 #include "annotate.h"
 #include "cli.h"
+#include "opts.h"
 #include "emm/replay.h"
 #include "emm/sim.h"
 #include "emm/strategy.h"
@@ -18,7 +19,7 @@
 
 #define DEFAULT_TOP 10
 
-static void usage(FILE *out)
+static void usage(FILE *out, const opts *o)
 {
     fprintf(out,
             "usage: emm annotate TRACE --strategy S [--top N] [--sort KEY] [--source FILE]\n"
@@ -31,22 +32,14 @@ static void usage(FILE *out)
             "access's cycles are those the model charged while simulating it (a stall\n"
             "lands on the access that waited). A function's row includes the functions\n"
             "the compiler inlined into it (a line counts once, for each function it lies\n"
-            "in), so an inlined helper shows under its own name and its caller's. The trace must hold the accesses' program\n"
-            "counters: a program built for the sancov capture and run with\n"
+            "in), so an inlined helper shows under its own name and its caller's. The trace\n"
+            "must hold the accesses' program counters: a program built for the sancov\n"
+            "capture and run with\n"
             "  emm run --capture sancov --trace TRACE -- PROGRAM ...\n"
             "Lines and functions come from the program's debug information (libdw); an\n"
             "object without it is shown by its path.\n"
-            "\n"
-            "  --strategy S   the strategy to simulate (required), e.g. tiles+convolution@64\n"
-            "  --top N        lines and functions shown (default %d; 0: all)\n"
-            "  --sort KEY     what to sort by: total (default), a bucket (dma_stall,\n"
-            "                 dma_issue, emm_instructions, local_access, remote_access,\n"
-            "                 compute, cache_hit, cache_miss_stall), lookups or accesses\n"
-            "  --source FILE  print FILE with each line's total, dma_stall and lookups in\n"
-            "                 the margin (FILE as the debug information names it, or any\n"
-            "                 path ending in the same components)\n"
-            MACHINE_CLI_HELP,
-            DEFAULT_TOP);
+            "\n");
+    opts_help(out, o);
 }
 
 static void on_costs(void *ctx, const emm_trace_record *recs, const emm_record_cost *cost,
@@ -157,55 +150,23 @@ static int print_source(const char *want, const emm_annotate_row *rows, size_t n
     return EMM_EXIT_OK;
 }
 
-int emm_cmd_annotate(int argc, char **argv)
+/* What the command line asked for. */
+struct annotate_args {
+    machine_cli mc;
+    const char *trace, *strategy, *source;
+    int key;
+    uint64_t top;
+};
+
+static int annotate(void *p)
 {
-    const char *cmd = "annotate", *trace = NULL, *source = NULL, *v;
+    struct annotate_args *args = p;
+    const char *cmd = "annotate", *trace = args->trace, *source = args->source;
     emm_strategy s;
-    int have_strategy = 0, key = EMM_ANNOTATE_TOTAL, rc;
-    uint64_t top = DEFAULT_TOP;
-    machine_cli mc = {0};
+    int key = args->key, rc;
+    uint64_t top = args->top;
     emm_error err;
-    for (int i = 1; i < argc; i++) {
-        if (cli_is_help(argv[i])) {
-            usage(stdout);
-            return EMM_EXIT_OK;
-        }
-        int r = machine_cli_option(&mc, cmd, argc, argv, &i);
-        if (r < 0)
-            return EMM_EXIT_USAGE;
-        if (r > 0)
-            continue;
-        if (strcmp(argv[i], "--strategy") == 0 || strcmp(argv[i], "-s") == 0) {
-            if (!(v = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-            if (emm_strategy_parse(v, &s, &err) != EMM_OK)
-                return cli_usage_error(cmd, "%s", err.message);
-            have_strategy = 1;
-        } else if (strcmp(argv[i], "--top") == 0) {
-            const char *opt = argv[i];
-            if (!(v = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, opt, v, &top))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(argv[i], "--sort") == 0) {
-            if (!(v = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-            if ((key = emm_annotate_key(v)) < 0)
-                return cli_usage_error(cmd, "--sort '%s': total, a bucket name, lookups or "
-                                       "accesses", v);
-        } else if (strcmp(argv[i], "--source") == 0) {
-            if (!(source = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
-        } else if (!trace) {
-            trace = argv[i];
-        } else {
-            return cli_usage_error(cmd, "unexpected argument '%s'", argv[i]);
-        }
-    }
-    if (!trace)
-        return cli_usage_error(cmd, "missing TRACE");
-    if (!have_strategy)
-        return cli_usage_error(cmd, "missing --strategy S (the strategy whose cycles to show)");
+    emm_strategy_parse(args->strategy, &s, NULL); /* checked by opts_parse */
 
     /* The trace must know where its accesses came from. */
     emm_trace_reader *r;
@@ -219,7 +180,7 @@ int emm_cmd_annotate(int argc, char **argv)
         return EMM_EXIT_FAIL;
     }
     emm_machine *m = NULL;
-    if ((rc = machine_cli_build(&mc, cmd, &m)) != 0) {
+    if ((rc = machine_cli_build(&args->mc, cmd, &m)) != 0) {
         emm_trace_reader_close(r);
         return rc;
     }
@@ -266,4 +227,32 @@ out:
     emm_machine_free(m);
     emm_trace_reader_close(r);
     return rc;
+}
+
+int emm_cmd_annotate(int argc, char **argv)
+{
+    struct annotate_args a = {.key = EMM_ANNOTATE_TOTAL, .top = DEFAULT_TOP};
+    const char *keys[EMM_ANNOTATE_KEYS + 1];
+    for (int k = 0; k < EMM_ANNOTATE_KEYS; k++)
+        keys[k] = emm_annotate_key_name(k);
+    keys[EMM_ANNOTATE_KEYS] = NULL;
+    opts_row rows[] = {
+        {.name = "--strategy", .alias = "-s", .metavar = "S", .kind = OPT_STRATEGY,
+         .dst = &a.strategy, .required = true,
+         .help = "the strategy to simulate (required), e.g. tiles+convolution@64"},
+        {.name = "--top", .metavar = "N", .kind = OPT_U64, .dst = &a.top, .show_default = true,
+         .help = "lines and functions shown, 0 for all"},
+        {.name = "--sort", .metavar = "KEY", .kind = OPT_WORD, .dst = &a.key, .words = keys,
+         .help = "what to sort by: total (default), a bucket (dma_stall, dma_issue, "
+                 "emm_instructions, local_access, remote_access, compute, cache_hit, "
+                 "cache_miss_stall), lookups or accesses"},
+        {.name = "--source", .metavar = "FILE", .kind = OPT_TEXT, .dst = &a.source,
+         .help = "print FILE with each line's total, dma_stall and lookups in the margin (FILE "
+                 "as the debug information names it, or any path ending in the same components)"},
+        MACHINE_CLI_OPTS(&a.mc),
+        {.metavar = "TRACE", .kind = OPT_TEXT, .dst = &a.trace, .required = true},
+        OPTS_END,
+    };
+    opts o = {"annotate", rows, usage};
+    return opts_run(&o, argc, argv, annotate, &a);
 }

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "opts.h"
 #include "emm/layout.h"
 #include "emm/mesh.h"
 #include "emm/sim.h"
@@ -16,7 +17,7 @@
 #include "outfile.h"
 #include "parse.h"
 
-static void usage(FILE *out)
+static void usage(FILE *out, const opts *o)
 {
     fprintf(out,
             "usage: emm layout MESH --strategy S [--svg FILE] [--stats] [--local BYTES]\n"
@@ -25,25 +26,15 @@ static void usage(FILE *out)
             "Builds the layout of strategy S (grid, tiles or quadtree; thesis 4.1) over a\n"
             "mesh file and draws or describes its cells. Each cell holds the triangles\n"
             "whose centroids fall in it and a copy of each of their vertices.\n"
+            "\n");
+    opts_help(out, o);
+    fprintf(out,
             "\n"
-            "  --strategy S        LAYOUT+FETCH[@CELL] or cache@LAYOUT, e.g. tiles+convolution@64;\n"
-            "                      CELL is triangles per cell (default %u)\n"
-            "  --svg FILE          draw the mesh, each cell's triangles in its own colour and\n"
-            "                      the cell boundaries in bold (y up); written whole or not at all\n"
-            "  --stats             print cells, triangles and bytes per cell (min, median, max),\n"
-            "                      duplicated vertices, look-up bytes, quadtree depths; the\n"
-            "                      default when --svg is not given\n"
-            "  --local BYTES       local store size (K, M, G allowed): a cell larger than it is\n"
-            "                      an error for an EMM strategy (default: the machine's, 256K;\n"
-            "                      0 = no check)\n"
-            "  --vertex-bytes N    bytes of a vertex record (default %u, the thesis' struct)\n"
-            "  --triangle-bytes N  bytes of a triangle record (default %u)\n"
-            "\n"
+            "The default record sizes are the thesis' structs (Vertex %u B, Triangle %u B).\n"
             "A 3D mesh is laid out over the two axes along which its bounding box is\n"
             "largest. docs/layouts.md explains the layouts.\n",
-            EMM_DEFAULT_CELL, EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES);
+            EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES);
 }
-
 
 static void print_stats(const emm_layout *l, const char *path, const emm_strategy *s)
 {
@@ -227,51 +218,20 @@ static int write_svg(const char *out, const emm_layout *l, const double *xyz, co
     return EMM_EXIT_OK;
 }
 
-int emm_cmd_layout(int argc, char **argv)
+/* --help's default CELL. */
+#define DEFAULT_CELL_TEXT "64"
+_Static_assert(EMM_DEFAULT_CELL == 64u, "DEFAULT_CELL_TEXT is EMM_DEFAULT_CELL");
+
+/* --local's value when it is not given: the machine's local store. */
+#define LOCAL_UNSET UINT64_MAX
+
+static int layout(const char *mesh_path, const char *strategy, const char *svg, int stats,
+                  uint64_t local, uint64_t vbytes, uint64_t tbytes)
 {
     const char *cmd = "layout";
-    const char *mesh_path = NULL, *strategy = NULL, *svg = NULL;
-    int stats = 0, have_local = 0;
-    uint64_t local = 0, vbytes = EMM_THESIS_VERTEX_BYTES, tbytes = EMM_THESIS_TRIANGLE_BYTES;
-    for (int i = 1; i < argc; i++) {
-        const char *arg = argv[i], *val;
-        if (cli_is_help(arg)) {
-            usage(stdout);
-            return EMM_EXIT_OK;
-        } else if (strcmp(arg, "--strategy") == 0 || strcmp(arg, "-s") == 0) {
-            if (!(strategy = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(arg, "--svg") == 0) {
-            if (!(svg = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(arg, "--stats") == 0) {
-            stats = 1;
-        } else if (strcmp(arg, "--local") == 0) {
-            if (!(val = cli_value(cmd, argc, argv, &i)) || !cli_size(cmd, arg, val, &local))
-                return EMM_EXIT_USAGE;
-            have_local = 1;
-        } else if (strcmp(arg, "--vertex-bytes") == 0 || strcmp(arg, "--triangle-bytes") == 0) {
-            uint64_t *dst = arg[2] == 'v' ? &vbytes : &tbytes;
-            if (!(val = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, arg, val, dst))
-                return EMM_EXIT_USAGE;
-            if (*dst < 1 || *dst > 65536)
-                return cli_usage_error(cmd, "%s expects 1 to 65536 bytes, not '%s'", arg, val);
-        } else if (arg[0] == '-' && arg[1] != '\0') {
-            return cli_usage_error(cmd, "unknown option '%s'", arg);
-        } else if (!mesh_path) {
-            mesh_path = arg;
-        } else {
-            return cli_usage_error(cmd, "one mesh file, not '%s' as well", arg);
-        }
-    }
-    if (!mesh_path)
-        return cli_usage_error(cmd, "a mesh file is required");
-    if (!strategy)
-        return cli_usage_error(cmd, "--strategy is required (e.g. --strategy tiles+convolution@64)");
     emm_strategy s;
     emm_error err;
-    if (emm_strategy_parse(strategy, &s, &err) != EMM_OK)
-        return cli_usage_error(cmd, "%s", err.message);
+    emm_strategy_parse(strategy, &s, NULL); /* checked by opts_parse */
     if (s.layout == EMM_LAYOUT_ORIGINAL)
         return cli_usage_error(cmd,
                                "strategy '%s' keeps the original layout; give "
@@ -280,7 +240,7 @@ int emm_cmd_layout(int argc, char **argv)
     if (!svg)
         stats = 1;
     /* Only an EMM strategy moves whole cells into the local store. */
-    if (!have_local && s.kind == EMM_STRATEGY_EMM) {
+    if (local == LOCAL_UNSET && s.kind == EMM_STRATEGY_EMM) {
         emm_machine *m;
         if (emm_machine_new(&m, &err) != EMM_OK)
             return cli_fail(&err);
@@ -317,4 +277,39 @@ int emm_cmd_layout(int argc, char **argv)
     emm_layout_free(l);
     emm_mesh_free(mesh);
     return rc;
+}
+
+int emm_cmd_layout(int argc, char **argv)
+{
+    const char *mesh_path = NULL, *strategy = NULL, *svg = NULL;
+    int stats = 0;
+    uint64_t local = LOCAL_UNSET, vbytes = EMM_THESIS_VERTEX_BYTES;
+    uint64_t tbytes = EMM_THESIS_TRIANGLE_BYTES;
+    opts_row rows[] = {
+        {.name = "--strategy", .alias = "-s", .metavar = "S", .kind = OPT_STRATEGY,
+         .dst = &strategy, .required = true,
+         .help = "LAYOUT+FETCH[@CELL] or cache@LAYOUT, e.g. tiles+convolution@64; CELL is "
+                 "triangles per cell (default " DEFAULT_CELL_TEXT ")"},
+        {.name = "--svg", .metavar = "FILE", .kind = OPT_TEXT, .dst = &svg,
+         .help = "draw the mesh, each cell's triangles in its own colour and the cell "
+                 "boundaries in bold (y up); written whole or not at all"},
+        {.name = "--stats", .kind = OPT_FLAG, .dst = &stats,
+         .help = "print cells, triangles and bytes per cell (min, median, max), duplicated "
+                 "vertices, look-up bytes, quadtree depths; the default when --svg is not given"},
+        {.name = "--local", .metavar = "BYTES", .kind = OPT_SIZE, .dst = &local,
+         .help = "local store size (K, M, G allowed): a cell larger than it is an error for an "
+                 "EMM strategy (default: the machine's, 256K; 0 = no check)"},
+        {.name = "--vertex-bytes", .metavar = "N", .kind = OPT_U64, .dst = &vbytes, .min = 1,
+         .max = 65536, .show_default = true,
+         .help = "bytes of a vertex record"},
+        {.name = "--triangle-bytes", .metavar = "N", .kind = OPT_U64, .dst = &tbytes, .min = 1,
+         .max = 65536, .show_default = true, .help = "bytes of a triangle record"},
+        {.metavar = "MESH", .kind = OPT_TEXT, .dst = &mesh_path, .required = true},
+        OPTS_END,
+    };
+    opts o = {"layout", rows, usage};
+    int rc;
+    if (opts_parse(&o, argc, argv, &rc))
+        return rc;
+    return layout(mesh_path, strategy, svg, stats, local, vbytes, tbytes);
 }

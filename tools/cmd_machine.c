@@ -1,52 +1,30 @@
 /* emm machine: show the simulated machine (docs/machine.md,
  * thesis §3.2) and the cost of one DMA transfer. */
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
 #include "machine_cli.h"
 
-int machine_cli_option(machine_cli *mc, const char *cmd, int argc, char **argv, int *i)
-{
-    const char *v;
-    if (strcmp(argv[*i], "--machine") == 0) {
-        if (!(v = cli_value(cmd, argc, argv, i)))
-            return -1;
-        mc->file = v;
-        return 1;
-    }
-    if (strcmp(argv[*i], "--set") == 0) {
-        if (!(v = cli_value(cmd, argc, argv, i)))
-            return -1;
-        if (mc->nsets == MACHINE_CLI_MAX_SETS) {
-            cli_usage_error(cmd, "at most %d --set options", MACHINE_CLI_MAX_SETS);
-            return -1;
-        }
-        mc->sets[mc->nsets++] = v;
-        return 1;
-    }
-    return 0;
-}
-
-int machine_cli_build(const machine_cli *mc, const char *cmd, emm_machine **out)
+int machine_cli_build(machine_cli *mc, const char *cmd, emm_machine **out)
 {
     emm_machine *m = NULL;
     emm_error err;
-    const char *file = mc->file;
-    if (!file) {
-        const char *env = getenv("EMM_MACHINE");
-        if (env && *env)
-            file = env;
+    int rc;
+    if (!mc->file) {
+        if ((rc = cli_env_file(EMM_CONFIG_MACHINE, false, mc->env)) != 0)
+            return rc;
+        if (mc->env[0])
+            mc->file = mc->env;
     }
     if (emm_machine_new(&m, &err) != EMM_OK)
         return cli_fail(&err);
-    if (file && emm_machine_load(m, file, &err) != EMM_OK) {
+    if (mc->file && emm_machine_load(m, mc->file, &err) != EMM_OK) {
         emm_machine_free(m);
         return cli_fail(&err);
     }
-    for (int i = 0; i < mc->nsets; i++) {
-        if (emm_machine_set(m, mc->sets[i], &err) != EMM_OK) {
+    for (size_t i = 0; i < mc->sets.n; i++) {
+        if (emm_machine_set(m, mc->sets.v[i], &err) != EMM_OK) {
             emm_machine_free(m);
             return cli_usage_error(cmd, "%s", err.message);
         }
@@ -59,7 +37,7 @@ int machine_cli_build(const machine_cli *mc, const char *cmd, emm_machine **out)
     return 0;
 }
 
-static void usage(FILE *out)
+static void usage_head(FILE *out)
 {
     fprintf(out,
             "usage: emm machine show [--machine FILE] [--set KEY=VALUE]...\n"
@@ -70,8 +48,22 @@ static void usage(FILE *out)
             "  dma    print the cycles of one synchronous DMA of BYTES bytes:\n"
             "         dma.issue + dma.cycles_per_8b*ceil(BYTES/8)\n"
             "                   + dma.chunk_cycles*(ceil(BYTES/dma.chunk_bytes) - 1)\n"
-            "\n"
-            MACHINE_CLI_HELP);
+            "\n");
+}
+
+static void usage(FILE *out, const opts *o)
+{
+    usage_head(out);
+    opts_help(out, o);
+}
+
+/* emm machine --help: the options both subcommands take. */
+static void usage_all(FILE *out)
+{
+    machine_cli mc = {0};
+    opts_row rows[] = {MACHINE_CLI_OPTS(&mc), OPTS_END};
+    opts o = {"machine", rows, usage};
+    usage(out, &o);
 }
 
 static void show(const emm_machine *m, const char *source)
@@ -93,57 +85,61 @@ static void show(const emm_machine *m, const char *source)
     }
 }
 
-int emm_cmd_machine(int argc, char **argv)
-{
-    machine_cli mc = {0};
-    const char *sub = NULL, *bytes_arg = NULL;
-    emm_machine *m = NULL;
-    int rc;
+/* What the command line asked for. */
+struct machine_args {
+    const char *cmd; /* "machine show" or "machine dma" */
+    machine_cli mc;
+    uint64_t bytes;  /* dma's BYTES */
+};
 
-    for (int i = 1; i < argc; i++) {
-        int r;
-        if (cli_is_help(argv[i])) {
-            usage(stdout);
-            return EMM_EXIT_OK;
-        }
-        r = machine_cli_option(&mc, "machine", argc, argv, &i);
-        if (r < 0)
-            return EMM_EXIT_USAGE;
-        if (r > 0)
-            continue;
-        if (argv[i][0] == '-' && argv[i][1] != '\0')
-            return cli_usage_error("machine", "unknown option '%s'", argv[i]);
-        if (!sub)
-            sub = argv[i];
-        else if (strcmp(sub, "dma") == 0 && !bytes_arg)
-            bytes_arg = argv[i];
-        else
-            return cli_usage_error("machine", "unexpected argument '%s'", argv[i]);
-    }
-    if (!sub)
-        return cli_usage_error("machine", "missing subcommand: show or dma");
-    if (strcmp(sub, "show") != 0 && strcmp(sub, "dma") != 0)
-        return cli_usage_error("machine", "unknown subcommand '%s': expected show or dma", sub);
-    if (strcmp(sub, "dma") == 0) {
-        uint64_t bytes;
-        if (!bytes_arg)
-            return cli_usage_error("machine dma", "missing BYTES");
-        if (!cli_size("machine dma", "BYTES", bytes_arg, &bytes))
-            return EMM_EXIT_USAGE;
-        if (bytes > (1ull << 40))
-            return cli_usage_error("machine dma", "BYTES = %s: at most 1T", bytes_arg);
-        if ((rc = machine_cli_build(&mc, "machine", &m)) != 0)
-            return rc;
-        printf("%llu\n", (unsigned long long)emm_machine_dma_cycles(m, bytes));
+static int show_dma(void *p)
+{
+    struct machine_args *a = p;
+    machine_cli *mc = &a->mc;
+    emm_machine *m = NULL;
+    int rc = machine_cli_build(mc, a->cmd, &m);
+    if (rc != 0)
+        return rc;
+    if (strcmp(a->cmd, "machine dma") == 0) {
+        printf("%llu\n", (unsigned long long)emm_machine_dma_cycles(m, a->bytes));
     } else {
-        const char *file = mc.file ? mc.file : getenv("EMM_MACHINE");
         char source[512];
-        if ((rc = machine_cli_build(&mc, "machine", &m)) != 0)
-            return rc;
-        snprintf(source, sizeof source, "defaults%s%s%s", file && *file ? ", then " : "",
-                 file && *file ? file : "", mc.nsets ? ", then --set" : "");
+        snprintf(source, sizeof source, "defaults%s%s%s", mc->file ? ", then " : "",
+                 mc->file ? mc->file : "", mc->sets.n ? ", then --set" : "");
         show(m, source);
     }
     emm_machine_free(m);
     return EMM_EXIT_OK;
+}
+
+/* show, or dma with its BYTES. */
+static int machine_sub(int argc, char **argv, bool dma)
+{
+    struct machine_args a = {.cmd = dma ? "machine dma" : "machine show"};
+    opts_row rows[] = {
+        MACHINE_CLI_OPTS(&a.mc),
+        {.metavar = "BYTES", .kind = OPT_SIZE, .dst = &a.bytes, .max = 1ull << 40,
+         .required = true},
+        OPTS_END,
+    };
+    if (!dma)
+        rows[2] = (opts_row)OPTS_END;
+    opts o = {a.cmd, rows, usage};
+    return opts_run(&o, argc, argv, show_dma, &a);
+}
+
+static int machine_show(int argc, char **argv)
+{
+    return machine_sub(argc, argv, false);
+}
+
+static int machine_dma(int argc, char **argv)
+{
+    return machine_sub(argc, argv, true);
+}
+
+int emm_cmd_machine(int argc, char **argv)
+{
+    static const opts_sub subs[] = {{"show", machine_show}, {"dma", machine_dma}, {NULL, NULL}};
+    return opts_subcommand("machine", subs, usage_all, argc, argv);
 }

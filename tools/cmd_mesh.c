@@ -5,6 +5,7 @@
 #include <strings.h>
 
 #include "cli.h"
+#include "opts.h"
 #include "parse.h"
 #include "emm/mesh.h"
 #include "generate.h"
@@ -27,7 +28,7 @@ static void usage_mesh(FILE *out)
             EMM_DEFAULT_FACES, EMM_DEFAULT_SEED);
 }
 
-static void usage_gen(FILE *out)
+static void usage_gen(FILE *out, const opts *o)
 {
     fprintf(out,
             "usage: emm mesh gen [--faces N] [--seed S] [--density clustered|uniform]\n"
@@ -40,23 +41,11 @@ static void usage_gen(FILE *out)
             "it is strictly convex: as many boundary edges (200 for 20,000 faces), each\n"
             "about as long as the edges inside. The same options give the same file, byte\n"
             "for byte.\n"
-            "\n"
-            "  --faces N        triangles to make, 8 or more (default %u)\n"
-            "  --seed S         seed of the point stream, a non-negative integer (default %u)\n"
-            "  --density D      clustered: a few Gaussian clusters over a uniform background,\n"
-            "                   their number, places and widths drawn from the seed (default)\n"
-            "                   uniform: points spread evenly\n"
-            "  --order O        made: vertices in the order the points were drawn, faces in\n"
-            "                   qhull's order, which is spatially coherent (default; 'input'\n"
-            "                   is the same); random: both in a random order from the seed,\n"
-            "                   unorganised like the thesis' original mesh; hilbert: both\n"
-            "                   numbered along a Hilbert curve, for locality\n"
-            "  -o, --output F   the file to write (required): .off for OFF, .obj for OBJ\n"
-            "                   (another extension is refused); written whole or not at all\n",
-            EMM_DEFAULT_FACES, EMM_DEFAULT_SEED);
+            "\n");
+    opts_help(out, o);
 }
 
-static void usage_info(FILE *out)
+static void usage_info(FILE *out, const opts *o)
 {
     fprintf(out,
             "usage: emm mesh info [--json] FILE\n"
@@ -64,77 +53,27 @@ static void usage_info(FILE *out)
             "Reads a mesh file (OFF, OBJ, PLY, STL; polygons are fan-triangulated) and prints:\n"
             "  vertices, faces, boundary edges, polygons split, bbox, mean edge length, and\n"
             "  thesis bytes: what the thesis' structs would take (Vertex %u B, Triangle %u B).\n"
-            "\n"
-            "  --json   print the same as one JSON object\n",
+            "\n",
             EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES);
+    opts_help(out, o);
 }
 
-static int cmd_gen(int argc, char **argv)
+/* "input" is the old name of "made". */
+static const char *const densities[] = {"clustered", "uniform", NULL};
+static const char *const orders[] = {"made", "random", "hilbert", "input", NULL};
+
+static int gen(const emm_gen_options *opt, const char *output)
 {
-    const char *cmd = "mesh gen";
-    emm_gen_options opt = {EMM_DEFAULT_FACES, EMM_DEFAULT_SEED, EMM_DENSITY_CLUSTERED, EMM_ORDER_INPUT};
-    const char *output = NULL;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v;
-        uint64_t n;
-        if (cli_is_help(a)) {
-            usage_gen(stdout);
-            return EMM_EXIT_OK;
-        } else if (strcmp(a, "--faces") == 0) {
-            if (!(v = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, a, v, &n))
-                return EMM_EXIT_USAGE;
-            if (n < EMM_GEN_MIN_FACES || n > EMM_GEN_MAX_FACES)
-                return cli_usage_error(cmd, "--faces must be between %u and %u, not '%s'",
-                                       EMM_GEN_MIN_FACES, EMM_GEN_MAX_FACES, v);
-            opt.faces = (size_t)n;
-        } else if (strcmp(a, "--seed") == 0) {
-            if (!(v = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, a, v, &n))
-                return EMM_EXIT_USAGE;
-            opt.seed = n;
-        } else if (strcmp(a, "--density") == 0) {
-            if (!(v = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-            if (strcmp(v, "clustered") == 0)
-                opt.density = EMM_DENSITY_CLUSTERED;
-            else if (strcmp(v, "uniform") == 0)
-                opt.density = EMM_DENSITY_UNIFORM;
-            else
-                return cli_usage_error(cmd, "--density expects clustered or uniform, not '%s'", v);
-        } else if (strcmp(a, "--order") == 0) {
-            if (!(v = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-            if (strcmp(v, "made") == 0 || strcmp(v, "input") == 0)
-                opt.order = EMM_ORDER_MADE;
-            else if (strcmp(v, "random") == 0)
-                opt.order = EMM_ORDER_RANDOM;
-            else if (strcmp(v, "hilbert") == 0)
-                opt.order = EMM_ORDER_HILBERT;
-            else
-                return cli_usage_error(cmd, "--order expects made, random or hilbert, not '%s'", v);
-        } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) {
-            if (!(v = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-            if (!*v)
-                return cli_usage_error(cmd, "%s needs a file name", a);
-            output = v;
-        } else if (a[0] == '-') {
-            return cli_usage_error(cmd, "unknown option '%s'", a);
-        } else {
-            return cli_usage_error(cmd, "unexpected argument '%s'", a);
-        }
-    }
-    if (!output)
-        return cli_usage_error(cmd, "-o FILE is required");
     /* The format the name promises; no OFF text in a file called .obj. */
     const char *dot = strrchr(output, '.');
     int obj = dot && strcasecmp(dot, ".obj") == 0;
     if (!dot || strchr(dot, '/') || (!obj && strcasecmp(dot, ".off") != 0))
-        return cli_usage_error(cmd, "-o %s: the file must end in .off (OFF) or .obj (OBJ)",
+        return cli_usage_error("mesh gen", "-o %s: the file must end in .off (OFF) or .obj (OBJ)",
                                output);
 
     emm_error err;
     emm_mesh *m;
-    if (emm_mesh_generate(&opt, &m, &err) != EMM_OK)
+    if (emm_mesh_generate(opt, &m, &err) != EMM_OK)
         return cli_fail(&err);
     emm_status st = obj ? emm_mesh_write_obj(m, output, &err) : emm_mesh_write_off(m, output, &err);
     if (st == EMM_OK)
@@ -144,28 +83,57 @@ static int cmd_gen(int argc, char **argv)
     return st == EMM_OK ? EMM_EXIT_OK : cli_fail(&err);
 }
 
+static int cmd_gen(int argc, char **argv)
+{
+    uint64_t faces = EMM_DEFAULT_FACES, seed = EMM_DEFAULT_SEED;
+    int density = EMM_DENSITY_CLUSTERED, order = EMM_ORDER_MADE;
+    const char *output = NULL;
+    opts_row rows[] = {
+        {.name = "--faces", .metavar = "N", .kind = OPT_U64, .dst = &faces,
+         .min = EMM_GEN_MIN_FACES, .max = EMM_GEN_MAX_FACES, .show_default = true,
+         .help = "triangles to make, 8 or more"},
+        {.name = "--seed", .metavar = "S", .kind = OPT_U64, .dst = &seed, .show_default = true,
+         .help = "seed of the point stream"},
+        {.name = "--density", .metavar = "D", .kind = OPT_WORD, .dst = &density, .words = densities,
+         .help = "clustered: a few Gaussian clusters over a uniform background, their number, "
+                 "places and widths drawn from the seed (default)\n"
+                 "uniform: points spread evenly"},
+        {.name = "--order", .metavar = "O", .kind = OPT_WORD, .dst = &order, .words = orders,
+         .help = "made: vertices in the order the points were drawn, faces in qhull's order, "
+                 "which is spatially coherent (default; 'input' is the same); random: both in a "
+                 "random order from the seed, unorganised like the thesis' original mesh; "
+                 "hilbert: both numbered along a Hilbert curve, for locality"},
+        {.name = "-o", .alias = "--output", .metavar = "FILE", .kind = OPT_TEXT, .dst = &output,
+         .required = true,
+         .help = "the file to write (required): .off for OFF, .obj for OBJ (another extension "
+                 "is refused); written whole or not at all"},
+        OPTS_END,
+    };
+    opts o = {"mesh gen", rows, usage_gen};
+    int rc;
+    if (opts_parse(&o, argc, argv, &rc))
+        return rc;
+    emm_gen_options opt = {(size_t)faces, seed, (emm_density)density,
+                           order == EMM_ORDER_RANDOM || order == EMM_ORDER_HILBERT
+                               ? (emm_order)order
+                               : EMM_ORDER_MADE};
+    return gen(&opt, output);
+}
+
 static int cmd_info(int argc, char **argv)
 {
-    const char *cmd = "mesh info";
     const char *path = NULL;
     int json = 0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (cli_is_help(a)) {
-            usage_info(stdout);
-            return EMM_EXIT_OK;
-        } else if (strcmp(a, "--json") == 0) {
-            json = 1;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error(cmd, "unknown option '%s'", a);
-        } else if (path) {
-            return cli_usage_error(cmd, "one FILE only, not '%s' too", a);
-        } else {
-            path = a;
-        }
-    }
-    if (!path)
-        return cli_usage_error(cmd, "FILE is required");
+    opts_row rows[] = {
+        {.name = "--json", .kind = OPT_FLAG, .dst = &json,
+         .help = "print the same as one JSON object"},
+        {.metavar = "FILE", .kind = OPT_TEXT, .dst = &path, .required = true},
+        OPTS_END,
+    };
+    opts o = {"mesh info", rows, usage_info};
+    int rc;
+    if (opts_parse(&o, argc, argv, &rc))
+        return rc;
 
     emm_error err;
     emm_mesh *m;
@@ -204,15 +172,6 @@ static int cmd_info(int argc, char **argv)
 
 int emm_cmd_mesh(int argc, char **argv)
 {
-    if (argc < 2)
-        return cli_usage_error("mesh", "a subcommand is needed: gen or info");
-    if (cli_is_help(argv[1])) {
-        usage_mesh(stdout);
-        return EMM_EXIT_OK;
-    }
-    if (strcmp(argv[1], "gen") == 0)
-        return cmd_gen(argc - 1, argv + 1);
-    if (strcmp(argv[1], "info") == 0)
-        return cmd_info(argc - 1, argv + 1);
-    return cli_usage_error("mesh", "unknown subcommand '%s' (gen or info)", argv[1]);
+    static const opts_sub subs[] = {{"gen", cmd_gen}, {"info", cmd_info}, {NULL, NULL}};
+    return opts_subcommand("mesh", subs, usage_mesh, argc, argv);
 }

@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "opts.h"
 #include "emm/profile.h"
 #include "emm/sim.h"
 #include "emm/strategy.h"
@@ -36,7 +37,7 @@ static const char *const CMD = "plot";
 #define PLOT_MAX_BARS 12
 #define PLOT_MAX_FILES 32
 
-static void usage(FILE *out)
+static void usage(FILE *out, const opts *o)
 {
     fprintf(out,
             "usage: emm plot REPORT [--out DIR] [--format png|svg|both] [--cells STRATEGY]\n"
@@ -62,17 +63,13 @@ static void usage(FILE *out)
             "\n"
             "A figure the report has no data for is skipped with a note; the others are\n"
             "still drawn. Nothing is written unless every figure drawn succeeds.\n"
-            "\n"
-            "  --out DIR          where the figures go (default: REPORT without .json, plus\n"
-            "                     -plots); created when missing\n"
-            "  --format F         png, svg or both (default both)\n"
-            "  --cells STRATEGY   the EMM strategy of the cells figure\n"
-            "  --gnuplot PROGRAM  the gnuplot to run (default: gnuplot, found on PATH)\n"
-            "  -h, --help         this text\n"
+            "\n",
+            PLOT_MAX_BARS, PLOT_MAX_BARS);
+    opts_help(out, o);
+    fprintf(out,
             "\n"
             "Exit status: 0 figures written, 1 a missing or malformed report, no gnuplot, or\n"
-            "a figure that could not be made, 2 bad usage.\n",
-            PLOT_MAX_BARS, PLOT_MAX_BARS);
+            "a figure that could not be made, 2 bad usage.\n");
 }
 
 /* ---- the report ------------------------------------------------------------- */
@@ -1000,9 +997,12 @@ static emm_status commit(plot_ctx *c, emm_error *err)
     return EMM_OK;
 }
 
+static const char *const formats[] = {"png", "svg", "both", NULL};
+
 int emm_cmd_plot(int argc, char **argv)
 {
-    const char *report = NULL, *out = NULL, *format = "both", *cells = NULL;
+    const char *report = NULL, *out = NULL, *cells = NULL;
+    int format = 2;
     plot_ctx c;
     plot_report rep;
     emm_error err;
@@ -1013,43 +1013,24 @@ int emm_cmd_plot(int argc, char **argv)
 
     memset(&c, 0, sizeof c);
     c.gnuplot = "gnuplot";
-    for (int i = 1; i < argc; i++) {
-        if (cli_is_help(argv[i])) {
-            usage(stdout);
-            return EMM_EXIT_OK;
-        }
-        if (strcmp(argv[i], "--out") == 0 || strcmp(argv[i], "-o") == 0) {
-            if (!(out = cli_value(CMD, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(argv[i], "--format") == 0) {
-            if (!(format = cli_value(CMD, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(argv[i], "--cells") == 0) {
-            if (!(cells = cli_value(CMD, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(argv[i], "--gnuplot") == 0) {
-            if (!(c.gnuplot = cli_value(CMD, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            return cli_usage_error(CMD, "unknown option '%s'", argv[i]);
-        } else if (!report) {
-            report = argv[i];
-        } else {
-            return cli_usage_error(CMD, "unexpected argument '%s'", argv[i]);
-        }
-    }
-    if (!report)
-        return cli_usage_error(CMD, "missing REPORT");
-    if (strcmp(format, "png") == 0)
-        c.png = 1;
-    else if (strcmp(format, "svg") == 0)
-        c.svg = 1;
-    else if (strcmp(format, "both") == 0)
-        c.png = c.svg = 1;
-    else
-        return cli_usage_error(CMD, "--format '%s': png, svg or both", format);
-    if (cells && emm_strategy_parse(cells, &(emm_strategy){0}, &err) != EMM_OK)
-        return cli_usage_error(CMD, "--cells: %s", err.message);
+    opts_row rows[] = {
+        {.name = "--out", .alias = "-o", .metavar = "DIR", .kind = OPT_TEXT, .dst = &out,
+         .help = "where the figures go (default: REPORT without .json, plus -plots); created "
+                 "when missing"},
+        {.name = "--format", .metavar = "F", .kind = OPT_WORD, .dst = &format, .words = formats,
+         .show_default = true, .help = "png, svg or both"},
+        {.name = "--cells", .metavar = "STRATEGY", .kind = OPT_STRATEGY, .dst = &cells,
+         .help = "the EMM strategy of the cells figure"},
+        {.name = "--gnuplot", .metavar = "PROGRAM", .kind = OPT_TEXT, .dst = &c.gnuplot,
+         .help = "the gnuplot to run (default: gnuplot, found on PATH)"},
+        {.metavar = "REPORT", .kind = OPT_TEXT, .dst = &report, .required = true},
+        OPTS_END,
+    };
+    opts o = {CMD, rows, usage};
+    if (opts_parse(&o, argc, argv, &rc))
+        return rc;
+    c.png = format != 1;
+    c.svg = format != 0;
 
     if ((st = load_report(report, &rep, &err)) != EMM_OK) {
         free_report(&rep);

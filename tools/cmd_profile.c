@@ -14,11 +14,16 @@
 #include "emm/trace.h"
 #include "json.h"
 #include "machine_cli.h"
+#include "opts.h"
 #include "outfile.h"
 
 static const char *const CMD = "profile";
 
-static void usage(FILE *out)
+/* --help's numbers that are no option's default. */
+#define EXACT_MAX_TEXT "65536"
+_Static_assert(EMM_PROFILE_EXACT_MAX == 65536u, "EXACT_MAX_TEXT is EMM_PROFILE_EXACT_MAX");
+
+static void usage(FILE *out, const opts *o)
 {
     char def[4096];
     emm_table_default_path(def, sizeof def);
@@ -38,27 +43,9 @@ static void usage(FILE *out)
             "docs/profile.md \"The decision\"), or the sample's own strategy when it has no\n"
             "recipe ('table'). A profile farther than the threshold from every sample is\n"
             "novel: then the best of the sweep on the window is chosen ('window').\n"
-            "\n"
-            "  --window N      element accesses to profile (default %u); up to %u use\n"
-            "                  the exact method, longer windows the fast one\n"
-            "  --table FILE    a user table added to the default one (default: $EMM_TABLE)\n"
-            "  --threshold X   novelty threshold on the nearest distance (default %g)\n"
-            "  --simulate      simulate the sweep on the window even when not novel\n"
-            "  --finalists N   the run's contest, as emm run holds it: every candidate from\n"
-            "                  the trace's start, the slower half dropped at 2, 4, 8, ...\n"
-            "                  windows until N remain; the fastest over the trace is the\n"
-            "                  answer (default %u; 0: the window's prediction stands)\n"
-            "  --learn NAME    when the sweep ran, append the profile as sample NAME with\n"
-            "                  the sweep's best strategy to the user table (--table or\n"
-            "                  $EMM_TABLE, created when missing)\n"
-            "  --pattern CLASS the pattern class of a learnt sample (default 'user')\n"
-            MACHINE_CLI_HELP
-            "  --dump FILE     write the profile as CSV with the columns i,D\n"
-            "  --json FILE     write pattern, strategy, nearest, distance, novel as JSON\n"
-            "\n"
-            "The default table is %s.\n",
-            EMM_PROFILE_DEFAULT_WINDOW, EMM_PROFILE_EXACT_MAX, EMM_NOVELTY_THRESHOLD,
-            EMM_CONFIG_DEFAULT_FINALISTS, def);
+            "\n");
+    opts_help(out, o);
+    fprintf(out, "\nThe default table is %s.\n", def);
 }
 
 /* Commits an output file; the exit status. */
@@ -160,81 +147,36 @@ static emm_status window_profile(const emm_trace_info *info, const emm_trace_rec
     return st;
 }
 
-int emm_cmd_profile(int argc, char **argv)
+/* What the command line asked for. */
+struct profile_args {
+    machine_cli mc;
+    const char *trace, *table, *dump, *json, *learn, *pattern;
+    uint64_t window, finalists;
+    double threshold;
+    int simulate;
+};
+
+static int profile(void *p)
 {
-    const char *trace = NULL, *table = NULL, *dump = NULL, *json = NULL, *learn = NULL;
-    const char *pattern = "user";
-    uint64_t window = EMM_PROFILE_DEFAULT_WINDOW;
-    double threshold = EMM_NOVELTY_THRESHOLD;
-    int simulate = 0;
-    unsigned finalists = EMM_CONFIG_DEFAULT_FINALISTS;
+    struct profile_args *a = p;
+    const char *trace = a->trace, *table = a->table, *dump = a->dump, *json = a->json;
+    const char *learn = a->learn, *pattern = a->pattern;
+    uint64_t window = a->window;
+    double threshold = a->threshold;
+    int simulate = a->simulate;
+    unsigned finalists = (unsigned)a->finalists;
     emm_strategy answer;
     int has_answer = 0;
-    machine_cli mc = {0};
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        int mo = machine_cli_option(&mc, CMD, argc, argv, &i);
-        if (mo < 0)
-            return EMM_EXIT_USAGE;
-        if (mo > 0)
-            continue;
-        if (cli_is_help(a)) {
-            usage(stdout);
-            return EMM_EXIT_OK;
-        } else if (strcmp(a, "--window") == 0) {
-            const char *v = cli_value(CMD, argc, argv, &i);
-            if (!v || !cli_u64(CMD, a, v, &window))
-                return EMM_EXIT_USAGE;
-            if (window < EMM_PROFILE_MIN)
-                return cli_usage_error(CMD, "--window must be at least %u", EMM_PROFILE_MIN);
-        } else if (strcmp(a, "--table") == 0) {
-            if (!(table = cli_value(CMD, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--threshold") == 0) {
-            const char *v = cli_value(CMD, argc, argv, &i);
-            char *end;
-            if (!v)
-                return EMM_EXIT_USAGE;
-            threshold = strtod(v, &end);
-            if (*v == '\0' || *end != '\0' || !(threshold > 0))
-                return cli_usage_error(CMD, "--threshold expects a positive number, not '%s'", v);
-        } else if (strcmp(a, "--finalists") == 0) {
-            const char *v = cli_value(CMD, argc, argv, &i);
-            uint64_t x;
-            if (!v || !cli_u64(CMD, a, v, &x))
-                return EMM_EXIT_USAGE;
-            if (x > 64)
-                return cli_usage_error(CMD, "--finalists takes a count from 0 to 64, not %s", v);
-            finalists = (unsigned)x;
-        } else if (strcmp(a, "--simulate") == 0) {
-            simulate = 1;
-        } else if (strcmp(a, "--learn") == 0) {
-            if (!(learn = cli_value(CMD, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--pattern") == 0) {
-            if (!(pattern = cli_value(CMD, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--dump") == 0) {
-            if (!(dump = cli_value(CMD, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--json") == 0) {
-            if (!(json = cli_value(CMD, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error(CMD, "unknown option '%s'", a);
-        } else if (!trace) {
-            trace = a;
-        } else {
-            return cli_usage_error(CMD, "one trace only ('%s' is extra)", a);
-        }
-    }
-    if (!trace)
-        return cli_usage_error(CMD, "a TRACE file is required");
+    /* The user table: --table, else $EMM_TABLE; one to learn into may be new. */
+    char env[EMM_CONFIG_PATH_MAX];
     const char *user = table;
+    if (!user) {
+        int erc = cli_env_file(EMM_CONFIG_TABLE, learn != NULL, env);
+        if (erc != 0)
+            return erc;
+        user = env[0] ? env : NULL;
+    }
     if (learn) {
-        const char *env = getenv("EMM_TABLE");
-        if (!user && env && *env)
-            user = env;
         if (!user)
             return cli_usage_error(CMD, "--learn needs the user table to add to: --table FILE "
                                         "or EMM_TABLE");
@@ -244,7 +186,7 @@ int emm_cmd_profile(int argc, char **argv)
     }
 
     emm_machine *m = NULL;
-    int rc = machine_cli_build(&mc, CMD, &m);
+    int rc = machine_cli_build(&a->mc, CMD, &m);
     if (rc != 0)
         return rc;
     emm_error err;
@@ -285,7 +227,7 @@ int emm_cmd_profile(int argc, char **argv)
             rc = cli_fail(&err);
             goto done;
         }
-    } else if (emm_table_load_standard(t, table, &err) != EMM_OK) {
+    } else if (emm_table_load_standard(t, user, &err) != EMM_OK) {
         rc = cli_fail(&err);
         goto done;
     }
@@ -395,4 +337,42 @@ done:
     emm_trace_reader_close(r);
     emm_machine_free(m);
     return rc;
+}
+
+int emm_cmd_profile(int argc, char **argv)
+{
+    struct profile_args a = {.pattern = "user", .window = EMM_PROFILE_DEFAULT_WINDOW,
+                             .finalists = EMM_CONFIG_DEFAULT_FINALISTS,
+                             .threshold = EMM_NOVELTY_THRESHOLD};
+    opts_row rows[] = {
+        {.name = "--window", .metavar = "N", .kind = OPT_U64, .dst = &a.window,
+         .min = EMM_PROFILE_MIN, .show_default = true,
+         .help = "element accesses to profile; up to " EXACT_MAX_TEXT " use the exact method, "
+                 "longer windows the fast one"},
+        {.name = "--table", .metavar = "FILE", .kind = OPT_TEXT, .dst = &a.table,
+         .help = "a user table added to the default one (default: $EMM_TABLE)"},
+        {.name = "--threshold", .metavar = "X", .kind = OPT_POSITIVE, .dst = &a.threshold,
+         .show_default = true, .help = "novelty threshold on the nearest distance"},
+        {.name = "--simulate", .kind = OPT_FLAG, .dst = &a.simulate,
+         .help = "simulate the sweep on the window even when not novel"},
+        {.name = "--finalists", .metavar = "N", .kind = OPT_U64, .dst = &a.finalists, .max = 64,
+         .show_default = true,
+         .help = "the run's contest, as emm run holds it: every candidate from the trace's "
+                 "start, the slower half dropped at 2, 4, 8, ... windows until N remain; the "
+                 "fastest over the trace is the answer; 0: the window's prediction stands"},
+        {.name = "--learn", .metavar = "NAME", .kind = OPT_TEXT, .dst = &a.learn,
+         .help = "when the sweep ran, append the profile as sample NAME with the sweep's best "
+                 "strategy to the user table (--table or $EMM_TABLE, created when missing)"},
+        {.name = "--pattern", .metavar = "CLASS", .kind = OPT_TEXT, .dst = &a.pattern,
+         .show_default = true, .help = "the pattern class of a learnt sample"},
+        MACHINE_CLI_OPTS(&a.mc),
+        {.name = "--dump", .metavar = "FILE", .kind = OPT_TEXT, .dst = &a.dump,
+         .help = "write the profile as CSV with the columns i,D"},
+        {.name = "--json", .metavar = "FILE", .kind = OPT_TEXT, .dst = &a.json,
+         .help = "write pattern, strategy, nearest, distance, novel as JSON"},
+        {.metavar = "TRACE", .kind = OPT_TEXT, .dst = &a.trace, .required = true},
+        OPTS_END,
+    };
+    opts o = {CMD, rows, usage};
+    return opts_run(&o, argc, argv, profile, &a);
 }

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "opts.h"
 #include "emm/replay.h"
 #include "emm/sim.h"
 #include "emm/strategy.h"
@@ -14,7 +15,7 @@
 
 #define MAX_JOBS 256
 
-static void usage(FILE *out)
+static void usage(FILE *out, const opts *o)
 {
     char sweep[256];
     emm_strategy_sweep_describe(sweep, sizeof sweep);
@@ -37,32 +38,23 @@ static void usage(FILE *out)
             "strategy that cannot run on this trace (a cell larger than the local store, a\n"
             "trace without geometry) is listed as skipped with the reason, and the sweep\n"
             "goes on.\n"
-            "\n"
-            "  --strategy S     direct (word-by-word remote reads), cache (the hardware cache\n"
-            "                   on the original addresses), cache@LAYOUT (the cache on the\n"
-            "                   addresses of a reordered layout: grid, tiles, quadtree) or\n"
-            "                   LAYOUT+FETCH[@CELL] (an EMM strategy); may be repeated;\n"
-            "                   default: direct and cache\n"
-            "  --all            the standard sweep (not with --strategy)\n"
-            "  --jobs N         threads simulating strategies (default: the online CPUs,\n"
-            "                   at most one per strategy); results do not depend on N\n"
-            "  --json FILE      also write the JSON report (docs/report.md), whole or not at all\n"
-            "  --timeline FILE  write the first strategy's simulated run as Chrome/Perfetto\n"
-            "                   trace-event JSON (open it in ui.perfetto.dev or\n"
-            "                   chrome://tracing): a track per DMA channel with every\n"
-            "                   transfer, the core's DMA stalls and cell entries; at most\n"
-            "                   " EMM_TIMELINE_MAX_EVENTS_TEXT " events, and its \"otherData\" says when the cap\n"
-            "                   was hit (docs/report.md \"Timelines\")\n"
-            "  --memory BYTES   memory the models may take together (K/M/G; default half the\n"
-            "                   physical memory, at most 4G): a sweep that needs more runs\n"
-            "                   in passes over the trace, with the same results\n"
-            "  --quiet          no table, no progress\n"
-            MACHINE_CLI_HELP
+            "\n",
+            sweep);
+    opts_help(out, o);
+    fprintf(out,
             "\n"
             "environment:\n"
-            "  EMM_MACHINE      machine file used when --machine is absent\n",
-            sweep);
+            "  EMM_MACHINE      machine file used when --machine is absent\n");
 }
+
+/* What the command line asked for. */
+struct replay_args {
+    machine_cli mc;
+    opts_list strategies; /* checked strategy strings */
+    const char *trace, *json, *timeline;
+    int quiet, all;
+    uint64_t jobs, memory;
+};
 
 struct progress_ctx {
     int on;
@@ -238,84 +230,33 @@ static void print_sweep(const char *trace, uint64_t accesses, const emm_machine 
 }
 
 /* emm replay with its arrays: strategies, results and skipped hold `cap`
- * entries (one per argument, or the sweep). */
-static int replay_main(int argc, char **argv, emm_strategy *strategies, emm_result *results,
+ * entries (one per --strategy, or the sweep). */
+static int replay_main(struct replay_args *a, emm_strategy *strategies, emm_result *results,
                        emm_error *skipped, size_t cap)
 {
-    machine_cli mc = {0};
     size_t nstrategies = 0;
-    const char *trace = NULL, *json = NULL, *timeline = NULL;
-    int quiet = 0, all = 0, rc;
-    uint64_t jobs = 0, memory = 0;
+    const char *trace = a->trace, *json = a->json, *timeline = a->timeline;
+    int quiet = a->quiet, all = a->all, rc;
     emm_machine *m = NULL;
     emm_error err;
     uint64_t accesses = 0;
     struct progress_ctx pctx;
 
-    for (int i = 1; i < argc; i++) {
-        int r;
-        const char *v;
-        if (cli_is_help(argv[i])) {
-            usage(stdout);
-            return EMM_EXIT_OK;
-        }
-        r = machine_cli_option(&mc, "replay", argc, argv, &i);
-        if (r < 0)
-            return EMM_EXIT_USAGE;
-        if (r > 0)
-            continue;
-        if (strcmp(argv[i], "--strategy") == 0 || strcmp(argv[i], "-s") == 0) {
-            if (!(v = cli_value("replay", argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-            if (emm_strategy_parse(v, &strategies[nstrategies], &err) != EMM_OK)
-                return cli_usage_error("replay", "%s", err.message);
-            nstrategies++;
-        } else if (strcmp(argv[i], "--all") == 0) {
-            all = 1;
-        } else if (strcmp(argv[i], "--jobs") == 0 || strcmp(argv[i], "-j") == 0) {
-            const char *opt = argv[i];
-            if (!(v = cli_value("replay", argc, argv, &i)) || !cli_u64("replay", opt, v, &jobs))
-                return EMM_EXIT_USAGE;
-            if (jobs < 1 || jobs > MAX_JOBS)
-                return cli_usage_error("replay", "%s '%s': a number of threads from 1 to %d", opt,
-                                       v, MAX_JOBS);
-        } else if (strcmp(argv[i], "--memory") == 0) {
-            const char *opt = argv[i];
-            if (!(v = cli_value("replay", argc, argv, &i)) || !cli_size("replay", opt, v, &memory))
-                return EMM_EXIT_USAGE;
-            if (memory == 0)
-                return cli_usage_error("replay", "--memory '%s': at least 1 byte", v);
-        } else if (strcmp(argv[i], "--json") == 0) {
-            if (!(json = cli_value("replay", argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(argv[i], "--timeline") == 0) {
-            if (!(timeline = cli_value("replay", argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(argv[i], "--quiet") == 0 || strcmp(argv[i], "-q") == 0) {
-            quiet = 1;
-        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            return cli_usage_error("replay", "unknown option '%s'", argv[i]);
-        } else if (!trace) {
-            trace = argv[i];
-        } else {
-            return cli_usage_error("replay", "unexpected argument '%s'", argv[i]);
-        }
-    }
-    if (!trace)
-        return cli_usage_error("replay", "missing TRACE");
-    if (all && nstrategies > 0)
+    if (all && a->strategies.n > 0)
         return cli_usage_error("replay", "--all and --strategy do not go together");
     if (all) {
         nstrategies = emm_strategy_sweep(strategies, cap);
-    } else if (nstrategies == 0) {
+    } else if (a->strategies.n == 0) {
         emm_strategy_parse("direct", &strategies[nstrategies++], NULL);
         emm_strategy_parse("cache", &strategies[nstrategies++], NULL);
     }
-    if ((rc = machine_cli_build(&mc, "replay", &m)) != 0)
+    for (size_t i = 0; i < a->strategies.n; i++) /* checked by opts_parse */
+        emm_strategy_parse(a->strategies.v[i], &strategies[nstrategies++], NULL);
+    if ((rc = machine_cli_build(&a->mc, "replay", &m)) != 0)
         return rc;
 
     pctx.on = !quiet && isatty(STDERR_FILENO);
-    emm_replay_options ropt = {(unsigned)jobs, progress, &pctx, json != NULL, memory,
+    emm_replay_options ropt = {(unsigned)a->jobs, progress, &pctx, json != NULL, a->memory,
                                NULL, NULL, NULL};
     if (timeline && emm_timeline_open(timeline, m, &strategies[0], 0, &ropt.timeline, &err) !=
                         EMM_OK) {
@@ -363,16 +304,17 @@ static int replay_main(int argc, char **argv, emm_strategy *strategies, emm_resu
     return EMM_EXIT_OK;
 }
 
-int emm_cmd_replay(int argc, char **argv)
+static int replay(void *p)
 {
-    /* At most one strategy per argument, or the sweep. */
-    size_t cap = (size_t)argc + emm_strategy_sweep(NULL, 0);
+    struct replay_args *a = p;
+    /* One strategy per --strategy, or the sweep. */
+    size_t cap = a->strategies.n + emm_strategy_sweep(NULL, 0);
     emm_strategy *strategies = calloc(cap, sizeof *strategies);
     emm_result *results = calloc(cap, sizeof *results);
     emm_error *skipped = calloc(cap, sizeof *skipped);
     int rc;
     if (strategies && results && skipped) {
-        rc = replay_main(argc, argv, strategies, results, skipped, cap);
+        rc = replay_main(a, strategies, results, skipped, cap);
     } else {
         cli_error("replay: out of memory");
         rc = EMM_EXIT_FAIL;
@@ -381,4 +323,42 @@ int emm_cmd_replay(int argc, char **argv)
     free(results);
     free(skipped);
     return rc;
+}
+
+int emm_cmd_replay(int argc, char **argv)
+{
+    struct replay_args a = {0};
+    opts_row rows[] = {
+        {.name = "--strategy", .alias = "-s", .metavar = "S", .kind = OPT_STRATEGY,
+         .repeat = true, .dst = &a.strategies,
+         .help = "direct (word-by-word remote reads), cache (the hardware cache on the original "
+                 "addresses), cache@LAYOUT (the cache on the addresses of a reordered layout: "
+                 "grid, tiles, quadtree) or LAYOUT+FETCH[@CELL] (an EMM strategy); may be "
+                 "repeated; default: direct and cache"},
+        {.name = "--all", .kind = OPT_FLAG, .dst = &a.all,
+         .help = "the standard sweep (not with --strategy)"},
+        {.name = "--jobs", .alias = "-j", .metavar = "N", .kind = OPT_U64, .dst = &a.jobs,
+         .min = 1, .max = MAX_JOBS,
+         .help = "threads simulating strategies (default: the online CPUs, at most one per "
+                 "strategy); results do not depend on N"},
+        {.name = "--json", .metavar = "FILE", .kind = OPT_TEXT, .dst = &a.json,
+         .help = "also write the JSON report (docs/report.md), whole or not at all"},
+        {.name = "--timeline", .metavar = "FILE", .kind = OPT_TEXT, .dst = &a.timeline,
+         .help = "write the first strategy's simulated run as Chrome/Perfetto trace-event JSON "
+                 "(open it in ui.perfetto.dev or chrome://tracing): a track per DMA channel with "
+                 "every transfer, the core's DMA stalls and cell entries; at most "
+                 EMM_TIMELINE_MAX_EVENTS_TEXT " events, and its \"otherData\" says when the cap "
+                 "was hit (docs/report.md \"Timelines\")"},
+        {.name = "--memory", .metavar = "BYTES", .kind = OPT_SIZE, .dst = &a.memory, .min = 1,
+         .help = "memory the models may take together (K/M/G; default half the physical "
+                 "memory, at most 4G): a sweep that needs more runs in passes over the trace, "
+                 "with the same results"},
+        {.name = "--quiet", .alias = "-q", .kind = OPT_FLAG, .dst = &a.quiet,
+         .help = "no table, no progress"},
+        MACHINE_CLI_OPTS(&a.mc),
+        {.metavar = "TRACE", .kind = OPT_TEXT, .dst = &a.trace, .required = true},
+        OPTS_END,
+    };
+    opts o = {"replay", rows, usage};
+    return opts_run(&o, argc, argv, replay, &a);
 }

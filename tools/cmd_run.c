@@ -22,14 +22,16 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "opts.h"
 #include "emm/config.h"
 #include "emm/session.h"
 
 #define SHIM_NAME "libemmshim.so"
 #define VGTOOL_NAME "emm/valgrind/emm-amd64-linux"
 
-static void usage(FILE *out)
+static void usage(FILE *out, const opts *o)
 {
+    (void)o; /* the options are the configuration table's rows */
     fprintf(out,
             "usage: emm run [OPTIONS] -- PROGRAM [ARGS...]\n"
             "\n"
@@ -241,46 +243,64 @@ static const char *get_env(const char *name)
     return getenv(name);
 }
 
+/* The options as they are parsed, each by its row of the configuration
+ * table. */
+struct run_options {
+    emm_config cfg;
+    const char *values[EMM_CONFIG_COUNT]; /* as given, for the environment */
+    unsigned given;                       /* 1u << key for each one given */
+};
+
+/* Sets the row whose option or switch `as` is; a bad value stops here,
+ * naming the option, before the program starts. */
+static bool run_option(void *dst, const char *as, const char *value)
+{
+    struct run_options *ro = dst;
+    const char *fixed;
+    emm_error err;
+    emm_config_key k = emm_config_find_option(as, &fixed);
+    if (fixed)
+        value = fixed;
+    if (emm_config_set(&ro->cfg, k, value, as, (long)getpid(), &err) != EMM_OK) {
+        cli_bad_value("run", &err);
+        return false;
+    }
+    ro->values[k] = value;
+    ro->given |= 1u << k;
+    return true;
+}
+
 int emm_cmd_run(int argc, char **argv)
 {
-    emm_config cfg;
-    const char *values[EMM_CONFIG_COUNT] = {0};
-    unsigned given = 0;
+    struct run_options ro = {0};
+    opts_row rows[EMM_CONFIG_COUNT * (1 + EMM_CONFIG_SWITCHES) + 2];
+    size_t n = 0;
     emm_error err;
-    int i;
+    int i = argc, rc;
 
-    /* The options, each parsed by its row of the configuration table: a bad
-     * one stops here, naming the option, before the program starts. */
-    emm_config_init(&cfg);
-    for (i = 1; i < argc; i++) {
-        const char *a = argv[i], *fixed;
-        if (strcmp(a, "--") == 0) {
-            i++;
-            break;
-        }
-        if (cli_is_help(a)) {
-            usage(stdout);
-            return EMM_EXIT_OK;
-        }
-        if (a[0] != '-')
-            break; /* the program, without "--" */
-        emm_config_key k = emm_config_find_option(a, &fixed);
-        if (k == EMM_CONFIG_COUNT)
-            return cli_usage_error("run", "unknown option '%s'", a);
-        const char *v = fixed ? fixed : cli_value("run", argc, argv, &i);
-        if (!v)
-            return EMM_EXIT_USAGE;
-        if (emm_config_set(&cfg, k, v, a, (long)getpid(), &err) != EMM_OK)
-            return cli_bad_value("run", &err);
-        values[k] = v;
-        given |= 1u << k;
+    /* A row for each option and each switch of the configuration table,
+     * then PROGRAM, which ends the options. */
+    emm_config_init(&ro.cfg);
+    for (int k = 0; k < EMM_CONFIG_COUNT; k++) {
+        const emm_config_row *r = emm_config_row_get((emm_config_key)k);
+        if (r->option)
+            rows[n++] = (opts_row){.name = r->option, .metavar = r->metavar, .kind = OPT_CALL,
+                                   .dst = &ro, .call = run_option};
+        for (int w = 0; w < EMM_CONFIG_SWITCHES && r->switches[w].option; w++)
+            rows[n++] = (opts_row){.name = r->switches[w].option, .kind = OPT_CALL, .dst = &ro,
+                                   .call = run_option};
     }
-    if (i >= argc)
-        return cli_usage_error("run", "missing PROGRAM (emm run [OPTIONS] -- PROGRAM [ARGS...])");
+    rows[n++] = (opts_row){.metavar = "PROGRAM", .kind = OPT_REST, .dst = &i, .required = true};
+    rows[n] = (opts_row)OPTS_END;
+    opts o = {"run", rows, usage};
+    if (opts_parse(&o, argc, argv, &rc))
+        return rc;
+    emm_config cfg = ro.cfg;
+    const char **values = ro.values;
     /* The variables the options leave alone, as the shim will read them;
      * then what only a session can check (a machine file's keys, a table's
      * samples), as the shim will start it. */
-    if (emm_config_from_env(&cfg, get_env, (long)getpid(), given, &err) != EMM_OK)
+    if (emm_config_from_env(&cfg, get_env, (long)getpid(), ro.given, &err) != EMM_OK)
         return cli_bad_value("run", &err);
     emm_session_config sc = {&cfg, cfg.capture, argv[i], 0, {1, NULL, NULL}, NULL, NULL};
     emm_session *probe;

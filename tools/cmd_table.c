@@ -16,8 +16,9 @@
 #include "emm/table.h"
 #include "emm/trace.h"
 #include "machine_cli.h"
+#include "opts.h"
 
-static void usage(FILE *out)
+static void usage_head(FILE *out)
 {
     char def[4096];
     emm_table_default_path(def, sizeof def);
@@ -49,32 +50,55 @@ static void usage(FILE *out)
             "         prog-<file name>-wN, of pattern CLASS and synthetic recipe RECIPE (a\n"
             "         pattern of emm trace synth, PATTERN@corner, PATTERN@N, or -), labelled\n"
             "         as the canonical ones (scripts/table.sh makes the shipped table so,\n"
-            "         from the example workloads' traces on meshes the tests do not use)\n"
-            MACHINE_CLI_HELP,
+            "         from the example workloads' traces on meshes the tests do not use)\n",
             def, EMM_PROFILE_DEFAULT_WINDOW);
+}
+
+static void usage_all(FILE *out)
+{
+    usage_head(out);
+    fprintf(out, "\n'emm table SUBCOMMAND --help' lists each subcommand's options.\n");
+}
+
+static void usage(FILE *out, const opts *o)
+{
+    usage_head(out);
+    fprintf(out, "\noptions of emm %s:\n", o->cmd);
+    opts_help(out, o);
+}
+
+/* The user table: --table, else $EMM_TABLE (read by the configuration
+ * table), else ""; a table to add to may not exist yet. */
+static int user_table(const char *table, bool to_add, char path[EMM_CONFIG_PATH_MAX])
+{
+    if (!table)
+        return cli_env_file(EMM_CONFIG_TABLE, to_add, path);
+    if (strlen(table) >= EMM_CONFIG_PATH_MAX)
+        return cli_usage_error("table", "--table: path too long");
+    strcpy(path, table);
+    return 0;
 }
 
 static int table_list(int argc, char **argv)
 {
-    const char *cmd = "table list", *table = NULL;
-    for (int i = 1; i < argc; i++) {
-        if (cli_is_help(argv[i])) {
-            usage(stdout);
-            return EMM_EXIT_OK;
-        } else if (strcmp(argv[i], "--table") == 0) {
-            if (!(table = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else {
-            return cli_usage_error(cmd, "unexpected argument '%s'", argv[i]);
-        }
-    }
+    const char *table = NULL;
+    char user[EMM_CONFIG_PATH_MAX];
+    opts_row rows[] = {
+        {.name = "--table", .metavar = "FILE", .kind = OPT_TEXT, .dst = &table,
+         .help = "the user table (default: $EMM_TABLE)"},
+        OPTS_END,
+    };
+    opts o = {"table list", rows, usage};
+    int rc;
+    if (opts_parse(&o, argc, argv, &rc) || (rc = user_table(table, false, user)) != 0)
+        return rc;
     emm_error err;
     emm_table *t = emm_table_new();
     if (!t) {
         cli_error("out of memory");
         return EMM_EXIT_FAIL;
     }
-    if (emm_table_load_standard(t, table, &err) != EMM_OK) {
+    if (emm_table_load_standard(t, user[0] ? user : NULL, &err) != EMM_OK) {
         emm_table_free(t);
         return cli_fail(&err);
     }
@@ -118,7 +142,7 @@ static emm_status window_features(emm_trace_reader *r, uint64_t window, const ch
 
 /* table add without --strategy: the best of the sweep on the window. */
 static int table_add_swept(const char *trace, const char *table, uint64_t window,
-                           const machine_cli *mc, emm_table_sample *s)
+                           machine_cli *mc, emm_table_sample *s)
 {
     emm_machine *m = NULL;
     int rc = machine_cli_build(mc, "table add", &m);
@@ -158,59 +182,26 @@ static int table_add_swept(const char *trace, const char *table, uint64_t window
     return rc;
 }
 
-static int table_add(int argc, char **argv)
+/* table add's command line. */
+struct add_args {
+    machine_cli mc;
+    const char *table, *trace, *name, *strategy, *pattern;
+    uint64_t window;
+};
+
+static int table_add_run(void *p)
 {
-    const char *cmd = "table add", *table = NULL, *trace = NULL, *name = NULL, *strategy = NULL;
-    const char *pattern = "user";
-    uint64_t window = EMM_PROFILE_DEFAULT_WINDOW;
-    machine_cli mc = {0};
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        int mo = machine_cli_option(&mc, cmd, argc, argv, &i);
-        if (mo < 0)
-            return EMM_EXIT_USAGE;
-        if (mo > 0)
-            continue;
-        if (cli_is_help(a)) {
-            usage(stdout);
-            return EMM_EXIT_OK;
-        } else if (strcmp(a, "--table") == 0) {
-            if (!(table = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--name") == 0) {
-            if (!(name = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--strategy") == 0) {
-            if (!(strategy = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--pattern") == 0) {
-            if (!(pattern = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--window") == 0) {
-            const char *v = cli_value(cmd, argc, argv, &i);
-            if (!v || !cli_u64(cmd, a, v, &window))
-                return EMM_EXIT_USAGE;
-            if (window < EMM_PROFILE_MIN)
-                return cli_usage_error(cmd, "--window must be at least %u", EMM_PROFILE_MIN);
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error(cmd, "unknown option '%s'", a);
-        } else if (!trace) {
-            trace = a;
-        } else {
-            return cli_usage_error(cmd, "one PROFILE trace only ('%s' is extra)", a);
-        }
-    }
-    if (!trace)
-        return cli_usage_error(cmd, "a PROFILE trace is required");
-    if (!name)
-        return cli_usage_error(cmd, "--name is required");
-    if (!table) {
-        const char *env = getenv("EMM_TABLE");
-        if (!env || !*env)
-            return cli_usage_error(cmd, "say which user table to add to: --table FILE or "
-                                        "EMM_TABLE");
-        table = env;
-    }
+    struct add_args *a = p;
+    const char *cmd = "table add", *trace = a->trace, *name = a->name;
+    const char *strategy = a->strategy, *pattern = a->pattern;
+    uint64_t window = a->window;
+    char table[EMM_CONFIG_PATH_MAX];
+    int rc = user_table(a->table, true, table);
+    if (rc != 0)
+        return rc;
+    if (!table[0])
+        return cli_usage_error(cmd, "say which user table to add to: --table FILE or "
+                                    "EMM_TABLE");
 
     emm_error err;
     emm_table_sample s;
@@ -220,16 +211,14 @@ static int table_add(int argc, char **argv)
                                EMM_TABLE_NAME_MAX - 1);
     snprintf(s.name, sizeof s.name, "%s", name);
     snprintf(s.pattern, sizeof s.pattern, "%s", pattern);
-    if (strategy && emm_strategy_parse(strategy, &s.strategy, &err) != EMM_OK)
-        return cli_usage_error(cmd, "%s", err.message);
     if (!strategy)
-        return table_add_swept(trace, table, window, &mc, &s);
+        return table_add_swept(trace, table, window, &a->mc, &s);
+    emm_strategy_parse(strategy, &s.strategy, NULL); /* checked by opts_parse */
 
     emm_trace_reader *r;
     if (emm_trace_reader_open(trace, &r, &err) != EMM_OK)
         return cli_fail(&err);
     size_t n = 0;
-    int rc = EMM_EXIT_OK;
     if (window_features(r, window, trace, s.f, &n, &err) != EMM_OK ||
         emm_table_append(table, &s, &err) != EMM_OK)
         rc = cli_fail(&err);
@@ -237,6 +226,29 @@ static int table_add(int argc, char **argv)
         printf("added %s (%s, %s) to %s\n", s.name, s.pattern, strategy, table);
     emm_trace_reader_close(r);
     return rc;
+}
+
+static int table_add(int argc, char **argv)
+{
+    struct add_args a = {.pattern = "user", .window = EMM_PROFILE_DEFAULT_WINDOW};
+    opts_row rows[] = {
+        {.name = "--name", .metavar = "NAME", .kind = OPT_TEXT, .dst = &a.name, .required = true,
+         .help = "the sample's name (required)"},
+        {.name = "--strategy", .metavar = "S", .kind = OPT_STRATEGY, .dst = &a.strategy,
+         .help = "the sample's strategy (default: the best of the standard sweep simulated on "
+                 "the window)"},
+        {.name = "--pattern", .metavar = "CLASS", .kind = OPT_TEXT, .dst = &a.pattern,
+         .show_default = true, .help = "the sample's pattern class"},
+        {.name = "--window", .metavar = "N", .kind = OPT_U64, .dst = &a.window,
+         .min = EMM_PROFILE_MIN, .show_default = true, .help = "element accesses to profile"},
+        {.name = "--table", .metavar = "FILE", .kind = OPT_TEXT, .dst = &a.table,
+         .help = "the user table to add to, created when missing (default: $EMM_TABLE)"},
+        MACHINE_CLI_OPTS(&a.mc),
+        {.metavar = "PROFILE", .kind = OPT_TEXT, .dst = &a.trace, .required = true},
+        OPTS_END,
+    };
+    opts o = {"table add", rows, usage};
+    return opts_run(&o, argc, argv, table_add_run, &a);
 }
 
 /* ---- emm table build ----------------------------------------------------- */
@@ -362,43 +374,23 @@ static int parse_program(const char *cmd, const char *v, struct program_trace *p
     return EMM_EXIT_OK;
 }
 
-enum { BUILD_MAX_PROGRAMS = 64 };
+/* table build's command line. */
+struct build_args {
+    machine_cli mc;
+    const char *out;
+    int quick;
+    opts_list programs; /* --program values */
+};
 
-static int table_build(int argc, char **argv)
+static int table_build_with(struct build_args *a, struct program_trace *progs)
 {
-    const char *cmd = "table build", *out = NULL;
-    int quick = 0;
-    machine_cli mc = {0};
-    static struct program_trace progs[BUILD_MAX_PROGRAMS];
-    size_t nprog = 0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        int mo = machine_cli_option(&mc, cmd, argc, argv, &i);
-        if (mo < 0)
-            return EMM_EXIT_USAGE;
-        if (mo > 0)
-            continue;
-        if (cli_is_help(a)) {
-            usage(stdout);
-            return EMM_EXIT_OK;
-        } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) {
-            if (!(out = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--quick") == 0) {
-            quick = 1;
-        } else if (strcmp(a, "--program") == 0) {
-            const char *v = cli_value(cmd, argc, argv, &i);
-            if (!v)
-                return EMM_EXIT_USAGE;
-            if (nprog == BUILD_MAX_PROGRAMS)
-                return cli_usage_error(cmd, "at most %d --program traces", BUILD_MAX_PROGRAMS);
-            int prc = parse_program(cmd, v, &progs[nprog]);
-            if (prc != EMM_EXIT_OK)
-                return prc;
-            nprog++;
-        } else {
-            return cli_usage_error(cmd, "unexpected argument '%s'", a);
-        }
+    const char *cmd = "table build", *out = a->out;
+    int quick = a->quick;
+    size_t nprog = a->programs.n;
+    for (size_t k = 0; k < nprog; k++) {
+        int prc = parse_program(cmd, a->programs.v[k], &progs[k]);
+        if (prc != EMM_EXIT_OK)
+            return prc;
     }
     char def[4096];
     if (!out) {
@@ -406,7 +398,7 @@ static int table_build(int argc, char **argv)
         out = def;
     }
     emm_machine *m = NULL;
-    int rc = machine_cli_build(&mc, cmd, &m);
+    int rc = machine_cli_build(&a->mc, cmd, &m);
     if (rc != 0)
         return rc;
 
@@ -463,8 +455,8 @@ static int table_build(int argc, char **argv)
                            "Generated by `emm table build%s%s%s%s`; do not edit by hand, rebuild.\n"
                            "Samples: canonical patterns (emm trace synth, seed 100 + the mesh's)\n"
                            "over planar Delaunay meshes (emm mesh gen):",
-                           quick ? " --quick" : "", mc.file ? " --machine " : "",
-                           mc.file ? mc.file : "", nprog ? " --program ..." : "");
+                           quick ? " --quick" : "", a->mc.file ? " --machine " : "",
+                           a->mc.file ? a->mc.file : "", nprog ? " --program ..." : "");
         for (size_t g = 0; g < nmesh && len > 0 && (size_t)len < sizeof comment; g++)
             len += snprintf(comment + len, sizeof comment - (size_t)len, " %zu %s faces seed %llu%s",
                             build_meshes[g].faces,
@@ -480,8 +472,8 @@ static int table_build(int argc, char **argv)
                      "\nwindows of %s element accesses; each strategy is the fewest cycles of\n"
                      "the standard sweep simulated on the whole traversal (%s machine%s).",
                      quick ? "4096 and 16384" : "4096, 16384 and 65536",
-                     mc.file || mc.nsets ? "a configured" : "the default",
-                     mc.nsets ? " with --set overrides" : "");
+                     a->mc.file || a->mc.sets.n ? "a configured" : "the default",
+                     a->mc.sets.n ? " with --set overrides" : "");
         if (emm_table_write(t, out, comment, &err) != EMM_OK)
             rc = cli_fail(&err);
         else
@@ -492,21 +484,44 @@ static int table_build(int argc, char **argv)
     return rc;
 }
 
+/* table build with an array for the --program traces. */
+static int table_build_run(void *p)
+{
+    struct build_args *a = p;
+    struct program_trace *progs = calloc(a->programs.n ? a->programs.n : 1, sizeof *progs);
+    int rc;
+    if (progs) {
+        rc = table_build_with(a, progs);
+    } else {
+        cli_error("out of memory");
+        rc = EMM_EXIT_FAIL;
+    }
+    free(progs);
+    return rc;
+}
+
+static int table_build(int argc, char **argv)
+{
+    struct build_args a = {0};
+    opts_row rows[] = {
+        {.name = "-o", .alias = "--output", .metavar = "FILE", .kind = OPT_TEXT, .dst = &a.out,
+         .help = "the table to write (default: the default table)"},
+        {.name = "--quick", .kind = OPT_FLAG, .dst = &a.quick,
+         .help = "two meshes and two windows, for tests"},
+        {.name = "--program", .metavar = "TRACE:CLASS:RECIPE", .kind = OPT_TEXT, .repeat = true,
+         .dst = &a.programs,
+         .help = "add the samples of a program's trace, of pattern CLASS and synthetic recipe "
+                 "RECIPE; may be repeated"},
+        MACHINE_CLI_OPTS(&a.mc),
+        OPTS_END,
+    };
+    opts o = {"table build", rows, usage};
+    return opts_run(&o, argc, argv, table_build_run, &a);
+}
+
 int emm_cmd_table(int argc, char **argv)
 {
-    if (argc < 2) {
-        usage(stderr);
-        return EMM_EXIT_USAGE;
-    }
-    if (cli_is_help(argv[1])) {
-        usage(stdout);
-        return EMM_EXIT_OK;
-    }
-    if (strcmp(argv[1], "list") == 0)
-        return table_list(argc - 1, argv + 1);
-    if (strcmp(argv[1], "add") == 0)
-        return table_add(argc - 1, argv + 1);
-    if (strcmp(argv[1], "build") == 0)
-        return table_build(argc - 1, argv + 1);
-    return cli_usage_error("table", "unknown subcommand '%s' (list, add, build)", argv[1]);
+    static const opts_sub subs[] = {{"list", table_list}, {"add", table_add},
+                                    {"build", table_build}, {NULL, NULL}};
+    return opts_subcommand("table", subs, usage_all, argc, argv);
 }

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "opts.h"
 #include "emm/mesh.h"
 #include "emm/synth.h"
 #include "emm/trace.h"
@@ -18,7 +19,7 @@
 
 #define READ_BATCH 65536
 
-static const char trace_usage[] =
+static const char trace_usage_text[] =
     "usage: emm trace info TRACE [--verify]\n"
     "       emm trace export --din TRACE [-o FILE]\n"
     "       emm trace import --din FILE -o TRACE [--bytes N] [--compress]\n"
@@ -29,67 +30,63 @@ static const char trace_usage[] =
     "writes).\n"
     "'emm trace SUBCOMMAND --help' explains each subcommand.\n";
 
-static const char info_usage[] =
-    "usage: emm trace info TRACE [--verify]\n"
-    "\n"
-    "Prints the trace's version, compression, arrays (kind, record size, count,\n"
-    "base address), geometry, accesses (reads and writes) and bytes on disk per\n"
-    "access.\n"
-    "\n"
-    "  --verify   also read every block, checking checksums and records, and\n"
-    "             print 'verify: ok' or exit 1 with the first problem\n";
+static void info_usage(FILE *out, const opts *o)
+{
+    fputs("usage: emm trace info TRACE [--verify]\n"
+          "\n"
+          "Prints the trace's version, compression, arrays (kind, record size, count,\n"
+          "base address), geometry, accesses (reads and writes) and bytes on disk per\n"
+          "access.\n"
+          "\n",
+          out);
+    opts_help(out, o);
+}
 
-static const char export_usage[] =
-    "usage: emm trace export --din TRACE [-o FILE]\n"
-    "\n"
-    "Writes the trace in Dinero IV's din format, one line per access:\n"
-    "'LABEL ADDRESS' with label 0 for a read, 1 for a write and the original\n"
-    "address (base + element * record size + offset) in hex. din has no size:\n"
-    "each access becomes one line at its first byte, which Dinero IV reads as\n"
-    "the 4-byte word holding it.\n"
-    "\n"
-    "  --din      the output format (the only one)\n"
-    "  -o FILE    write to FILE (whole or not at all) instead of stdout\n";
+static void export_usage(FILE *out, const opts *o)
+{
+    fputs("usage: emm trace export --din TRACE [-o FILE]\n"
+          "\n"
+          "Writes the trace in Dinero IV's din format, one line per access:\n"
+          "'LABEL ADDRESS' with label 0 for a read, 1 for a write and the original\n"
+          "address (base + element * record size + offset) in hex. din has no size:\n"
+          "each access becomes one line at its first byte, which Dinero IV reads as\n"
+          "the 4-byte word holding it.\n"
+          "\n",
+          out);
+    opts_help(out, o);
+}
 
-static const char import_usage[] =
-    "usage: emm trace import --din FILE -o TRACE [--bytes N] [--compress]\n"
-    "\n"
-    "Reads Dinero IV din text ('-' for stdin) and writes an address-only trace:\n"
-    "one raw-memory array, no geometry, so only the 'direct' and 'cache'\n"
-    "strategies apply to it. Label 0 is a read, 1 a write; 2 (instruction\n"
-    "fetch) is skipped, as emm models data accesses; other labels are errors.\n"
-    "Text after the address is ignored, as Dinero IV does.\n"
-    "\n"
-    "  --din        the input format (the only one)\n"
-    "  -o TRACE     the trace to write (required)\n"
-    "  --bytes N    bytes per access, 1 to 4096 (default: to the end of the\n"
-    "               aligned 4-byte word holding the address, the word Dinero IV\n"
-    "               would access)\n"
-    "  --compress   zstd-compress the trace's blocks\n";
+static void import_usage(FILE *out, const opts *o)
+{
+    fputs("usage: emm trace import --din FILE -o TRACE [--bytes N] [--compress]\n"
+          "\n"
+          "Reads Dinero IV din text ('-' for stdin) and writes an address-only trace:\n"
+          "one raw-memory array, no geometry, so only the 'direct' and 'cache'\n"
+          "strategies apply to it. Label 0 is a read, 1 a write; 2 (instruction\n"
+          "fetch) is skipped, as emm models data accesses; other labels are errors.\n"
+          "Text after the address is ignored, as Dinero IV does.\n"
+          "\n",
+          out);
+    opts_help(out, o);
+}
 
 /* ------------------------------------------------------------------------ */
 
 static int trace_info(int argc, char **argv)
 {
-    const char *cmd = "trace info";
     const char *path = NULL;
     int verify = 0;
-    for (int i = 1; i < argc; i++) {
-        if (cli_is_help(argv[i])) {
-            fputs(info_usage, stdout);
-            return EMM_EXIT_OK;
-        } else if (strcmp(argv[i], "--verify") == 0) {
-            verify = 1;
-        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
-        } else if (path) {
-            return cli_usage_error(cmd, "one trace at a time ('%s' and '%s')", path, argv[i]);
-        } else {
-            path = argv[i];
-        }
-    }
-    if (!path)
-        return cli_usage_error(cmd, "which trace?");
+    opts_row rows[] = {
+        {.name = "--verify", .kind = OPT_FLAG, .dst = &verify,
+         .help = "also read every block, checking checksums and records, and print "
+                 "'verify: ok' or exit 1 with the first problem"},
+        {.metavar = "TRACE", .kind = OPT_TEXT, .dst = &path, .required = true},
+        OPTS_END,
+    };
+    opts o = {"trace info", rows, info_usage};
+    int rc;
+    if (opts_parse(&o, argc, argv, &rc))
+        return rc;
 
     emm_error err;
     emm_trace_reader *r = NULL;
@@ -132,7 +129,7 @@ static int trace_info(int argc, char **argv)
                (double)size / (double)info->accesses);
     else
         printf("file:        %" PRIu64 " bytes\n", size);
-    int rc = EMM_EXIT_OK;
+    rc = EMM_EXIT_OK;
     if (verify) {
         emm_trace_record *buf = malloc(READ_BATCH * sizeof *buf);
         if (!buf) {
@@ -220,30 +217,20 @@ static int out_close(struct out_file *o, int ok)
 
 static int trace_export(int argc, char **argv)
 {
-    const char *cmd = "trace export";
     const char *path = NULL, *out = NULL;
     int din = 0;
-    for (int i = 1; i < argc; i++) {
-        if (cli_is_help(argv[i])) {
-            fputs(export_usage, stdout);
-            return EMM_EXIT_OK;
-        } else if (strcmp(argv[i], "--din") == 0) {
-            din = 1;
-        } else if (strcmp(argv[i], "-o") == 0 || strcmp(argv[i], "--output") == 0) {
-            if (!(out = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
-        } else if (path) {
-            return cli_usage_error(cmd, "one trace at a time ('%s' and '%s')", path, argv[i]);
-        } else {
-            path = argv[i];
-        }
-    }
-    if (!din)
-        return cli_usage_error(cmd, "which format? (--din is the only one)");
-    if (!path)
-        return cli_usage_error(cmd, "which trace?");
+    opts_row rows[] = {
+        {.name = "--din", .kind = OPT_FLAG, .dst = &din, .required = true,
+         .help = "the output format (the only one)"},
+        {.name = "-o", .alias = "--output", .metavar = "FILE", .kind = OPT_TEXT, .dst = &out,
+         .help = "write to FILE (whole or not at all) instead of stdout"},
+        {.metavar = "TRACE", .kind = OPT_TEXT, .dst = &path, .required = true},
+        OPTS_END,
+    };
+    opts o = {"trace export", rows, export_usage};
+    int rc;
+    if (opts_parse(&o, argc, argv, &rc))
+        return rc;
 
     emm_error err;
     emm_trace_reader *r = NULL;
@@ -252,7 +239,7 @@ static int trace_export(int argc, char **argv)
     const emm_trace_info *info = emm_trace_reader_info(r);
     emm_trace_record *buf = malloc(READ_BATCH * sizeof *buf);
     char *text = malloc((size_t)READ_BATCH * 20);
-    struct out_file o;
+    struct out_file dest;
     if (!buf || !text) {
         cli_error("%s: out of memory", path);
         free(buf);
@@ -260,7 +247,7 @@ static int trace_export(int argc, char **argv)
         emm_trace_reader_close(r);
         return EMM_EXIT_FAIL;
     }
-    if (out_open(&o, out) != 0) {
+    if (out_open(&dest, out) != 0) {
         free(buf);
         free(text);
         emm_trace_reader_close(r);
@@ -278,7 +265,7 @@ static int trace_export(int argc, char **argv)
             uint64_t addr = a->base + buf[i].element * a->record_size + buf[i].offset;
             p = put_din_line(p, buf[i].write, addr);
         }
-        if (fwrite(text, 1, (size_t)(p - text), o.f) != (size_t)(p - text)) {
+        if (fwrite(text, 1, (size_t)(p - text), dest.f) != (size_t)(p - text)) {
             cli_error("%s: cannot write: %s", out ? out : "stdout", strerror(errno));
             ok = 0;
             break;
@@ -291,49 +278,35 @@ static int trace_export(int argc, char **argv)
     free(buf);
     free(text);
     emm_trace_reader_close(r);
-    return out_close(&o, ok) == 0 ? EMM_EXIT_OK : EMM_EXIT_FAIL;
+    return out_close(&dest, ok) == 0 ? EMM_EXIT_OK : EMM_EXIT_FAIL;
 }
 
 /* ------------------------------------------------------------------------ */
 
 static int trace_import(int argc, char **argv)
 {
-    const char *cmd = "trace import";
     const char *in = NULL, *out = NULL;
     int din = 0, compress = 0;
     uint64_t fixed_bytes = 0;
-    for (int i = 1; i < argc; i++) {
-        if (cli_is_help(argv[i])) {
-            fputs(import_usage, stdout);
-            return EMM_EXIT_OK;
-        } else if (strcmp(argv[i], "--din") == 0) {
-            din = 1;
-        } else if (strcmp(argv[i], "--compress") == 0) {
-            compress = 1;
-        } else if (strcmp(argv[i], "-o") == 0 || strcmp(argv[i], "--output") == 0) {
-            if (!(out = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(argv[i], "--bytes") == 0) {
-            const char *v = cli_value(cmd, argc, argv, &i);
-            if (!v || !cli_u64(cmd, "--bytes", v, &fixed_bytes))
-                return EMM_EXIT_USAGE;
-            if (fixed_bytes == 0 || fixed_bytes > EMM_TRACE_MAX_ACCESS_BYTES)
-                return cli_usage_error(cmd, "--bytes must be between 1 and %u",
-                                       EMM_TRACE_MAX_ACCESS_BYTES);
-        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
-        } else if (in) {
-            return cli_usage_error(cmd, "one input at a time ('%s' and '%s')", in, argv[i]);
-        } else {
-            in = argv[i];
-        }
-    }
-    if (!din)
-        return cli_usage_error(cmd, "which format? (--din is the only one)");
-    if (!in)
-        return cli_usage_error(cmd, "which din file?");
-    if (!out)
-        return cli_usage_error(cmd, "-o TRACE is required");
+    opts_row rows[] = {
+        {.name = "--din", .kind = OPT_FLAG, .dst = &din, .required = true,
+         .help = "the input format (the only one)"},
+        {.name = "-o", .alias = "--output", .metavar = "TRACE", .kind = OPT_TEXT, .dst = &out,
+         .required = true,
+         .help = "the trace to write (required)"},
+        {.name = "--bytes", .metavar = "N", .kind = OPT_U64, .dst = &fixed_bytes, .min = 1,
+         .max = EMM_TRACE_MAX_ACCESS_BYTES,
+         .help = "bytes per access, 1 to 4096 (default: to the end of the aligned 4-byte word "
+                 "holding the address, the word Dinero IV would access)"},
+        {.name = "--compress", .kind = OPT_FLAG, .dst = &compress,
+         .help = "zstd-compress the trace's blocks"},
+        {.metavar = "FILE", .kind = OPT_TEXT, .dst = &in, .required = true},
+        OPTS_END,
+    };
+    opts o = {"trace import", rows, import_usage};
+    int rc;
+    if (opts_parse(&o, argc, argv, &rc))
+        return rc;
 
     const char *in_name = strcmp(in, "-") == 0 ? "stdin" : in;
     FILE *f = strcmp(in, "-") == 0 ? stdin : fopen(in, "r");
@@ -376,99 +349,76 @@ static int trace_import(int argc, char **argv)
 
 /* ------------------------------------------------------------------------ */
 
-static const char synth_usage[] =
-    "usage: emm trace synth --mesh FILE --pattern P -o TRACE [--seed S] [--visits N]\n"
-    "                       [--length L] [--corner] [--work W] [--compress]\n"
-    "\n"
-    "Writes the trace of a canonical traversal over a mesh (thesis §5, Table 5.1):\n"
-    "each triangle visit reads the triangle's record (vertex indices and\n"
-    "neighbours, 24 bytes) and then its three vertices' coordinates (24 bytes\n"
-    "each), so a trace has 4 records per visit, over the thesis' record layout\n"
-    "(80-byte vertices, 28-byte triangles) and the mesh's geometry. The same\n"
-    "options give the same file, byte for byte.\n"
-    "\n"
-    "  --mesh FILE      the mesh (OFF, OBJ, PLY, STL)\n"
-    "  --pattern P      region    breadth-first growth over edge neighbours from a seed\n"
-    "                   curve     straight walks across triangles from random starts\n"
-    "                   scanline  rows of triangles by centroid, left to right\n"
-    "                   zorder    triangles in Z-order (Morton) of their centroids\n"
-    "                   gray      triangles in Gray-code order of their centroids\n"
-    "                   hilbert   triangles in Hilbert order of their centroids\n"
-    "                   random    triangles in a uniformly random order\n"
-    "                   spiral    triangles by angle then radius around the centre\n"
-    "  -o, --output F   the trace to write (required), whole or not at all\n"
-    "  --seed S         seed of region's start, curves' starts and directions and\n"
-    "                   random's order (default 1)\n"
-    "  --visits N       stop after N triangle visits (default: every triangle once;\n"
-    "                   curve: as many visits as triangles). Only curve visits\n"
-    "                   a triangle more than once, so the other patterns stop at\n"
-    "                   the triangle count\n"
-    "  --length L       curve: triangles per walk before a new walk starts\n"
-    "                   (default 0: walk to the boundary)\n"
-    "  --corner         region: start at the corner triangle (lowest x + y centroid)\n"
-    "                   instead of one drawn from the seed\n"
-    "  --work W         compute cycles recorded before each access (default 0)\n"
-    "  --compress       zstd-compress the trace's blocks\n";
+static void synth_usage(FILE *out, const opts *o)
+{
+    fputs("usage: emm trace synth --mesh FILE --pattern P -o TRACE [--seed S] [--visits N]\n"
+          "                       [--length L] [--corner] [--work W] [--compress]\n"
+          "\n"
+          "Writes the trace of a canonical traversal over a mesh (thesis §5, Table 5.1):\n"
+          "each triangle visit reads the triangle's record (vertex indices and\n"
+          "neighbours, 24 bytes) and then its three vertices' coordinates (24 bytes\n"
+          "each), so a trace has 4 records per visit, over the thesis' record layout\n"
+          "(80-byte vertices, 28-byte triangles) and the mesh's geometry. The same\n"
+          "options give the same file, byte for byte.\n"
+          "\n",
+          out);
+    opts_help(out, o);
+}
 
 static int trace_synth(int argc, char **argv)
 {
     const char *cmd = "trace synth";
-    const char *mesh_path = NULL, *pattern = NULL, *out = NULL;
+    const char *mesh_path = NULL, *out = NULL;
+    const char *patterns[EMM_PATTERN_COUNT + 1];
     emm_synth_options opt;
-    uint64_t v;
+    uint64_t work = 0;
+    int pattern = 0;
     emm_error err;
 
     memset(&opt, 0, sizeof opt);
     opt.seed = 1;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *val;
-        if (cli_is_help(a)) {
-            fputs(synth_usage, stdout);
-            return EMM_EXIT_OK;
-        } else if (strcmp(a, "--mesh") == 0) {
-            if (!(mesh_path = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--pattern") == 0) {
-            if (!(pattern = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) {
-            if (!(out = cli_value(cmd, argc, argv, &i)))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--seed") == 0) {
-            if (!(val = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, a, val, &opt.seed))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--visits") == 0) {
-            if (!(val = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, a, val, &opt.visits))
-                return EMM_EXIT_USAGE;
-            if (opt.visits == 0)
-                return cli_usage_error(cmd, "--visits must be at least 1");
-        } else if (strcmp(a, "--length") == 0) {
-            if (!(val = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, a, val, &opt.length))
-                return EMM_EXIT_USAGE;
-        } else if (strcmp(a, "--work") == 0) {
-            if (!(val = cli_value(cmd, argc, argv, &i)) || !cli_u64(cmd, a, val, &v))
-                return EMM_EXIT_USAGE;
-            if (v > UINT32_MAX)
-                return cli_usage_error(cmd, "--work '%s' is above %u", val, UINT32_MAX);
-            opt.work = (uint32_t)v;
-        } else if (strcmp(a, "--corner") == 0) {
-            opt.corner_seed = 1;
-        } else if (strcmp(a, "--compress") == 0) {
-            opt.compress = 1;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error(cmd, "unknown option '%s'", a);
-        } else {
-            return cli_usage_error(cmd, "unexpected argument '%s'", a);
-        }
-    }
-    if (!mesh_path)
-        return cli_usage_error(cmd, "missing --mesh FILE");
-    if (!pattern)
-        return cli_usage_error(cmd, "missing --pattern P");
-    if (!out)
-        return cli_usage_error(cmd, "missing -o TRACE");
-    if (emm_pattern_parse(pattern, &opt.pattern, &err) != EMM_OK)
-        return cli_usage_error(cmd, "%s", err.message);
+    for (int k = 0; k < EMM_PATTERN_COUNT; k++)
+        patterns[k] = emm_pattern_name((emm_pattern)k);
+    patterns[EMM_PATTERN_COUNT] = NULL;
+    opts_row rows[] = {
+        {.name = "--mesh", .metavar = "FILE", .kind = OPT_TEXT, .dst = &mesh_path,
+         .required = true, .help = "the mesh (OFF, OBJ, PLY, STL)"},
+        {.name = "--pattern", .metavar = "P", .kind = OPT_WORD, .dst = &pattern, .words = patterns,
+         .required = true,
+         .help = "region    breadth-first growth over edge neighbours from a seed\n"
+                 "curve     straight walks across triangles from random starts\n"
+                 "scanline  rows of triangles by centroid, left to right\n"
+                 "zorder    triangles in Z-order (Morton) of their centroids\n"
+                 "gray      triangles in Gray-code order of their centroids\n"
+                 "hilbert   triangles in Hilbert order of their centroids\n"
+                 "random    triangles in a uniformly random order\n"
+                 "spiral    triangles by angle then radius around the centre"},
+        {.name = "-o", .alias = "--output", .metavar = "TRACE", .kind = OPT_TEXT, .dst = &out,
+         .required = true, .help = "the trace to write (required), whole or not at all"},
+        {.name = "--seed", .metavar = "S", .kind = OPT_U64, .dst = &opt.seed, .show_default = true,
+         .help = "seed of region's start, curves' starts and directions and random's order"},
+        {.name = "--visits", .metavar = "N", .kind = OPT_U64, .dst = &opt.visits, .min = 1,
+         .help = "stop after N triangle visits (default: every triangle once; curve: as many "
+                 "visits as triangles). Only curve visits a triangle more than once, so the other "
+                 "patterns stop at the triangle count"},
+        {.name = "--length", .metavar = "L", .kind = OPT_U64, .dst = &opt.length,
+         .help = "curve: triangles per walk before a new walk starts (default 0: walk to the "
+                 "boundary)"},
+        {.name = "--corner", .kind = OPT_FLAG, .dst = &opt.corner_seed,
+         .help = "region: start at the corner triangle (lowest x + y centroid) instead of one "
+                 "drawn from the seed"},
+        {.name = "--work", .metavar = "W", .kind = OPT_U64, .dst = &work, .max = UINT32_MAX,
+         .show_default = true, .help = "compute cycles recorded before each access"},
+        {.name = "--compress", .kind = OPT_FLAG, .dst = &opt.compress,
+         .help = "zstd-compress the trace's blocks"},
+        OPTS_END,
+    };
+    opts o = {cmd, rows, synth_usage};
+    int rc;
+    if (opts_parse(&o, argc, argv, &rc))
+        return rc;
+    opt.work = (uint32_t)work;
+    opt.pattern = (emm_pattern)pattern;
 
     emm_mesh *mesh = NULL;
     uint64_t records = 0;
@@ -483,22 +433,15 @@ static int trace_synth(int argc, char **argv)
     return EMM_EXIT_OK;
 }
 
+static void trace_usage(FILE *out)
+{
+    fputs(trace_usage_text, out);
+}
+
 int emm_cmd_trace(int argc, char **argv)
 {
-    if (argc < 2)
-        return cli_usage_error("trace", "which subcommand? (info, export, import, synth)");
-    if (cli_is_help(argv[1])) {
-        fputs(trace_usage, stdout);
-        return EMM_EXIT_OK;
-    }
-    if (strcmp(argv[1], "info") == 0)
-        return trace_info(argc - 1, argv + 1);
-    if (strcmp(argv[1], "export") == 0)
-        return trace_export(argc - 1, argv + 1);
-    if (strcmp(argv[1], "import") == 0)
-        return trace_import(argc - 1, argv + 1);
-    if (strcmp(argv[1], "synth") == 0)
-        return trace_synth(argc - 1, argv + 1);
-    return cli_usage_error("trace", "unknown subcommand '%s' (info, export, import, synth)",
-                           argv[1]);
+    static const opts_sub subs[] = {{"info", trace_info},     {"export", trace_export},
+                                    {"import", trace_import}, {"synth", trace_synth},
+                                    {NULL, NULL}};
+    return opts_subcommand("trace", subs, trace_usage, argc, argv);
 }

@@ -89,10 +89,12 @@ EMM_API emm_status emm_table_append(const char *path, const emm_table_sample *s,
  * returns nonzero when it exists. */
 EMM_API int emm_table_default_path(char *out, size_t cap);
 
-/* Loads the default table (when its file exists) and the user's: `user`
- * when not NULL, else $EMM_TABLE when set. A user table named explicitly
- * must exist. When neither yields a sample the result is EMM_ERR_IO with a
- * message naming every path tried. */
+/* Loads the shipped table (when its file exists) and then `user`, the
+ * user's table (NULL: none), which must exist. The library reads no
+ * environment: EMM_TABLE is the configuration table's (emm/config.h), and
+ * callers pass its value (emm_config.table) or their own --table. When
+ * neither yields a sample the result is EMM_ERR_IO with a message naming
+ * every path tried. */
 EMM_API emm_status emm_table_load_standard(emm_table *t, const char *user, emm_error *err);
 
 typedef struct emm_decision {

@@ -27,7 +27,7 @@ check help-table-add 0 "$EMM" table add --help
 has help-table-add out.txt "the best of the standard sweep"
 has help-table-add out.txt "emm table build"
 check no-trace 2 "$EMM" profile
-has no-trace err.txt "emm profile: a TRACE file is required"
+has no-trace err.txt "emm profile: missing TRACE"
 check bad-window 2 "$EMM" profile grid.emmt --window ten
 check small-window 2 "$EMM" profile grid.emmt --window 10
 check bad-option 2 "$EMM" profile grid.emmt --fast

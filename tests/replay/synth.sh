@@ -55,7 +55,7 @@ expect 0 "$EMM" replay "$W/z.emmt" --strategy cache@quadtree --strategy cache --
 
 # Bad usage, bad input.
 expect 2 "$EMM" trace synth --mesh "$M" --pattern zigzag -o "$W/x.emmt"
-has "pattern 'zigzag' is unknown; accepted: region, curve, scanline"
+has "--pattern expects region, curve, scanline, zorder, gray, hilbert, random or spiral, not 'zigzag'"
 [ -e "$W/x.emmt" ] && no "a bad pattern left a file"
 expect 2 "$EMM" trace synth --pattern region -o "$W/x.emmt"; has 'missing --mesh'
 expect 2 "$EMM" trace synth --mesh "$M" -o "$W/x.emmt"; has 'missing --pattern'
