@@ -215,6 +215,15 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
     return EMM_OK;
 }
 
+void emm_agent_free(emm_agent *a)
+{
+    if (!a)
+        return;
+    emm_agent_finish(a);
+    pthread_mutex_destroy(&a->lock);
+    agent_free(a);
+}
+
 /* ---- the session -------------------------------------------------------------- */
 
 static bool live_locked(const emm_agent *a)
@@ -551,7 +560,7 @@ void emm_agent_release(emm_agent *a, const void *p)
     pthread_mutex_unlock(&a->lock);
 }
 
-int emm_agent_free(emm_agent *a, void *p)
+int emm_agent_on_free(emm_agent *a, void *p)
 {
     struct tag t;
     pthread_mutex_lock(&a->lock);
@@ -562,10 +571,10 @@ int emm_agent_free(emm_agent *a, void *p)
     return found;
 }
 
-void *emm_agent_realloc(emm_agent *a, void *p, size_t size, int *handled)
+void *emm_agent_on_realloc(emm_agent *a, void *p, size_t size, int *handled)
 {
     if (size == 0) {
-        *handled = emm_agent_free(a, p);
+        *handled = emm_agent_on_free(a, p);
         return NULL;
     }
     pthread_mutex_lock(&a->lock);

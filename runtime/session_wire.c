@@ -163,10 +163,19 @@ bool wire_start_encode(const emm_session_config *sc, long pid, unsigned char **o
     put_u64(&b, (uint64_t)pid);
     put_str(&b, sc->program ? sc->program : "program");
     char text[2 * EMM_CONFIG_PATH_MAX + 16];
+    /* The rows that were set, counted first: a start is whole or refused. */
+    bool sent[EMM_CONFIG_COUNT];
+    uint64_t count = 0;
     for (int k = 0; k < EMM_CONFIG_COUNT; k++) {
-        if (!c->source[k] || k == EMM_CONFIG_TAG ||
-            !emm_config_format(c, (emm_config_key)k, text, sizeof text))
+        sent[k] = c->source[k] && k != EMM_CONFIG_TAG &&
+                  emm_config_format(c, (emm_config_key)k, text, sizeof text);
+        count += sent[k];
+    }
+    put_u64(&b, count);
+    for (int k = 0; k < EMM_CONFIG_COUNT; k++) {
+        if (!sent[k])
             continue;
+        emm_config_format(c, (emm_config_key)k, text, sizeof text);
         put_u64(&b, (uint64_t)k);
         put_str(&b, c->source[k]);
         put_str(&b, text);
@@ -178,15 +187,16 @@ emm_status wire_start_decode(const unsigned char *data, size_t len, emm_config *
                              char **strings, emm_capture *capture, int *table_only,
                              const char **program, emm_error *err)
 {
-    struct cursor c = {data, data + len};
-    uint64_t version, cap, only, pid;
+    struct cursor c = {data, data ? data + len : data};
+    uint64_t version, cap, only, pid, count;
     emm_config_init(cfg);
     *strings = NULL;
     if (!get_u64(&c, &version) || version != WIRE_VERSION)
         return emm_fail(err, EMM_ERR_FORMAT,
                         "emm-session: the shim and the session server are of different builds");
     if (!get_u64(&c, &cap) || !get_u64(&c, &only) || !get_u64(&c, &pid) ||
-        !get_str(&c, program) || cap >= EMM_CAPTURE_COUNT)
+        !get_str(&c, program) || !get_u64(&c, &count) || cap >= EMM_CAPTURE_COUNT ||
+        count > EMM_CONFIG_COUNT)
         return emm_fail(err, EMM_ERR_FORMAT, "emm-session: a malformed start");
     *capture = (emm_capture)cap;
     *table_only = only != 0;
@@ -198,7 +208,7 @@ emm_status wire_start_decode(const unsigned char *data, size_t len, emm_config *
     memcpy(copy, c.p, rest);
     *strings = copy;
     struct cursor r = {(const unsigned char *)copy, (const unsigned char *)copy + rest};
-    while (r.p < r.end) {
+    for (uint64_t i = 0; i < count; i++) {
         uint64_t k;
         const char *source, *text;
         if (!get_u64(&r, &k) || k >= EMM_CONFIG_COUNT || k == EMM_CONFIG_TAG ||
@@ -208,6 +218,8 @@ emm_status wire_start_decode(const unsigned char *data, size_t len, emm_config *
         if (st != EMM_OK)
             return st;
     }
+    if (r.p != r.end)
+        return emm_fail(err, EMM_ERR_FORMAT, "emm-session: a malformed start");
     return EMM_OK;
 }
 
@@ -232,6 +244,8 @@ bool wire_tag_encode(const emm_array_desc *d, unsigned char **out, size_t *len)
 
 bool wire_tag_decode(const unsigned char *data, size_t len, emm_array_desc *d)
 {
+    if (!data)
+        return false;
     struct cursor c = {data, data + len};
     uint64_t v[10];
     const char *origin;
@@ -272,6 +286,8 @@ bool wire_modules_encode(const emm_trace_module *m, uint32_t n, unsigned char **
 bool wire_modules_decode(const unsigned char *data, size_t len, emm_trace_module **out,
                          uint32_t *n)
 {
+    if (!data || len == 0)
+        return false;
     struct cursor c = {data, data + len};
     size_t count = 0, text = 0;
     while (c.p < c.end) {

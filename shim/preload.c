@@ -269,7 +269,7 @@ void free(void *p)
         int handled = 0;
         if (maybe_tagged(p)) {
             shim_busy++;
-            handled = emm_agent_free(shim.agent, p);
+            handled = emm_agent_on_free(shim.agent, p);
             shim_leave();
         }
         if (!handled)
@@ -301,7 +301,7 @@ static void *realloc_impl(void *p, size_t size)
     int handled = 0;
     if (maybe_tagged(p)) {
         shim_busy++;
-        q = emm_agent_realloc(shim.agent, p, size, &handled);
+        q = emm_agent_on_realloc(shim.agent, p, size, &handled);
         shim_leave();
         if (handled)
             return q;

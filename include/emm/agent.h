@@ -77,6 +77,10 @@ typedef struct emm_agent_config {
  * unwinder when a rule uses site= or the mode lists sites. On failure err
  * says why in one line and *out is NULL: the caller steps aside. */
 EMM_API emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *err);
+/* Finishes (emm_agent_finish) and frees the agent, its session and its
+ * tables; the blocks it tagged stay the program's. NULL is allowed. (The
+ * shim keeps its agent for the process's life.) */
+EMM_API void emm_agent_free(emm_agent *a);
 
 /* The smallest block a rule can select, or list mode lists: smaller ones
  * need no call at all. SIZE_MAX when nothing can be. */
@@ -103,12 +107,12 @@ EMM_API int emm_agent_maybe_tagged(const emm_agent *a, const void *p);
 /* free(p) of a block that may be tagged: untags it and releases it (its own
  * pages unmapped, or free()). Returns 0 when p was not tagged: the caller
  * frees it. */
-EMM_API int emm_agent_free(emm_agent *a, void *p);
+EMM_API int emm_agent_on_free(emm_agent *a, void *p);
 /* realloc(p, size) of a block that may be tagged: the same array, moved
  * (the session keeps its window); returns the new block, or NULL with errno
  * ENOMEM and p kept (size 0: p freed, NULL). *handled is 0 when p was not
  * tagged: the caller reallocs. */
-EMM_API void *emm_agent_realloc(emm_agent *a, void *p, size_t size, int *handled);
+EMM_API void *emm_agent_on_realloc(emm_agent *a, void *p, size_t size, int *handled);
 /* The bytes usable at p when it is a tagged block on its own pages, else 0. */
 EMM_API size_t emm_agent_usable_size(emm_agent *a, const void *p);
 /* List mode: the block at p is about to be freed or moved; its records are

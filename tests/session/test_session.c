@@ -153,7 +153,7 @@ static emm_config tcfg;
 static emm_session_config base_config(void)
 {
     emm_session_config c = {0};
-    emm_config_init(&tcfg);
+    emm_config_free(&tcfg); /* the rules of the test before, if any; then the defaults */
     tcfg.window_accesses = WINDOW;
     tcfg.compare = EMM_COMPARE_BASELINES;
     /* These tests check the window's prediction; test_contest the run's
