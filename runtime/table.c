@@ -725,7 +725,7 @@ static emm_status records_features(const emm_trace_info *info, const emm_trace_r
                                    size_t *np, size_t *skip, emm_error *err)
 {
     emm_profiler *p;
-    emm_status st = emm_profiler_new(info, window ? window : 1, name, &p, err);
+    emm_status st = emm_profiler_new(info, window ? window : 1, EMM_PROFILE_PLANE, name, &p, err);
     if (st != EMM_OK)
         return st;
     if ((st = emm_profiler_add(p, recs, n, err)) != EMM_OK) {
@@ -748,7 +748,7 @@ static emm_status records_features(const emm_trace_info *info, const emm_trace_r
         emm_profiler_free(p);
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile", name);
     }
-    st = emm_profile_compute(xy, *np, D, NULL, threads, err);
+    st = emm_profile_compute(xy, *np, emm_profiler_dims(p), D, NULL, threads, err);
     emm_profiler_free(p);
     if (st == EMM_OK)
         st = emm_profile_features(D, *np, name, f, err);

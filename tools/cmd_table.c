@@ -96,7 +96,7 @@ static emm_status window_features(emm_trace_reader *r, uint64_t window, const ch
                                   double f[EMM_FEATURES], size_t *n, emm_error *err)
 {
     double *xy = NULL, *D = NULL;
-    emm_status st = emm_profile_trace_positions(r, window, name, &xy, n, err);
+    emm_status st = emm_profile_trace_positions(r, window, EMM_PROFILE_PLANE, name, &xy, n, err);
     if (st == EMM_OK && *n < EMM_PROFILE_MIN) {
         err->status = st = EMM_ERR_RANGE;
         snprintf(err->message, sizeof err->message,
@@ -108,7 +108,7 @@ static emm_status window_features(emm_trace_reader *r, uint64_t window, const ch
         snprintf(err->message, sizeof err->message, "%.300s: out of memory", name);
     }
     if (st == EMM_OK)
-        st = emm_profile_compute(xy, *n, D, NULL, NULL, err);
+        st = emm_profile_compute(xy, *n, EMM_PROFILE_PLANE, D, NULL, NULL, err);
     if (st == EMM_OK)
         st = emm_profile_features(D, *n, name, f, err);
     free(xy);

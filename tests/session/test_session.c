@@ -105,11 +105,12 @@ static void setup(void)
     REQUIRE(emm_trace_reader_open("expect.emmt", &r, &err) == EMM_OK);
     double *xy, *D;
     size_t n;
-    REQUIRE(emm_profile_trace_positions(r, WINDOW, "expect", &xy, &n, &err) == EMM_OK);
+    REQUIRE(emm_profile_trace_positions(r, WINDOW, EMM_PROFILE_PLANE, "expect", &xy, &n, &err) ==
+            EMM_OK);
     REQUIRE(n == WINDOW);
     D = malloc(n * sizeof *D);
     REQUIRE(D);
-    REQUIRE(emm_profile_compute(xy, n, D, NULL, NULL, &err) == EMM_OK);
+    REQUIRE(emm_profile_compute(xy, n, EMM_PROFILE_PLANE, D, NULL, NULL, &err) == EMM_OK);
     REQUIRE(emm_profile_features(D, n, "expect", feat, &err) == EMM_OK);
     free(xy);
     free(D);
@@ -469,9 +470,10 @@ static void test_window_not_filled(void)
         emm_decision d;
         REQUIRE(t && emm_table_load_standard(t, "table.txt", &err) == EMM_OK);
         REQUIRE(emm_trace_reader_open("expect.emmt", &r, &err) == EMM_OK);
-        REQUIRE(emm_profile_trace_positions(r, nrecs, "expect", &xy, &n, &err) == EMM_OK);
+        REQUIRE(emm_profile_trace_positions(r, nrecs, EMM_PROFILE_PLANE, "expect", &xy, &n,
+                                            &err) == EMM_OK);
         REQUIRE((D = malloc(n * sizeof *D)) != NULL);
-        REQUIRE(emm_profile_compute(xy, n, D, NULL, NULL, &err) == EMM_OK);
+        REQUIRE(emm_profile_compute(xy, n, EMM_PROFILE_PLANE, D, NULL, NULL, &err) == EMM_OK);
         REQUIRE(emm_profile_features(D, n, "expect", f, &err) == EMM_OK);
         REQUIRE(emm_table_decide(t, f, 0, &d, &err) == EMM_OK);
         char want[2 * EMM_TABLE_NAME_MAX + 32];
