@@ -241,8 +241,10 @@ static struct probe_job *take_probe(emm_session *s)
 
 static void free_probe(struct probe_job *j)
 {
-    if (j)
+    if (j) {
         free(j->recs);
+        emm_window_decision_release(&j->wd);
+    }
     free(j);
 }
 

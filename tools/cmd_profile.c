@@ -296,6 +296,7 @@ int emm_cmd_profile(int argc, char **argv)
         rc = cli_fail(&err);
         goto done;
     }
+    emm_window_decision_release(&w); /* the classes checked are not shown */
     char strat[96];
     emm_strategy_format(&w.strategy, strat, sizeof strat);
     printf("trace:     %s\n", trace);

@@ -140,6 +140,7 @@ static int table_add_swept(const char *trace, const char *table, uint64_t window
             EMM_OK) {
         rc = cli_fail(&err);
     } else {
+        emm_window_decision_release(&w); /* the classes checked are not used */
         s->strategy = w.strategy;
         memcpy(s->f, w.f, sizeof s->f);
         if (emm_table_append(table, s, &err) != EMM_OK) {
