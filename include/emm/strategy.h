@@ -34,7 +34,6 @@ typedef enum emm_strategy_kind {
     X(GRID, grid, "a uniform grid of cells over the mesh's plane")                          \
     X(TILES, tiles, "tiles: cells cut to hold about equal numbers of triangles")            \
     X(QUADTREE, quadtree, "quadtree leaves: cells split where the mesh is dense")           \
-    X(GRID3D, grid3d, "a uniform grid of boxes in space, 26 neighbours")                    \
     /* (the end of the layouts) */
 #define EMM_FETCH_LIST(X)                                                                   \
     X(NAIVE, naive, "fetch a cell when the program needs it, and wait")                     \
