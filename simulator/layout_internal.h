@@ -18,9 +18,9 @@ struct emm_layout_ops {
     uint32_t dims;
     /* Cuts the cells from the triangles' centroids (c[a][t]: coordinate a
      * of triangle t's centroid in the layout's space, a < l->dims): fills
-     * l->ncells,
-     * l->cells' geometry (lo, hi, coord, depth, path), l->tri_cell and the
-     * neighbour lists (l->nb_start, l->nb, l->nb_side), and l->priv. */
+     * l->ncells, l->cells' geometry (lo, hi, coord, depth, path),
+     * l->tri_cell and the neighbour lists (l->nb_start, l->nb, l->nb_side),
+     * and l->priv. */
     emm_status (*build)(emm_layout *l, const double *const *c, const char *name, emm_error *err);
     /* EMM_SIDE_* bits of where `to` lies seen from `from`, over the
      * layout's dims axes (EMM_SIDE_MINUS(a), EMM_SIDE_PLUS(a)). */
