@@ -161,6 +161,7 @@ int main(int argc, char **argv)
                 emm_decide_options dopt = {0, simulate, NULL};
                 if (emm_decide_window(t, m, info, recs, n, path, &dopt, &d, &err) != EMM_OK)
                     die(patterns[p].name, &err);
+                emm_window_decision_release(&d); /* the classes checked are not used */
                 free(recs);
                 size_t k = whole->count;
                 for (size_t i = 0; i < whole->count; i++)

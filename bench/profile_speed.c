@@ -55,13 +55,13 @@ int main(int argc, char **argv)
     positions(xy, nfast);
 
     double t0 = now();
-    emm_profile_exact(xy, nexact, D, NULL);
+    emm_profile_exact(xy, nexact, 2, D, NULL);
     double te = now() - t0;
     printf("exact: %zu accesses in %.3f s\n", nexact, te);
 
     emm_error err;
     t0 = now();
-    if (emm_profile_fast(xy, nfast, theta, D, NULL, &err) != EMM_OK) {
+    if (emm_profile_fast(xy, nfast, 2, theta, D, NULL, &err) != EMM_OK) {
         fprintf(stderr, "profile_speed: %s\n", err.message);
         return 1;
     }

@@ -911,6 +911,7 @@ static void engine_free(emm_session *h)
     emm_runner_free(s->runner);
     emm_model_share_unref(s->layouts);
     decide_cache_free(s->decisions);
+    emm_window_decision_release(&s->wd);
     if (s->trace)
         emm_trace_writer_abort(s->trace);
     for (int i = 0; i < s->narrays; i++) {

@@ -508,7 +508,8 @@ static emm_status freeze_arrays(session *s, emm_error *err)
 static emm_status profile_window(session *s, emm_error *err)
 {
     emm_profiler *p;
-    emm_status st = emm_profiler_new(&s->info, s->welements ? s->welements : 1, s->program, &p, err);
+    emm_status st = emm_profiler_new(&s->info, s->welements ? s->welements : 1, EMM_PROFILE_PLANE,
+                                     s->program, &p, err);
     if (st != EMM_OK)
         return st;
     if ((st = emm_profiler_add(p, s->window, s->wn, err)) != EMM_OK) {
@@ -527,7 +528,7 @@ static emm_status profile_window(session *s, emm_error *err)
             emm_profiler_free(p);
             return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile", s->program);
         }
-        st = emm_profile_compute(xy, n, s->D, NULL, &s->threads, err);
+        st = emm_profile_compute(xy, n, emm_profiler_dims(p), s->D, NULL, &s->threads, err);
         s->nD = st == EMM_OK ? n : 0;
     }
     emm_profiler_free(p);

@@ -139,7 +139,7 @@ static void evaluate(void *ctx)
     emm_error e;
     double *D = NULL, f[EMM_FEATURES];
     size_t n;
-    if (emm_profiler_new(&s->info, j->reads, s->program, &pr, &e) != EMM_OK ||
+    if (emm_profiler_new(&s->info, j->reads, EMM_PROFILE_PLANE, s->program, &pr, &e) != EMM_OK ||
         emm_profiler_add(pr, j->recs, j->n, &e) != EMM_OK)
         goto off;
     const double *xy = emm_profiler_positions(pr, &n);
@@ -150,7 +150,7 @@ static void evaluate(void *ctx)
     emm_threads one = s->threads;
     one.jobs = 1;
     if (!(D = malloc(n * sizeof *D)) ||
-        emm_profile_fast(xy, n, EMM_PROFILE_THETA, D, &one, &e) != EMM_OK ||
+        emm_profile_fast(xy, n, emm_profiler_dims(pr), EMM_PROFILE_THETA, D, &one, &e) != EMM_OK ||
         emm_profile_features(D, n, s->program, f, &e) != EMM_OK ||
         emm_table_decide(s->table, f, 0, &j->d, &e) != EMM_OK)
         goto off;
@@ -241,8 +241,10 @@ static struct probe_job *take_probe(session *s)
 
 static void free_probe(struct probe_job *j)
 {
-    if (j)
+    if (j) {
         free(j->recs);
+        emm_window_decision_release(&j->wd);
+    }
     free(j);
 }
 

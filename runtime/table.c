@@ -723,7 +723,7 @@ static emm_status records_features(const emm_trace_info *info, const emm_trace_r
                                    size_t *np, size_t *skip, emm_error *err)
 {
     emm_profiler *p;
-    emm_status st = emm_profiler_new(info, window ? window : 1, name, &p, err);
+    emm_status st = emm_profiler_new(info, window ? window : 1, EMM_PROFILE_PLANE, name, &p, err);
     if (st != EMM_OK)
         return st;
     if ((st = emm_profiler_add(p, recs, n, err)) != EMM_OK) {
@@ -746,7 +746,7 @@ static emm_status records_features(const emm_trace_info *info, const emm_trace_r
         emm_profiler_free(p);
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile", name);
     }
-    st = emm_profile_compute(xy, *np, D, NULL, threads, err);
+    st = emm_profile_compute(xy, *np, emm_profiler_dims(p), D, NULL, threads, err);
     emm_profiler_free(p);
     if (st == EMM_OK)
         st = emm_profile_features(D, *np, name, f, err);
@@ -1009,7 +1009,12 @@ static emm_status pick_class(const emm_table *t, const emm_trace_info *info, con
                              const char *name, const emm_threads *threads, decide_cache *cache,
                              emm_window_decision *out, emm_error *err)
 {
-    size_t cand[EMM_DECIDE_CLASSES_MAX], nc = 0;
+    /* The nearest sample of every class that has one within the margin,
+     * however many: the classes are sized here, not capped
+     * (docs/profile.md "The decision" has what checking them all changed). */
+    size_t *cand = malloc(t->n * sizeof *cand), nc = 0;
+    if (!cand)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the class check", name);
     for (size_t i = 0; i < t->n; i++) {
         double d = emm_feature_distance(f, t->s[i].f);
         if (d > out->table.distance * EMM_DECIDE_CLASS_MARGIN)
@@ -1017,45 +1022,40 @@ static emm_status pick_class(const emm_table *t, const emm_trace_info *info, con
         size_t k = 0;
         while (k < nc && strcmp(t->s[cand[k]].pattern, t->s[i].pattern) != 0)
             k++;
-        if (k < nc) {
-            if (d < emm_feature_distance(f, t->s[cand[k]].f))
-                cand[k] = i;
-        } else if (nc < EMM_DECIDE_CLASSES_MAX) {
+        if (k == nc)
             cand[nc++] = i;
-        } else {
-            /* Full: a nearer class displaces the farthest. */
-            size_t far = 0;
-            for (size_t j = 1; j < nc; j++)
-                if (emm_feature_distance(f, t->s[cand[j]].f) >
-                    emm_feature_distance(f, t->s[cand[far]].f))
-                    far = j;
-            if (d < emm_feature_distance(f, t->s[cand[far]].f))
-                cand[far] = i;
-        }
+        else if (d < emm_feature_distance(f, t->s[cand[k]].f))
+            cand[k] = i;
     }
-    if (nc < 2)
-        return EMM_OK;
+    emm_status st = EMM_OK;
     size_t best = SIZE_MAX;
     double bd = INFINITY, mine = INFINITY;
+    if (nc < 2)
+        goto done;
+    if (!(out->classes = malloc(nc * sizeof *out->classes))) {
+        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the class check", name);
+        goto done;
+    }
     for (size_t k = 0; k < nc; k++) {
         const emm_table_sample *smp = &t->s[cand[k]];
         double g[EMM_FEATURES];
         uint64_t visits = accesses < info->geometry.nt ? accesses : info->geometry.nt;
         emm_error e;
         emm_synth_options so;
-        emm_status st = synth_options(mesh, arrays, sample_recipe(smp), recs, n, visits, &so, &e);
-        if (st == EMM_OK)
-            st = synth_features(cache, mesh, info, arrays, &so, accesses, name, threads, g, &e);
-        if (st == EMM_ERR_NOMEM)
-            return emm_fail(err, st, "%s", e.message);
-        out->classes[out->nclasses].distance = emm_feature_distance(f, smp->f);
-        out->classes[out->nclasses].synth_distance = st == EMM_OK ? emm_feature_distance(f, g) : -1;
-        snprintf(out->classes[out->nclasses].pattern, sizeof out->classes[0].pattern, "%s",
-                 smp->pattern);
-        out->nclasses++;
-        if (st == EMM_OK && strcmp(smp->pattern, out->table.pattern) == 0)
+        emm_status sst = synth_options(mesh, arrays, sample_recipe(smp), recs, n, visits, &so, &e);
+        if (sst == EMM_OK)
+            sst = synth_features(cache, mesh, info, arrays, &so, accesses, name, threads, g, &e);
+        if (sst == EMM_ERR_NOMEM) {
+            st = emm_fail(err, sst, "%s", e.message);
+            goto done;
+        }
+        emm_decide_class *c = &out->classes[out->nclasses++];
+        c->distance = emm_feature_distance(f, smp->f);
+        c->synth_distance = sst == EMM_OK ? emm_feature_distance(f, g) : -1;
+        snprintf(c->pattern, sizeof c->pattern, "%s", smp->pattern);
+        if (sst == EMM_OK && strcmp(smp->pattern, out->table.pattern) == 0)
             mine = emm_feature_distance(f, g);
-        if (st == EMM_OK && emm_feature_distance(f, g) < bd) {
+        if (sst == EMM_OK && emm_feature_distance(f, g) < bd) {
             bd = emm_feature_distance(f, g);
             best = cand[k];
         }
@@ -1064,17 +1064,19 @@ static emm_status pick_class(const emm_table *t, const emm_trace_info *info, con
      * than the nearest sample's class's own on this mesh. */
     if (best != SIZE_MAX && !(bd < EMM_DECIDE_CLASS_SWITCH * mine))
         best = SIZE_MAX;
-    if (best == SIZE_MAX || strcmp(t->s[best].pattern, out->table.pattern) == 0)
-        return EMM_OK;
-    const emm_table_sample *b = &t->s[best];
-    snprintf(out->table.pattern, sizeof out->table.pattern, "%s", b->pattern);
-    snprintf(out->table.nearest, sizeof out->table.nearest, "%s", b->name);
-    snprintf(out->table.synth, sizeof out->table.synth, "%s", b->synth[0] ? b->synth : "-");
-    out->table.strategy = b->strategy;
-    out->table.distance = emm_feature_distance(f, b->f);
-    out->strategy = b->strategy;
-    out->reclassified = 1;
-    return EMM_OK;
+    if (best != SIZE_MAX && strcmp(t->s[best].pattern, out->table.pattern) != 0) {
+        const emm_table_sample *b = &t->s[best];
+        snprintf(out->table.pattern, sizeof out->table.pattern, "%s", b->pattern);
+        snprintf(out->table.nearest, sizeof out->table.nearest, "%s", b->name);
+        snprintf(out->table.synth, sizeof out->table.synth, "%s", b->synth[0] ? b->synth : "-");
+        out->table.strategy = b->strategy;
+        out->table.distance = emm_feature_distance(f, b->f);
+        out->strategy = b->strategy;
+        out->reclassified = 1;
+    }
+done:
+    free(cand);
+    return st;
 }
 
 /* The table's pattern, checked on this mesh and this window (docs/profile.md
@@ -1249,12 +1251,19 @@ emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
     return st;
 }
 
-emm_status decide_features_shared(const emm_table *t, const emm_machine *m,
-                                  const emm_trace_info *info, const emm_trace_record *recs,
-                                  size_t n, const double f[EMM_FEATURES], size_t accesses,
-                                  const char *name, const emm_decide_options *opt,
-                                  emm_model_share *share, decide_cache *cache,
-                                  emm_window_decision *out, emm_error *err)
+void emm_window_decision_release(emm_window_decision *d)
+{
+    free(d->classes);
+    d->classes = NULL;
+    d->nclasses = 0;
+}
+
+/* decide_features_shared, but for what a failure leaves in *out. */
+static emm_status decide(const emm_table *t, const emm_machine *m, const emm_trace_info *info,
+                         const emm_trace_record *recs, size_t n, const double f[EMM_FEATURES],
+                         size_t accesses, const char *name, const emm_decide_options *opt,
+                         emm_model_share *share, decide_cache *cache, emm_window_decision *out,
+                         emm_error *err)
 {
     cache = cache_for(cache, info);
     memset(out, 0, sizeof *out);
@@ -1313,6 +1322,19 @@ emm_status decide_features_shared(const emm_table *t, const emm_machine *m,
                               1);
     }
     emm_sweep_free(sw);
+    return st;
+}
+
+emm_status decide_features_shared(const emm_table *t, const emm_machine *m,
+                                  const emm_trace_info *info, const emm_trace_record *recs,
+                                  size_t n, const double f[EMM_FEATURES], size_t accesses,
+                                  const char *name, const emm_decide_options *opt,
+                                  emm_model_share *share, decide_cache *cache,
+                                  emm_window_decision *out, emm_error *err)
+{
+    emm_status st = decide(t, m, info, recs, n, f, accesses, name, opt, share, cache, out, err);
+    if (st != EMM_OK)
+        emm_window_decision_release(out);
     return st;
 }
 

@@ -1,13 +1,15 @@
-/* EMM mesh layouts (thesis §4.1): what every layout shares — cells by
- * triangle centroid, vertex copies, layout indices both ways, cell sizes and
- * the packed remote image (§4.1: struct CellData), the neighbour lists the
- * fetch schemes read (§4.2) — and the dispatch to each kind's ops table:
+/* EMM mesh layouts (thesis §4.1): what every layout shares — the layout's
+ * space (as many axes as its kind declares), cells by triangle centroid,
+ * vertex copies, layout indices both ways, cell sizes and the packed remote
+ * image (§4.1: struct CellData), the neighbour lists the fetch schemes read
+ * (§4.2) — and the dispatch to each kind's ops table:
  * layout_grid.c (§4.1.1), layout_tiles.c (§4.1.2), both on layout_rows.c,
  * and layout_quadtree.c (§4.1.3). docs/layouts.md explains the choices. */
 #include "layout_internal.h"
 
 #include <assert.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -54,6 +56,9 @@ emm_status emm_layout_nomem(emm_error *err, const char *name)
     return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory building the layout", name);
 }
 
+/* A side is a bit of a byte: two per axis. */
+_Static_assert(EMM_SIDE_BITS <= 8, "neighbour sides are stored in a byte");
+
 emm_status emm_layout_fill_sides(emm_layout *l, const char *name, emm_error *err)
 {
     uint32_t n = l->nb_start[l->ncells];
@@ -66,9 +71,10 @@ emm_status emm_layout_fill_sides(emm_layout *l, const char *name, emm_error *err
     return EMM_OK;
 }
 
-/* The bounding box of the vertices triangles use, and the axes along which
- * it is largest (core/geom.h: the one choice every layer makes). */
-static void choose_plane(emm_layout *l, const double *xyz, const int32_t *tri)
+/* The bounding box of the vertices triangles use, and the layout's space:
+ * as many axes as its kind declares, those along which the box is largest
+ * (core/geom.h: the one choice every layer makes; all three in space). */
+static void choose_space(emm_layout *l, const double *xyz, const int32_t *tri)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < 3 * l->nt; i++) {
@@ -80,7 +86,8 @@ static void choose_plane(emm_layout *l, const double *xyz, const int32_t *tri)
                 hi[a] = p[a];
         }
     }
-    l->dims = 2;
+    l->dims = l->ops->dims;
+    assert(l->dims >= 2 && l->dims <= EMM_MAX_DIMS);
     emm_axes_largest(lo, hi, l->dims, l->axes);
     for (uint32_t k = 0; k < l->dims; k++) {
         l->lo[k] = lo[l->axes[k]];
@@ -231,7 +238,7 @@ static emm_status build_once(const double *xyz, size_t nv, const int32_t *tri, s
     l->ops = kinds[opt->kind];
     l->nv = nv;
     l->nt = nt;
-    choose_plane(l, xyz, tri);
+    choose_space(l, xyz, tri);
 
     double *c[EMM_MAX_DIMS] = {NULL, NULL, NULL};
     /* Cells divide the bounding box: past ±1e300 its extent, or a sum of
@@ -244,9 +251,12 @@ static emm_status build_once(const double *xyz, size_t nv, const int32_t *tri, s
             goto done;
         }
     l->tri_cell = malloc(nt * sizeof *l->tri_cell);
-    for (uint32_t k = 0; k < l->dims; k++)
+    bool got = l->tri_cell != NULL;
+    for (uint32_t k = 0; k < l->dims; k++) {
         c[k] = malloc(nt * sizeof *c[k]);
-    if (!l->tri_cell || !c[0] || !c[1] || (l->dims > 2 && !c[2])) {
+        got = got && c[k];
+    }
+    if (!got) {
         st = emm_layout_nomem(err, name);
         goto done;
     }

@@ -9,6 +9,7 @@ static emm_status build(emm_layout *l, const double *const *c, const char *name,
 }
 
 const struct emm_layout_ops emm_layout_grid_ops = {
+    .dims = 2,
     .build = build,
     .move_side = emm_rows_move_side,
     .cell_at = emm_rows_cell_at,

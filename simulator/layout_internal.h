@@ -1,23 +1,32 @@
 /* Internal to the layouts (simulator/layout*.c): the layout object and the
  * ops table each kind of layout fills (docs/architecture.md, "Adding a
- * layout"). layout.c holds what every layout shares — validation, the plane,
- * centroids, triangles and vertex copies per cell, sizes, the image, the
- * public queries — and dispatches to the kind's ops for what differs: how
- * cells are cut, neighbours, relative sides, point location. */
+ * part"). layout.c holds what every layout shares — validation, the
+ * layout's space, centroids, triangles and vertex copies per cell, sizes,
+ * the image, the public queries — and dispatches to the kind's ops for what
+ * differs: its dimension, how cells are cut, neighbours, relative sides,
+ * point location. */
 #ifndef EMM_INTERNAL_LAYOUT_H
 #define EMM_INTERNAL_LAYOUT_H
 
 #include "emm/layout.h"
 
 struct emm_layout_ops {
+    /* The axes of the layout's space, 2 to EMM_MAX_DIMS: 2 lays a mesh out
+     * over the two axes along which its bounding box is largest (x and y
+     * for a planar mesh), 3 over x, y and z. layout.c sets l->dims, l->axes
+     * and the bounding box l->lo, l->hi from it before build. */
+    uint32_t dims;
     /* Cuts the cells from the triangles' centroids (c[a][t]: coordinate a
-     * of triangle t's centroid in the layout's space): fills l->ncells,
-     * l->cells' geometry (lo, hi, coord, depth, path), l->tri_cell and the
-     * neighbour lists (l->nb_start, l->nb, l->nb_side), and l->priv. */
+     * of triangle t's centroid in the layout's space, a < l->dims): fills
+     * l->ncells, l->cells' geometry (lo, hi, coord, depth, path),
+     * l->tri_cell and the neighbour lists (l->nb_start, l->nb, l->nb_side),
+     * and l->priv. */
     emm_status (*build)(emm_layout *l, const double *const *c, const char *name, emm_error *err);
-    /* EMM_SIDE_* bits of where `to` lies seen from `from`. */
+    /* EMM_SIDE_* bits of where `to` lies seen from `from`, over the
+     * layout's dims axes (EMM_SIDE_MINUS(a), EMM_SIDE_PLUS(a)). */
     unsigned (*move_side)(const emm_layout *l, uint32_t from, uint32_t to);
-    /* The cell holding point p (clamped); *levels: tree levels descended. */
+    /* The cell holding point p (dims coordinates, clamped); *levels: tree
+     * levels descended. */
     uint32_t (*cell_at)(const emm_layout *l, const double *p, uint32_t *levels);
     /* Cells along each axis of a regular array, or 0 (NULL: 0). */
     uint32_t (*per_axis)(const emm_layout *l, uint32_t n[EMM_MAX_DIMS]);
@@ -42,7 +51,7 @@ struct emm_layout {
     emm_layout_options opt;
     const struct emm_layout_ops *ops;
     size_t nv, nt;
-    uint32_t dims;                    /* axes of the layout's space */
+    uint32_t dims;                    /* axes of the layout's space: ops->dims */
     int axes[EMM_MAX_DIMS];
     double lo[EMM_MAX_DIMS], hi[EMM_MAX_DIMS];
     void *priv;                       /* the kind's own data */
@@ -71,8 +80,9 @@ emm_status emm_layout_nomem(emm_error *err, const char *name);
 /* Fills l->nb_side from the kind's move_side, for lists already in l->nb. */
 emm_status emm_layout_fill_sides(emm_layout *l, const char *name, emm_error *err);
 
-/* Rows of equal boxes, shared by the grid and the interleaving tiles
- * (layout_rows.c): `shift` nonzero shifts odd rows by half a cell. */
+/* Rows of equal boxes in the plane (dims 2), shared by the grid and the
+ * interleaving tiles (layout_rows.c): `shift` nonzero shifts odd rows by
+ * half a cell. */
 emm_status emm_rows_build(emm_layout *l, const double *const *c, int shift, const char *name,
                           emm_error *err);
 unsigned emm_rows_move_side(const emm_layout *l, uint32_t from, uint32_t to);

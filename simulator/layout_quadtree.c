@@ -401,6 +401,7 @@ static int neighbors(qt_build *b)
 
 static emm_status build(emm_layout *l, const double *const *c, const char *name, emm_error *err)
 {
+    assert(l->dims == 2); /* a tree of squares: the ops declare 2 (an octree would be 3) */
     quadtree *q = calloc(1, sizeof *q);
     if (!q)
         return emm_layout_nomem(err, name);
@@ -500,6 +501,7 @@ static void destroy(emm_layout *l)
 }
 
 const struct emm_layout_ops emm_layout_quadtree_ops = {
+    .dims = 2,
     .build = build,
     .move_side = move_side,
     .cell_at = cell_at,

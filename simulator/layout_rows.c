@@ -5,6 +5,7 @@
  * without, a cell has up to 8 neighbours. docs/layouts.md. */
 #include "layout_internal.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdlib.h>
 
@@ -111,7 +112,7 @@ uint32_t emm_rows_per_axis(const emm_layout *l, uint32_t n[EMM_MAX_DIMS])
 {
     n[0] = R(l)->cols;
     n[1] = R(l)->rows;
-    return 2;
+    return l->dims;
 }
 
 /* Grid: the 8 surrounding cells; tiles: 2 in the row, and the 2 tiles of
@@ -156,6 +157,7 @@ static emm_status neighbors(emm_layout *l, const char *name, emm_error *err)
 emm_status emm_rows_build(emm_layout *l, const double *const *c, int shift, const char *name,
                           emm_error *err)
 {
+    assert(l->dims == 2); /* rows in the plane: the kind's ops declare 2 */
     struct rows *r = calloc(1, sizeof *r);
     if (!r)
         return emm_layout_nomem(err, name);

@@ -51,8 +51,11 @@ static void print_stats(const emm_layout *l, const char *path, const emm_strateg
     else if (s->layout == EMM_LAYOUT_TILES)
         printf(" (%u rows of %u and %u tiles)", n[1], n[0], n[0] + 1);
     int axes[EMM_MAX_DIMS];
-    emm_layout_axes(l, axes, NULL, NULL);
-    printf(", over %c and %c\n", "xyz"[axes[0]], "xyz"[axes[1]]);
+    uint32_t dims = emm_layout_axes(l, axes, NULL, NULL);
+    printf(", over ");
+    for (uint32_t k = 0; k < dims; k++)
+        printf("%s%c", k == 0 ? "" : k + 1 < dims ? ", " : " and ", "xyz"[axes[k]]);
+    printf("\n");
     printf("cells           %s (%s without triangles)\n", emm_grouped(st.cells, a),
            emm_grouped(st.empty_cells, b));
     printf("triangles/cell  min %s, median %s, max %s\n", emm_grouped(st.tri_min, a),
@@ -122,6 +125,8 @@ static void write_svg_body(FILE *f, const emm_layout *l, const double *xyz, cons
     uint32_t n = emm_layout_cell_count(l);
     int axes[EMM_MAX_DIMS];
     double lo[EMM_MAX_DIMS], hi[EMM_MAX_DIMS];
+    /* The drawing is of the first two axes of the layout's space: a layout
+     * in space is seen along its third. */
     emm_layout_axes(l, axes, lo, hi);
     /* The view covers every cell (tiles at a row's end and the quadtree's
      * square reach past the mesh's box). */

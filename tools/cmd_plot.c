@@ -121,16 +121,23 @@ static emm_status check_cells(const plot_report *rep, size_t i, const jr_value *
                               emm_error *err)
 {
     const jr_value *rects = jr_get(c, "rects");
+    /* Boxes of the layout's dims axes: low corner, high corner (4 numbers
+     * in the plane, 6 in space). */
+    size_t dims = jr_len(jr_get(c, "bbox")) / 2;
     if (!jr_is(c, JR_OBJECT) || !jr_is(jr_get(c, "count"), JR_NUMBER) ||
-        !numbers(jr_get(c, "bbox"), 4) || !jr_is(rects, JR_ARRAY))
+        !(dims == 2 || dims == 3) || !numbers(jr_get(c, "bbox"), 2 * dims) ||
+        !jr_is(rects, JR_ARRAY))
         return bad(err, rep->path, "results[%zu].cells: needs \"count\", \"bbox\" [x0, y0, x1, y1] "
-                   "and \"rects\"", i);
+                   "(or [x0, y0, z0, x1, y1, z1]) and \"rects\"", i);
     for (size_t k = 0; k < jr_len(rects); k++) {
         const jr_value *q = jr_at(rects, k);
-        if (!numbers(q, 5) || jr_number(jr_at(q, 0)) > jr_number(jr_at(q, 2)) ||
-            jr_number(jr_at(q, 1)) > jr_number(jr_at(q, 3)) || jr_number(jr_at(q, 4)) < 0)
+        int ok = numbers(q, 2 * dims + 1) && jr_number(jr_at(q, 2 * dims)) >= 0;
+        for (size_t a = 0; ok && a < dims; a++)
+            ok = jr_number(jr_at(q, a)) <= jr_number(jr_at(q, dims + a));
+        if (!ok)
             return bad(err, rep->path, "results[%zu].cells.rects[%zu]: not [x0, y0, x1, y1, bytes] "
-                       "with x0 <= x1, y0 <= y1, bytes >= 0", i, k);
+                       "(or [x0, y0, z0, x1, y1, z1, bytes]) with x0 <= x1, y0 <= y1, z0 <= z1, "
+                       "bytes >= 0", i, k);
     }
     return EMM_OK;
 }
@@ -842,8 +849,11 @@ static emm_status fig_transfer(plot_ctx *c, const plot_report *rep, int *made, e
 static emm_status fig_cells(plot_ctx *c, const plot_result *r, const char *why, emm_error *err)
 {
     const jr_value *cells = r->cells, *rects = jr_get(cells, "rects"), *bb = jr_get(cells, "bbox");
+    /* The first two axes of the layout's space: a layout in space is seen
+     * along its third (its boxes are dims low, dims high coordinates). */
+    size_t dims = jr_len(bb) / 2;
     double x0 = jr_number(jr_at(bb, 0)), y0 = jr_number(jr_at(bb, 1));
-    double x1 = jr_number(jr_at(bb, 2)), y1 = jr_number(jr_at(bb, 3));
+    double x1 = jr_number(jr_at(bb, dims)), y1 = jr_number(jr_at(bb, dims + 1));
     double lo[2] = {x0, y0}, hi[2] = {x1, y1}, total = 0, pad, bmin = INFINITY, bmax = 0;
     double unit;
     int logscale;
@@ -855,9 +865,8 @@ static emm_status fig_cells(plot_ctx *c, const plot_result *r, const char *why, 
     fprintf(f, "# x0 y0 x1 y1 bytes  (%s; cells DMA moved nothing for are left out)\n", r->name);
     for (size_t k = 0; k < jr_len(rects); k++) {
         const jr_value *q = jr_at(rects, k);
-        double v[5];
-        for (size_t j = 0; j < 5; j++)
-            v[j] = jr_number(jr_at(q, j));
+        double v[5] = {jr_number(jr_at(q, 0)), jr_number(jr_at(q, 1)), jr_number(jr_at(q, dims)),
+                       jr_number(jr_at(q, dims + 1)), jr_number(jr_at(q, 2 * dims))};
         fprintf(f, "%.17g %.17g %.17g %.17g %.17g\n", v[0], v[1], v[2], v[3], v[4]);
         lo[0] = fmin(lo[0], v[0]);
         lo[1] = fmin(lo[1], v[1]);

@@ -127,7 +127,7 @@ static emm_status window_profile(const emm_trace_info *info, const emm_trace_rec
     emm_profiler *p = NULL;
     *D = NULL;
     *nD = 0;
-    emm_status st = emm_profiler_new(info, n ? n : 1, name, &p, err);
+    emm_status st = emm_profiler_new(info, n ? n : 1, EMM_PROFILE_PLANE, name, &p, err);
     if (st == EMM_OK && (st = emm_profiler_add(p, recs, n, err)) == EMM_OK) {
         size_t np;
         emm_profiler_swept(p, skip);
@@ -136,7 +136,8 @@ static emm_status window_profile(const emm_trace_info *info, const emm_trace_rec
         if (!*D) {
             err->status = st = EMM_ERR_NOMEM;
             snprintf(err->message, sizeof err->message, "%.300s: out of memory", name);
-        } else if ((st = emm_profile_compute(xy, np, *D, exact, NULL, err)) == EMM_OK)
+        } else if ((st = emm_profile_compute(xy, np, emm_profiler_dims(p), *D, exact, NULL,
+                                             err)) == EMM_OK)
             *nD = np;
     }
     if (st != EMM_OK) {
@@ -237,6 +238,7 @@ static int profile(void *p)
         rc = cli_fail(&err);
         goto done;
     }
+    emm_window_decision_release(&w); /* the classes checked are not shown */
     char strat[96];
     emm_strategy_format(&w.strategy, strat, sizeof strat);
     printf("trace:     %s\n", trace);

@@ -120,7 +120,7 @@ static emm_status window_features(emm_trace_reader *r, uint64_t window, const ch
                                   double f[EMM_FEATURES], size_t *n, emm_error *err)
 {
     double *xy = NULL, *D = NULL;
-    emm_status st = emm_profile_trace_positions(r, window, name, &xy, n, err);
+    emm_status st = emm_profile_trace_positions(r, window, EMM_PROFILE_PLANE, name, &xy, n, err);
     if (st == EMM_OK && *n < EMM_PROFILE_MIN) {
         err->status = st = EMM_ERR_RANGE;
         snprintf(err->message, sizeof err->message,
@@ -132,7 +132,7 @@ static emm_status window_features(emm_trace_reader *r, uint64_t window, const ch
         snprintf(err->message, sizeof err->message, "%.300s: out of memory", name);
     }
     if (st == EMM_OK)
-        st = emm_profile_compute(xy, *n, D, NULL, NULL, err);
+        st = emm_profile_compute(xy, *n, EMM_PROFILE_PLANE, D, NULL, NULL, err);
     if (st == EMM_OK)
         st = emm_profile_features(D, *n, name, f, err);
     free(xy);
@@ -164,6 +164,7 @@ static int table_add_swept(const char *trace, const char *table, uint64_t window
             EMM_OK) {
         rc = cli_fail(&err);
     } else {
+        emm_window_decision_release(&w); /* the classes checked are not used */
         s->strategy = w.strategy;
         memcpy(s->f, w.f, sizeof s->f);
         if (emm_table_append(table, s, &err) != EMM_OK) {

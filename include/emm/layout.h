@@ -15,11 +15,13 @@
  *   at most `cell` triangles per leaf, leaves that touch (by an edge or a
  *   corner) differ by at most 3 levels; cells in leaf (Morton) order.
  *
- * Geometry is in the layout's own space: today the two axes along which the
- * bounding box is largest (x and y for a planar mesh); every coordinate,
- * side and path of this interface is written for up to EMM_MAX_DIMS axes
- * (emm_layout_axes says how many a layout uses). The remote "image" packs the cells one after
- * the other in cell order; each cell is a 12-byte header (the thesis'
+ * Geometry is in the layout's own space, whose dimension each kind of layout
+ * declares: the three above lay a mesh out in the plane of the two axes
+ * along which its bounding box is largest (x and y for a planar mesh); a
+ * layout in space would use x, y and z. Every coordinate, side and path of
+ * this interface is written for up to EMM_MAX_DIMS axes (emm_layout_axes
+ * says how many a layout uses). The remote "image" packs the cells one
+ * after the other in cell order; each cell is a 12-byte header (the thesis'
  * struct CellData: verNr, triNr, length), its vertex records, then its
  * triangle records. docs/layouts.md explains every choice. */
 #ifndef EMM_LAYOUT_H

@@ -4,14 +4,17 @@
  *
  *     D_i = Σ_{k<i} ‖p_i − p_k‖                                  (Eq. 5.1)
  *
- * Positions are 2D (the two largest extents of the mesh's bounding box) and
- * scaled by the bounding box's diagonal, so profiles of different meshes
- * compare. An element access is an access to a vertex (its coordinates) or a
- * triangle (its centroid); consecutive accesses to one element count once.
+ * Positions have the dimension their caller chooses: 2, the plane of the
+ * two largest extents of the mesh's bounding box (as the layouts see a mesh
+ * today), or 3, x, y and z. They are scaled by the bounding box's diagonal
+ * over those axes, so profiles of different meshes compare. An element
+ * access is an access to a vertex (its coordinates) or a triangle (its
+ * centroid); consecutive accesses to one element count once.
  *
  * Two methods compute D: an exact one, O(n²) in SIMD over up to two threads,
- * and a fast one, a tree code over the earlier accesses with a stated bound
- * on its relative error. emm_profile_compute picks by length.
+ * and a fast one, a tree code over the earlier accesses (a quadtree in the
+ * plane, an octree in space) with a stated bound on its relative error,
+ * the same in either dimension. emm_profile_compute picks by length.
  *
  * The profile is then reduced to a fixed-size feature vector
  * (emm_profile_features) that the strategy table (emm/table.h) compares. */
@@ -41,35 +44,44 @@ extern "C" {
 #define EMM_PROFILE_DEFAULT_WINDOW EMM_CONFIG_DEFAULT_WINDOW
 /* The shortest profile that has features. */
 #define EMM_PROFILE_MIN 256u
+/* Positions in the plane of the mesh's two largest extents: what the
+ * session, the decision and the tools profile today, since the layouts and
+ * the synthetic traversals see a mesh in that plane too. */
+#define EMM_PROFILE_PLANE 2u
 
-/* Exact Eq. 5.1. `xy` holds n positions as x0, y0, x1, y1, ...; D receives n
- * values (D[0] = 0). Double precision throughout: the result differs from a
- * naive double loop only by summation order (relative 1e-12 at most for any
- * n this is meant for). Uses AVX2 when the processor has it, SSE2 otherwise,
- * and up to two threads (`threads` may allow fewer; NULL: two). */
-EMM_API void emm_profile_exact(const double *xy, size_t n, double *D, const emm_threads *threads);
+/* Exact Eq. 5.1. `pos` holds n positions of `dims` coordinates each (2 or
+ * 3; anything else is a misuse): x0, y0, x1, y1, ... in the plane, x0, y0,
+ * z0, x1, ... in space; D receives n values (D[0] = 0). Double precision
+ * throughout: the result differs from a naive double loop only by
+ * summation order (relative 1e-12 at most for any n this is meant for).
+ * Uses AVX2 when the processor has it, SSE2 otherwise, and up to two
+ * threads (`threads` may allow fewer; NULL: two). */
+EMM_API void emm_profile_exact(const double *pos, size_t n, uint32_t dims, double *D,
+                               const emm_threads *threads);
 
 /* The fast method's bound on the relative error of every D_i for opening
  * angle theta (0 < theta < 1): each term ‖p − q‖ a node's aggregate stands
  * for is replaced by its second-order Taylor expansion about the node's
  * centroid, whose remainder is at most (1/(3√3))·r³/(d−r)² per point, while
  * the term itself is at least d − r; so the relative error of the sum is at
- * most (1/(3√3))·(θ/(1−θ))³. */
+ * most (1/(3√3))·(θ/(1−θ))³, in the plane and in space alike. */
 EMM_API double emm_profile_fast_bound(double theta);
 
-/* Fast Eq. 5.1: an incremental quadtree over the earlier positions whose
- * nodes keep count, first and second moments and the bounding box of their
- * points; a node far enough (r ≤ θ·d) contributes its multipole sum, a near
- * leaf its points one by one. Relative error at most
- * emm_profile_fast_bound(theta). Two threads, each with its own tree over
- * its half of the queries. Fails only when memory runs out. */
-EMM_API emm_status emm_profile_fast(const double *xy, size_t n, double theta, double *D,
-                                    const emm_threads *threads, emm_error *err);
+/* Fast Eq. 5.1 over n positions of `dims` coordinates (as for
+ * emm_profile_exact): an incremental tree over the earlier positions — a
+ * quadtree for 2, an octree for 3 — whose nodes keep count, first and
+ * second moments and the bounding box of their points; a node far enough
+ * (r ≤ θ·d) contributes its multipole sum, a near leaf its points one by
+ * one. Relative error at most emm_profile_fast_bound(theta). Two threads,
+ * each with its own tree over its half of the queries. Fails with
+ * EMM_ERR_RANGE for theta outside (0, 1), and when memory runs out. */
+EMM_API emm_status emm_profile_fast(const double *pos, size_t n, uint32_t dims, double theta,
+                                    double *D, const emm_threads *threads, emm_error *err);
 
 /* Exact when n ≤ EMM_PROFILE_EXACT_MAX, fast with EMM_PROFILE_THETA beyond.
  * *exact (may be NULL) tells which ran. */
-EMM_API emm_status emm_profile_compute(const double *xy, size_t n, double *D, int *exact,
-                                       const emm_threads *threads, emm_error *err);
+EMM_API emm_status emm_profile_compute(const double *pos, size_t n, uint32_t dims, double *D,
+                                       int *exact, const emm_threads *threads, emm_error *err);
 
 /* Reduces a profile of n ≥ EMM_PROFILE_MIN values to EMM_FEATURES numbers
  * (documented in docs/profile.md): the shape of the mean distance
@@ -87,17 +99,21 @@ EMM_API emm_status emm_profile_features(const double *D, size_t n, const char *n
  * `name` names the trace in error messages. */
 typedef struct emm_profiler emm_profiler;
 
-/* Fails with EMM_ERR_UNSUPPORTED when no array of the trace has positions
- * (an address-only trace: RAW arrays, or no geometry). window = 0 means
- * EMM_PROFILE_DEFAULT_WINDOW. */
 /* The most element accesses of a leading index-order sweep that a profile
  * leaves out (docs/profile.md "The leading sweep"): a sweep over every
  * triangle of a 2M-face mesh. The session keeps the sweep's records until
  * the decision (some 32 bytes each), so this bounds that memory. */
 #define EMM_PROFILE_SWEEP_MAX 2097152u
 
-EMM_API emm_status emm_profiler_new(const emm_trace_info *info, uint64_t window,
+/* Positions of `dims` coordinates (2: EMM_PROFILE_PLANE, the plane of the
+ * mesh's two largest extents; 3: x, y and z; anything else is a misuse).
+ * Fails with EMM_ERR_UNSUPPORTED when no array of the trace has positions
+ * (an address-only trace: RAW arrays, or no geometry). window = 0 means
+ * EMM_PROFILE_DEFAULT_WINDOW. */
+EMM_API emm_status emm_profiler_new(const emm_trace_info *info, uint64_t window, uint32_t dims,
                                     const char *name, emm_profiler **out, emm_error *err);
+/* The coordinates of each position (the `dims` it was built with). */
+EMM_API uint32_t emm_profiler_dims(const emm_profiler *p);
 /* Adds records; records of RAW arrays are skipped, and so is a leading
  * index-order sweep (docs/profile.md "The leading sweep": element 0, 1, 2,
  * ... of the arrays before the traversal; at most EMM_PROFILE_SWEEP_MAX
@@ -112,16 +128,18 @@ EMM_API emm_status emm_profiler_add(emm_profiler *p, const emm_trace_record *rec
 EMM_API uint64_t emm_profiler_swept(const emm_profiler *p, size_t *records);
 /* True once `window` element accesses are collected. */
 EMM_API int emm_profiler_full(const emm_profiler *p);
-/* The positions so far (x0, y0, x1, y1, ...), owned by p; *n receives their count. */
+/* The positions so far, emm_profiler_dims(p) coordinates each (x0, y0, x1,
+ * y1, ... in the plane), owned by p; *n receives their count. */
 EMM_API const double *emm_profiler_positions(const emm_profiler *p, size_t *n);
 EMM_API void emm_profiler_free(emm_profiler *p);
 
 /* Reads a trace from its first record until `window` element accesses
- * (0: EMM_PROFILE_DEFAULT_WINDOW) or its end and returns their positions in
- * *xy (malloc'd, the caller frees) and their count in *n. */
+ * (0: EMM_PROFILE_DEFAULT_WINDOW) or its end and returns their positions,
+ * `dims` coordinates each (as for emm_profiler_new), in *pos (malloc'd, the
+ * caller frees) and their count in *n. */
 EMM_API emm_status emm_profile_trace_positions(emm_trace_reader *r, uint64_t window,
-                                               const char *name, double **xy, size_t *n,
-                                               emm_error *err);
+                                               uint32_t dims, const char *name, double **pos,
+                                               size_t *n, emm_error *err);
 
 /* Reads a trace from its first record until `window` element accesses
  * (0: EMM_PROFILE_DEFAULT_WINDOW) or its end and returns those records

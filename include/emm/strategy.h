@@ -23,19 +23,23 @@ typedef enum emm_strategy_kind {
 
 /* The EMM layouts (thesis §4.1) and fetch schemes (§4.2), one entry each:
  * X(ENUM, name, words) gives the value EMM_LAYOUT_ENUM or EMM_FETCH_ENUM,
- * the name strategy strings use and what it does, in words for a summary. Adding a layout or a fetch scheme is a line
- * here, its ops file in simulator/ (layout_NAME.c, fetch_NAME.c) and its
- * documentation (docs/architecture.md, "Adding a part"): the enums, the
- * names, the parser, the standard sweep and the simulator's tables of ops
- * all follow these lists. */
+ * the name strategy strings use and what it does, in words for a summary.
+ * Adding a layout or a fetch scheme is a line here, its ops file in
+ * simulator/ (layout_NAME.c, fetch_NAME.c) and its documentation
+ * (docs/architecture.md, "Adding a part"): the enums, the names, the
+ * parser, the standard sweep and the simulator's tables of ops all follow
+ * these lists. Each list ends in a comment line, so that a new last entry
+ * is one added line, ending in a backslash like the others. */
 #define EMM_LAYOUT_LIST(X)                                                                  \
     X(GRID, grid, "a uniform grid of cells over the mesh's plane")                          \
     X(TILES, tiles, "tiles: cells cut to hold about equal numbers of triangles")            \
-    X(QUADTREE, quadtree, "quadtree leaves: cells split where the mesh is dense")
+    X(QUADTREE, quadtree, "quadtree leaves: cells split where the mesh is dense")           \
+    /* (the end of the layouts) */
 #define EMM_FETCH_LIST(X)                                                                   \
     X(NAIVE, naive, "fetch a cell when the program needs it, and wait")                     \
     X(CONVOLUTION, convolution, "on entering a cell, prefetch its neighbours")              \
-    X(EXTRAPOLATED, extrapolated, "prefetch the neighbour the recent moves point to")
+    X(EXTRAPOLATED, extrapolated, "prefetch the neighbour the recent moves point to")       \
+    /* (the end of the fetch schemes) */
 
 #define EMM_LAYOUT_ENUM_(e, n, w) EMM_LAYOUT_##e,
 #define EMM_FETCH_ENUM_(e, n, w) EMM_FETCH_##e,

@@ -162,13 +162,19 @@ typedef enum emm_decided_how {
 
 /* Classes whose nearest sample lies within this factor of the nearest
  * distance are each synthesised over the program's mesh and profiled; the
- * one nearest the window's profile is the pattern (at most
- * EMM_DECIDE_CLASSES_MAX of them). */
+ * one nearest the window's profile is the pattern. */
 #define EMM_DECIDE_CLASS_MARGIN 1.5
-#define EMM_DECIDE_CLASSES_MAX 3
 /* ... and another class than the nearest sample's is taken only when its
  * traversal's profile is nearer the window's by this factor. */
 #define EMM_DECIDE_CLASS_SWITCH 0.75
+
+/* A class checked on the program's mesh (emm_window_decision.classes). */
+typedef struct emm_decide_class {
+    char pattern[EMM_TABLE_NAME_MAX];
+    double distance;       /* its nearest sample's, from the window's features */
+    double synth_distance; /* its traversal's over this mesh, from the window's
+                              profile; -1: it could not be synthesised */
+} emm_decide_class;
 
 typedef struct emm_window_decision {
     emm_decision table;      /* the nearest sample (valid when has_table) */
@@ -187,18 +193,20 @@ typedef struct emm_window_decision {
                                 whole run's cycles, when simulated, decide: emm_decide_is_tie) */
     size_t candidates;       /* strategies simulated on the window (CHECKED, WINDOW) */
     size_t synth_visits;     /* triangle visits of the synthetic run (CHECKED) */
-    /* The classes checked on this mesh (nclasses 0: the nearest sample's
-     * class stood alone): each one's nearest sample distance, and the
-     * distance of its traversal over this mesh from the window's profile
-     * (-1: it could not be synthesised). reclassified: the table decision
-     * above was moved to another class than the nearest sample's. */
-    struct {
-        char pattern[EMM_TABLE_NAME_MAX];
-        double distance, synth_distance;
-    } classes[EMM_DECIDE_CLASSES_MAX];
+    /* The classes checked on this mesh, as many as lie within the margin
+     * (nclasses 0, classes NULL: the nearest sample's class stood alone),
+     * in the table's order of their first sample. The decision owns them:
+     * emm_window_decision_release. reclassified: the table decision above
+     * was moved to another class than the nearest sample's. */
+    emm_decide_class *classes;
     size_t nclasses;
     int reclassified;
 } emm_window_decision;
+
+/* Frees what a decision holds (its classes) and leaves them empty; a
+ * zeroed decision, and one released already, are allowed. A decision copied
+ * by value shares them: release one copy only. */
+EMM_API void emm_window_decision_release(emm_window_decision *d);
 
 /* True when cycles a and b (the choice and the runner-up over the same
  * run) are within EMM_DECIDE_TIE_MARGIN of the smaller: the answer names
@@ -228,7 +236,9 @@ typedef struct emm_decide_options {
  * NULL only when nothing is to be simulated (then the table's strategy
  * stands). `name` names the window in messages; opt may be NULL. To learn a
  * novel profile, append a sample made of out->f and out->strategy
- * (emm_table_append). */
+ * (emm_table_append). *out is overwritten (release what it held first);
+ * on success the caller releases it (emm_window_decision_release), on
+ * failure it holds nothing. */
 EMM_API emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
                                        const emm_trace_info *info, const emm_trace_record *recs,
                                        size_t n, const double f[EMM_FEATURES], size_t accesses,

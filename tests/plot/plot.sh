@@ -57,7 +57,7 @@ bars=$(( ${lf% *} * ${lf#* } ))
 grep -q '^"direct"' "$W/all-plots/compare.dat" || no "compare lacks direct"
 grep -q '(best EMM)' "$W/all-plots/compare.dat" || no "compare lacks the best EMM strategy"
 # One point per EMM strategy of the sweep: layouts x fetch schemes x cells.
-ne=$(grep -c '"strategy": "[a-z]*+' "$W/all.json")
+ne=$(grep -c '"strategy": "[a-z][a-z0-9]*+' "$W/all.json")
 [ "$(grep -c '^[0-9]' "$W/all-plots/transfer.dat")" = "$ne" ] || no "transfer has not $ne points"
 
 # --format and --out; the figures' script can be rerun by hand.

@@ -74,7 +74,10 @@ has profile-cache out.txt "strategy: *cache$"
 # candidates, the answer and its cycles, and the prediction's against it.
 check profile-contest 0 "$EMM" profile walk.emmt --table user.txt --set cache.present=1 --json walk.json
 has profile-contest out.txt "^predicted: *cache$"
-has profile-contest out.txt "^contest: *68 candidates over the whole trace"
+# Every strategy of the standard sweep (as many as emm replay --help says).
+sweep=$("$EMM" replay --help | sed -n 's/.*: \([0-9][0-9]*\) strategies,*$/\1/p')
+[ -n "$sweep" ] || { echo "FAIL profile-contest: emm replay --help does not say the sweep's size"; fail=1; }
+has profile-contest out.txt "^contest: *$sweep candidates over the whole trace"
 has profile-contest out.txt "^strategy: "
 has profile-contest out.txt "^predicted: cache, [0-9]* cycles over the trace, [0-9.]*x the answer$"
 has json walk.json '"predicted": "cache"'

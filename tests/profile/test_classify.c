@@ -55,12 +55,13 @@ static double *profile_of(const emm_mesh *m, emm_pattern p, uint64_t seed, size_
     emm_trace_reader *r;
     REQUIRE(emm_trace_reader_open(path, &r, &err) == EMM_OK);
     double *xy;
-    REQUIRE(emm_profile_trace_positions(r, windows[NWIN - 1], path, &xy, n, &err) == EMM_OK);
+    REQUIRE(emm_profile_trace_positions(r, windows[NWIN - 1], EMM_PROFILE_PLANE, path, &xy, n,
+                                        &err) == EMM_OK);
     emm_trace_reader_close(r);
     remove(path);
     double *D = malloc(*n * sizeof *D);
     REQUIRE(D);
-    REQUIRE(emm_profile_compute(xy, *n, D, NULL, NULL, &err) == EMM_OK);
+    REQUIRE(emm_profile_compute(xy, *n, EMM_PROFILE_PLANE, D, NULL, NULL, &err) == EMM_OK);
     free(xy);
     return D;
 }

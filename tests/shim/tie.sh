@@ -4,6 +4,6 @@
 . "$(dirname "$0")/lib.sh"
 unset EMM_STRATEGY # the decision's own answer
 run_both tie "$@"
-expect_err tie '^emm: answer: a tie between [a-z]+\+[a-z]+@[0-9]+ and [a-z]+\+[a-z]+@[0-9]+ \(within 3%'
+expect_err tie '^emm: answer: a tie between [a-z][a-z0-9]*\+[a-z]+@[0-9]+ and [a-z][a-z0-9]*\+[a-z]+@[0-9]+ \(within 3%'
 expect_err tie '^emm: .*[0-9] cycles'
 echo "tie: ok"
