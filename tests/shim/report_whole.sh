@@ -85,11 +85,16 @@ stop() {
   [ "$rc" = "$3" ] || { cat "$WORK/$1.err" >&2; fail "$1: exit status $rc after SIG$2, expected $3"; }
 }
 
-# The native runs: what the signals do without the shim.
+# The native runs: what the signals do without the shim. The output is
+# emptied before each start, as start() does: else the second run could
+# find the first one's "ready" and be signalled before it runs the program
+# (the shell's child ignores SIGINT until env resets it: a 60 s "hang").
+: > "$WORK/native.out"
 env -u LD_PRELOAD $START "$PROG" loop > "$WORK/native.out" 2>&1 &
 pid=$!
 until grep -q ready "$WORK/native.out"; do sleep 0.05; done
 stop native TERM 143
+: > "$WORK/native.out"
 env -u LD_PRELOAD $START "$PROG" loop > "$WORK/native.out" 2>&1 &
 pid=$!
 until grep -q ready "$WORK/native.out"; do sleep 0.05; done
