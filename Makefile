@@ -26,8 +26,10 @@ build: configure
 demo: build
 	@scripts/demo.sh $(BUILD)
 
+# After the run, pass or fail, its ten slowest tests (scripts/slowest.sh).
 check: build
-	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS); rc=$$?; \
+	  cd $(CURDIR) && scripts/slowest.sh $(BUILD); exit $$rc
 
 # The test suite again, built with clang under AddressSanitizer and
 # UndefinedBehaviorSanitizer, with the fuzz harnesses
@@ -38,7 +40,8 @@ asan-build: deps
 
 check-asan: asan-build
 	@cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-	  ctest --output-on-failure -j $(JOBS)
+	  ctest --output-on-failure -j $(JOBS); rc=$$?; \
+	  cd $(CURDIR) && scripts/slowest.sh build-asan; exit $$rc
 
 # Each libFuzzer harness of tests/fuzz for FUZZ_SECONDS (default 300), one
 # after the other (FUZZ="trace din" picks some), in the sanitizer build.

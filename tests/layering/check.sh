@@ -11,30 +11,34 @@ set -eu
 root=${1:?usage: check.sh ROOT}
 cd "$root"
 
-# layer ranks
+# The helpers set a variable instead of printing: a command substitution
+# per #include line made this check take seconds.
+
+# rank LAYER: the layer's rank in $rank.
 rank() {
   case $1 in
-    core) echo 0 ;; simulator) echo 1 ;; runtime) echo 2 ;; shim) echo 3 ;;
-    tools|server) echo 4 ;;
-    *) echo '' ;;
+    core) rank=0 ;; simulator) rank=1 ;; runtime) rank=2 ;; shim) rank=3 ;;
+    tools|server) rank=4 ;;
+    *) rank='' ;;
   esac
 }
 
-# The public headers and their layers.
+# public_layer HEADER: the layer of a public header in $layer_of ('' if none).
 public_layer() {
   case $1 in
-    common.h|strategy.h|config.h) echo core ;;
-    sim.h|trace.h|layout.h) echo simulator ;;
+    common.h|strategy.h|config.h) layer_of=core ;;
+    sim.h|trace.h|layout.h) layer_of=simulator ;;
     mesh.h|profile.h|table.h|synth.h|session.h|replay.h|tag.h|sites.h|agent.h|guard.h)
-      echo runtime ;;
-    *) echo '' ;;
+      layer_of=runtime ;;
+    *) layer_of='' ;;
   esac
 }
 
 status=0
 for h in include/emm/*.h; do
   name=${h#include/emm/}
-  if [ -z "$(public_layer "$name")" ]; then
+  public_layer "$name"
+  if [ -z "$layer_of" ]; then
     echo "$h: public header without a layer (add it to tests/layering/check.sh)"
     status=1
   fi
@@ -42,14 +46,16 @@ done
 
 for layer in core simulator runtime shim tools server; do
   [ -d "$layer" ] || continue
-  mine=$(rank $layer)
+  rank $layer; mine=$rank
   for f in $(find "$layer" -type f \( -name '*.c' -o -name '*.cpp' -o -name '*.h' \) | sort); do
-    # Every #include "..." of the file, with its line number.
+    # Every #include "..." of the file, with its line number. The line's
+    # first '"' opens the name: only blanks, '#' and "include" come before.
     grep -n '^[[:space:]]*#[[:space:]]*include[[:space:]]*"' "$f" | while IFS= read -r line; do
       num=${line%%:*}
-      inc=$(printf '%s\n' "$line" | sed 's/.*#[[:space:]]*include[[:space:]]*"\([^"]*\)".*/\1/')
+      inc=${line#*\"}
+      inc=${inc%%\"*}
       case $inc in
-        emm/*) owner=$(public_layer "${inc#emm/}") ;;
+        emm/*) public_layer "${inc#emm/}"; owner=$layer_of ;;
         */*) owner='' ;;  # a path into another tree (a system or package header)
         *)
           owner=''
@@ -59,7 +65,7 @@ for layer in core simulator runtime shim tools server; do
           ;;
       esac
       [ -n "$owner" ] || continue
-      theirs=$(rank "$owner")
+      rank "$owner"; theirs=$rank
       if [ "$theirs" -gt "$mine" ]; then
         echo "$f:$num: includes \"$inc\", a header of $owner, above $layer"
         echo violation >> "${TMPDIR:-/tmp}/emm-layering.$$"

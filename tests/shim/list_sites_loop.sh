@@ -4,7 +4,7 @@
 # follows its first call path, so without nth= the x rule would take all
 # three); the suggested rules, used as they are, tag one mesh of three
 # blocks and the run is decided.
-#   sh list_sites_loop.sh SHIM WORKDIR EMM PROGRAM
+#   sh list_sites_loop.sh SHIM WORKDIR EMM PROGRAM 140   (a 140 x 140 grid)
 EMM_TEST_DECIDE=1
 . "$(dirname "$0")/lib.sh"
 EMM=$1; shift
@@ -15,6 +15,6 @@ trule=$(sed -n 's/^emm:      rule: \(triangles:site=mesh_alloc,stride=12,vidx=0:
 [ -n "$trule" ] || fail "no triangles rule suggested"
 run_suggested "$EMM" "$axes;$trule" "$@"
 cat "$WORK/tagged.err"
-grep -q 'the vertices are 3 blocks (x, y, z) of 40,000 f32 each' "$WORK/tagged.err" ||
+grep -q 'the vertices are 3 blocks (x, y, z) of 19,600 f32 each' "$WORK/tagged.err" ||
   fail "the suggested rules did not tag the three blocks as one mesh"
 echo "list_sites_loop: ok"

@@ -41,8 +41,8 @@ realloc)
   run_both realloc "$@"
   expect_err realloc '^emm: answer: '
   nv=$(sed -n 's/^vertices \([0-9]*\) .*/\1/p' "$WORK/realloc.native.out")
-  vr=$(report "r['mesh']['vertices']") w=$(report "r['window']['element_accesses']")
-  lw=$(report "r['coverage']['loader_writes']")
+  set -- $(report "r['mesh']['vertices'], r['window']['element_accesses'], r['coverage']['loader_writes']")
+  vr=$1 w=$2 lw=$3
   [ "$vr" = "$nv" ] || fail "realloc: the report counts $vr vertices, the program $nv"
   [ "$w" -ge 256 ] || fail "realloc: the window profiled $w element accesses"
   [ "$lw" -gt 0 ] || fail "realloc: no loader writes counted"

@@ -8,7 +8,6 @@
 unset EMM_STRATEGY
 EMM=$1 SANCOV=$2; shift 2
 TAG='vertices:site=load_mesh,stride=12,xyz=0:f32;triangles:site=load_mesh,stride=12,vidx=0:u32'
-report() { python3 -c "import json; r = json.load(open('$1')); print($2)"; }
 env -u LD_PRELOAD "$@" > "$WORK/native.out"; native_rc=$?
 "$EMM" run --tag "$TAG" --report "$WORK/valgrind.json" -- "$@" \
   > "$WORK/valgrind.out" 2> "$WORK/valgrind.err"; rc=$?
@@ -17,15 +16,25 @@ cmp -s "$WORK/native.out" "$WORK/valgrind.out" || { cat "$WORK/valgrind.err" >&2
 grep -q '^emm: answer: ' "$WORK/valgrind.err" || { cat "$WORK/valgrind.err" >&2; fail "no answer"; }
 grep -q 'simulated: the whole run from the frozen mesh on, .*(the valgrind capture)' "$WORK/valgrind.err" ||
   fail "the summary does not say the whole run was simulated"
-[ "$(report "$WORK/valgrind.json" "r['coverage']['simulated']")" = run ] || fail "coverage.simulated is not 'run'"
-[ "$(report "$WORK/valgrind.json" "r['capture']")" = valgrind ] || fail "capture is not 'valgrind'"
+# The reports are read by Python's own JSON parser, each check with its
+# own message: here the valgrind run's, at the end both runs' counts.
+python3 - "$WORK/valgrind.json" <<'PY' || exit 1
+import json, sys
+r = json.load(open(sys.argv[1]))
+if r['coverage']['simulated'] != 'run':
+    sys.exit("FAIL: coverage.simulated is not 'run'")
+if r['capture'] != 'valgrind':
+    sys.exit("FAIL: capture is not 'valgrind'")
+PY
 shift
 "$EMM" run --capture sancov --tag "$TAG" --report "$WORK/sancov.json" -- "$SANCOV" "$@" \
   > "$WORK/sancov.out" 2> "$WORK/sancov.err" || { cat "$WORK/sancov.err" >&2; fail "the sancov build failed"; }
 cmp -s "$WORK/native.out" "$WORK/sancov.out" || fail "the sancov build prints something else"
-v=$(report "$WORK/valgrind.json" "r['coverage']['element_accesses']")
-s=$(report "$WORK/sancov.json" "r['coverage']['element_accesses']")
-echo "element accesses: valgrind $v, sancov $s"
-python3 -c "import sys; v, s = $v, $s; sys.exit(0 if s > 0 and abs(v - s) <= 0.01 * s else 1)" ||
-  fail "element accesses differ by more than 1%: valgrind $v, sancov $s"
+python3 - "$WORK/valgrind.json" "$WORK/sancov.json" <<'PY' || exit 1
+import json, sys
+v, s = (json.load(open(p))['coverage']['element_accesses'] for p in sys.argv[1:3])
+print("element accesses: valgrind %s, sancov %s" % (v, s))
+if not (s > 0 and abs(v - s) <= 0.01 * s):
+    sys.exit("FAIL: element accesses differ by more than 1%%: valgrind %s, sancov %s" % (v, s))
+PY
 echo "valgrind: ok"
