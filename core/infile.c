@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <poll.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -34,6 +35,59 @@ static emm_status too_large(const char *path, const char *what, size_t limit, bo
                     size, regular ? "" : " from a pipe or device");
 }
 
+emm_status emm_infile_open(const char *path, const char *what, bool regular_only, int *out,
+                           struct stat *st, emm_error *err)
+{
+    *out = -1;
+    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+    if (fd < 0)
+        return emm_fail(err, EMM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    const char *why = NULL, *kind = NULL;
+    if (fstat(fd, st) != 0)
+        why = strerror(errno);
+    else if (S_ISDIR(st->st_mode))
+        kind = "is a directory";
+    else if (regular_only && !S_ISREG(st->st_mode))
+        kind = S_ISFIFO(st->st_mode) ? "is a pipe or FIFO" : "is a device";
+    else if (S_ISREG(st->st_mode) && fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) & ~O_NONBLOCK) != 0)
+        why = strerror(errno);
+    if (why || kind) {
+        close(fd);
+        return kind ? emm_fail(err, EMM_ERR_IO, "%s: %s, not a %s", path, kind, what)
+                    : emm_fail(err, EMM_ERR_IO, "%s: %s", path, why);
+    }
+    *out = fd;
+    return EMM_OK;
+}
+
+FILE *emm_infile_fopen(const char *path, const char *what, emm_error *err)
+{
+    struct stat st;
+    int fd;
+    if (emm_infile_open(path, what, true, &fd, &st, err) != EMM_OK)
+        return NULL;
+    FILE *f = fdopen(fd, "rb");
+    if (!f) {
+        emm_fail(err, EMM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+        close(fd);
+    }
+    return f;
+}
+
+/* Waits until `fd` (a pipe, FIFO or device) has something to read or its
+ * writer has gone, at most EMM_INFILE_STREAM_WAIT_MS: false when it stayed
+ * silent (a FIFO nobody opened for writing stays so on Linux). */
+static bool stream_ready(int fd)
+{
+    struct pollfd p = {.fd = fd, .events = POLLIN};
+    for (;;) {
+        int r = poll(&p, 1, EMM_INFILE_STREAM_WAIT_MS);
+        if (r < 0 && errno == EINTR)
+            continue;
+        return r != 0; /* an error shows in the read that follows */
+    }
+}
+
 emm_status emm_infile_read(const char *path, const char *what, size_t max, char **data,
                            size_t *len, emm_error *err)
 {
@@ -41,19 +95,11 @@ emm_status emm_infile_read(const char *path, const char *what, size_t max, char 
     *len = 0;
     if (max > SIZE_MAX / 4)
         max = SIZE_MAX / 4; /* "no cap": the file's own size is the limit */
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (fd < 0)
-        return emm_fail(err, EMM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
     struct stat st;
-    if (fstat(fd, &st) != 0) {
-        int e = errno;
-        close(fd);
-        return emm_fail(err, EMM_ERR_IO, "%s: %s", path, strerror(e));
-    }
-    if (S_ISDIR(st.st_mode)) {
-        close(fd);
-        return emm_fail(err, EMM_ERR_IO, "%s: is a directory, not a %s", path, what);
-    }
+    int fd;
+    emm_status opened = emm_infile_open(path, what, false, &fd, &st, err);
+    if (opened != EMM_OK)
+        return opened;
     bool regular = S_ISREG(st.st_mode);
     size_t limit = regular || max < EMM_INFILE_STREAM_MAX ? max : EMM_INFILE_STREAM_MAX;
     if (regular && (uint64_t)st.st_size > limit) {
@@ -83,8 +129,14 @@ emm_status emm_infile_read(const char *path, const char *what, size_t max, char 
             buf = nb;
             cap = grown;
         }
+        if (!regular && !stream_ready(fd)) {
+            s = emm_fail(err, EMM_ERR_IO,
+                         "%s: nothing to read for %d s (a pipe or FIFO with no writer, or a "
+                         "silent one)", path, EMM_INFILE_STREAM_WAIT_MS / 1000);
+            break;
+        }
         ssize_t got = read(fd, buf + n, cap - n);
-        if (got < 0 && errno == EINTR)
+        if (got < 0 && (errno == EINTR || errno == EAGAIN || errno == EWOULDBLOCK))
             continue;
         if (got < 0)
             s = emm_fail(err, EMM_ERR_IO, "%s: cannot read: %s", path, strerror(errno));

@@ -337,9 +337,9 @@ emm_status emm_table_write(const emm_table *t, const char *path, const char *com
  * through a temporary file renamed into place. */
 static emm_status append_line(const char *path, const emm_table_sample *s, emm_error *err)
 {
-    FILE *in = fopen(path, "r");
+    FILE *in = emm_infile_fopen(path, "strategy table", err);
     if (!in)
-        return emm_fail(err, EMM_ERR_IO, "%s: cannot rewrite: %s", path, strerror(errno));
+        return err ? err->status : EMM_ERR_IO;
     emm_outfile o;
     emm_status st = emm_outfile_open(&o, path, "the table", err);
     if (st != EMM_OK) {

@@ -29,6 +29,7 @@
 #include <zstd.h>
 
 #include "error.h"
+#include "infile.h"
 #include "outfile.h"
 #include "trace_format.h"
 
@@ -873,17 +874,12 @@ emm_status emm_trace_reader_open(const char *path, emm_trace_reader **out, emm_e
         free(r);
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", path);
     }
-    r->f = fopen(path, "rb");
     struct stat st;
     emm_status s = EMM_OK;
-    if (!r->f)
-        s = emm_fail(err, EMM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    if (!(r->f = emm_infile_fopen(path, "trace", err)))
+        s = err ? err->status : EMM_ERR_IO;
     else if (fstat(fileno(r->f), &st) != 0)
         s = emm_fail(err, EMM_ERR_IO, "%s: cannot stat: %s", path, strerror(errno));
-    else if (S_ISDIR(st.st_mode))
-        s = emm_fail(err, EMM_ERR_IO, "%s: is a directory, not a trace", path);
-    else if (!S_ISREG(st.st_mode))
-        s = emm_fail(err, EMM_ERR_IO, "%s: not a regular file (a trace is read with random access)", path);
     if (s == EMM_OK) {
         r->file_size = (uint64_t)st.st_size;
         s = reader_header(r, err);

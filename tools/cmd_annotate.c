@@ -11,6 +11,7 @@
 
 #include "annotate.h"
 #include "cli.h"
+#include "infile.h"
 #include "opts.h"
 #include "emm/replay.h"
 #include "emm/sim.h"
@@ -119,9 +120,10 @@ static int print_source(const char *want, const emm_annotate_row *rows, size_t n
         fputc('\n', stderr);
         return EMM_EXIT_FAIL;
     }
-    FILE *f = fopen(path, "r");
-    if (!f && !(f = fopen(want, "r"))) {
-        cli_error("annotate: --source: cannot open %s: %s", path, strerror(errno));
+    emm_error err;
+    FILE *f = emm_infile_fopen(path, "source file", &err);
+    if (!f && !(f = emm_infile_fopen(want, "source file", &err))) {
+        cli_error("annotate: --source: %s", err.message);
         return EMM_EXIT_FAIL;
     }
     printf("\n-- %s (total, dma_stall, lookups per line)\n", path);

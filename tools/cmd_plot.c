@@ -28,6 +28,7 @@
 #include "emm/sim.h"
 #include "emm/strategy.h"
 #include "error.h"
+#include "infile.h"
 #include "json_read.h"
 
 static const char *const CMD = "plot";
@@ -168,9 +169,9 @@ static emm_status check_profile(const plot_report *rep, const jr_value *p, emm_e
 static emm_status sniff_input(const char *path, emm_error *err)
 {
     unsigned char head[8] = {0};
-    FILE *f = fopen(path, "rb");
+    FILE *f = emm_infile_fopen(path, "report", NULL);
     if (!f)
-        return EMM_OK; /* the parser says why it cannot be read */
+        return EMM_OK; /* the parser says why it cannot be read (a FIFO is not waited for) */
     size_t n = fread(head, 1, sizeof head, f);
     int c = 0;
     rewind(f);

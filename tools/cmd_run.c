@@ -22,6 +22,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "infile.h"
 #include "opts.h"
 #include "emm/config.h"
 #include "emm/session.h"
@@ -168,7 +169,7 @@ static bool elf_offset(const Elf64_Phdr *ph, size_t nph, uint64_t v, uint64_t *o
  * unmodified. */
 static bool links_emm(const char *path)
 {
-    FILE *f = fopen(path, "rb");
+    FILE *f = emm_infile_fopen(path, "program", NULL);
     if (!f)
         return false;
     bool found = false;
