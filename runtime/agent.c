@@ -17,6 +17,7 @@
 #include "emm/agent.h"
 
 #include <dlfcn.h>
+#include <fcntl.h>
 #include <elf.h>
 #include <errno.h>
 #include <link.h>
@@ -27,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "agent_rules.h"
@@ -78,8 +80,66 @@ struct emm_agent {
     } *retired;            /* snapshots replaced while a hot path might read them */
 };
 
+/* Where emm's words go: a duplicate of the stderr the process started with,
+ * taken when the agent starts (close-on-exec, numbered high), and what it
+ * pointed at. A program that closes its stderr and opens a file gets that
+ * file as fd 2: emm's lines must not land in it. They go to the stderr the
+ * user gave the program, or nowhere when that is gone (never opened, or
+ * the program closed the duplicate too and the number now names another
+ * file). One per process, as fd 2 is: the agent is the process's. */
+#define SAY_FD_MIN 700
+static struct {
+    bool opened;
+    int fd; /* -1: nowhere */
+    dev_t dev;
+    ino_t ino;
+} say_to = {false, -1, 0, 0};
+
+static void say_open(void)
+{
+    struct stat st;
+    if (say_to.fd >= 0 && fstat(say_to.fd, &st) == 0 && st.st_dev == say_to.dev &&
+        st.st_ino == say_to.ino)
+        return; /* a forked child's agent keeps its parent's */
+    int fd = fcntl(2, F_DUPFD_CLOEXEC, SAY_FD_MIN);
+    if (fd >= 0 && fstat(fd, &st) != 0) {
+        close(fd);
+        fd = -1;
+    }
+    say_to.opened = true;
+    say_to.fd = fd;
+    say_to.dev = fd >= 0 ? st.st_dev : 0;
+    say_to.ino = fd >= 0 ? st.st_ino : 0;
+}
+
+/* emm's stderr when it still is what it was, else -1. */
+static int say_fd(void)
+{
+    struct stat st;
+    if (!say_to.opened)
+        say_open(); /* a line before the agent starts (a bad setting) */
+    if (say_to.fd < 0 || fstat(say_to.fd, &st) != 0 || st.st_dev != say_to.dev ||
+        st.st_ino != say_to.ino)
+        return -1;
+    return say_to.fd;
+}
+
+/* A stream on emm's stderr for the summary (fclose it), or NULL. */
+static FILE *say_stream(void)
+{
+    int fd = say_fd();
+    int dup = fd >= 0 ? fcntl(fd, F_DUPFD_CLOEXEC, SAY_FD_MIN) : -1;
+    FILE *f = dup >= 0 ? fdopen(dup, "w") : NULL;
+    if (!f && dup >= 0)
+        close(dup);
+    return f;
+}
+
 void emm_agent_say(const char *fmt, ...)
 {
+    int fd = say_fd();
+    if (fd < 0)
+        return;
     char line[1024];
     va_list ap;
     va_start(ap, fmt);
@@ -91,7 +151,7 @@ void emm_agent_say(const char *fmt, ...)
     size_t len = 5 + ((size_t)n < sizeof line - 7 ? (size_t)n : sizeof line - 7);
     line[len++] = '\n';
     for (size_t off = 0; off < len;) {
-        ssize_t w = write(2, line + off, len - off);
+        ssize_t w = write(fd, line + off, len - off);
         if (w <= 0 && errno != EINTR)
             return;
         if (w > 0)
@@ -161,6 +221,7 @@ static void agent_free(emm_agent *a)
 emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *err)
 {
     *out = NULL;
+    say_open();
     emm_agent *a = calloc(1, sizeof *a);
     if (!a || !(a->program = strdup(c->program ? c->program : "program")) ||
         emm_config_copy(&a->cfg, c->config) != EMM_OK) {
@@ -208,7 +269,11 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
     if (a->cfg.log >= 2) {
         emm_agent_say("libemmshim.so in %s (pid %ld), capture %s", a->program, (long)getpid(),
                   emm_capture_name(a->capture));
-        emm_config_dump(&a->cfg, stderr);
+        FILE *f = say_stream();
+        if (f) {
+            emm_config_dump(&a->cfg, f);
+            fclose(f);
+        }
     }
     __atomic_store_n(&a->active, 1, __ATOMIC_RELEASE);
     *out = a;
@@ -657,7 +722,11 @@ void emm_agent_finish(emm_agent *a)
     }
     __atomic_store_n(&a->active, 0, __ATOMIC_RELEASE);
     if (a->sites) { /* list mode: the candidate arrays, nothing simulated */
-        emm_sites_print(a->sites, a->program, stderr);
+        FILE *f = say_stream();
+        if (f) {
+            emm_sites_print(a->sites, a->program, f);
+            fclose(f);
+        }
         pthread_mutex_unlock(&a->lock);
         return;
     }
@@ -676,7 +745,10 @@ void emm_agent_finish(emm_agent *a)
     ranges_changed_locked(a);
     /* The summary already says why a session had nothing to simulate, and
      * names each output that could not be written. */
-    emm_session_finish(a->session, a->cfg.log >= 1 ? stderr : NULL, NULL);
+    FILE *f = a->cfg.log >= 1 ? say_stream() : NULL;
+    emm_session_finish(a->session, f, NULL);
+    if (f)
+        fclose(f);
     pthread_mutex_unlock(&a->lock);
 }
 

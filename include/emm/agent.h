@@ -177,8 +177,10 @@ EMM_API void emm_agent_forked(emm_agent *a);
  * test for a program written against emm_mesh_*). */
 EMM_API int emm_program_imports(const char *symbol);
 
-/* Writes one line "emm: ..." to stderr (fd 2) without allocating: the
- * shim's and the agent's own words. */
+/* Writes one line "emm: ..." without allocating: the shim's and the
+ * agent's own words. They go to the stderr the process started with (a
+ * duplicate the agent keeps), never to a file the program opened after
+ * closing its stderr; nowhere when that stderr is gone. */
 EMM_API void emm_agent_say(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
 #ifdef __cplusplus
