@@ -711,7 +711,23 @@ size_t emm_agent_usable_size(emm_agent *a, const void *p)
 
 /* ---- the end, fork ------------------------------------------------------------- */
 
+static void agent_finish(emm_agent *a, const char *ended);
+
 void emm_agent_finish(emm_agent *a)
+{
+    agent_finish(a, NULL);
+}
+
+void emm_agent_finish_signal(emm_agent *a, int sig)
+{
+    char ended[64];
+    const char *abbrev = sigabbrev_np(sig);
+    snprintf(ended, sizeof ended, "signal %d%s%s%s", sig, abbrev ? " (SIG" : "",
+             abbrev ? abbrev : "", abbrev ? ")" : "");
+    agent_finish(a, ended);
+}
+
+static void agent_finish(emm_agent *a, const char *ended)
 {
     if (!a || __atomic_exchange_n(&a->finishing, 1, __ATOMIC_ACQ_REL))
         return;
@@ -746,7 +762,7 @@ void emm_agent_finish(emm_agent *a)
     /* The summary already says why a session had nothing to simulate, and
      * names each output that could not be written. */
     FILE *f = a->cfg.log >= 1 ? say_stream() : NULL;
-    emm_session_finish(a->session, f, NULL);
+    emm_session_finish_ended(a->session, f, ended, NULL);
     if (f)
         fclose(f);
     pthread_mutex_unlock(&a->lock);

@@ -781,13 +781,16 @@ static void output_failed(const session *s, FILE *summary, const emm_error *e)
     }
 }
 
-static emm_status engine_finish(emm_session *h, FILE *summary, emm_error *err)
+static emm_status engine_finish(emm_session *h, FILE *summary, const char *ended,
+                                emm_error *err)
 {
     session *s = (session *)h;
     emm_status first = EMM_OK;
     emm_error e;
     if (s->phase == PHASE_DONE)
         return EMM_OK;
+    if (ended)
+        snprintf(s->ended, sizeof s->ended, "%s", ended);
     if (s->phase == PHASE_DEFERRED)
         s->phase = PHASE_DECIDE;
     if (s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE)

@@ -57,7 +57,13 @@ emm_status emm_session_decide(emm_session *s, emm_error *err)
 
 emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err)
 {
-    return s->transport->finish(s, summary, err);
+    return s->transport->finish(s, summary, NULL, err);
+}
+
+emm_status emm_session_finish_ended(emm_session *s, FILE *summary, const char *ended,
+                                    emm_error *err)
+{
+    return s->transport->finish(s, summary, ended, err);
 }
 
 void emm_session_forked(emm_session *s)

@@ -122,6 +122,7 @@ typedef struct session {
     emm_config cfg;      /* the settings, parsed (a copy, without the tag rules: each
                             array's description comes whole) */
     char *program;
+    char ended[96];      /* how the run ended when not normally ("": an exit) */
     emm_capture capture;
     emm_threads threads;
     emm_machine *machine;

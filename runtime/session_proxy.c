@@ -337,15 +337,22 @@ static emm_status proxy_decide_rest(emm_session *h, emm_error *err)
     return EMM_OK;
 }
 
-static emm_status proxy_finish(emm_session *h, FILE *summary, emm_error *err)
+static emm_status proxy_finish(emm_session *h, FILE *summary, const char *ended,
+                               emm_error *err)
 {
     proxy *r = (proxy *)h;
     if (r->quiet)
         return EMM_OK;
     if (summary)
         fflush(summary);
+    /* Whether to print the summary, then how the run ended, if not normally. */
+    char msg[4 + 96] = {0};
     uint32_t say = summary != NULL;
-    emm_status st = status_call(r, WIRE_FINISH, &say, sizeof say, NULL, NULL, NULL, err);
+    memcpy(msg, &say, sizeof say);
+    size_t n = ended ? strnlen(ended, sizeof msg - 5) : 0;
+    if (n)
+        memcpy(msg + 4, ended, n);
+    emm_status st = status_call(r, WIRE_FINISH, msg, 4 + n, NULL, NULL, NULL, err);
     if (r->broken && summary) {
         fprintf(summary, "emm: %s\n", r->why.message);
         fflush(summary);

@@ -204,6 +204,8 @@ static void report_extra(json_writer *w, void *ctx)
     json_string(w, s->program);
     json_key(w, "capture");
     json_string(w, emm_capture_name(s->capture));
+    json_key(w, "ended");
+    json_string(w, s->ended[0] ? s->ended : "exit");
     json_key(w, "pattern");
     if (s->has_profile)
         json_string(w, s->decision.novel ? "novel" : s->decision.pattern);
@@ -582,6 +584,9 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
         fprintf(out, "emm:   simulated: the whole run from the frozen mesh on, %s accesses, %s "
                      "element accesses (the %s capture)\n",
                 emm_grouped(s->accesses, num), elems, emm_capture_name(s->capture));
+    if (s->ended[0])
+        fprintf(out, "emm:   the run ended by %s: what was captured up to then is simulated\n",
+                s->ended);
     if (s->pick_note[0])
         fprintf(out, "emm:   %s\n", s->pick_note);
     if (s->vertex_only)

@@ -47,6 +47,7 @@ struct server {
     bool ended;          /* the client closed, or a frame was malformed */
     bool waiting;        /* the client waits for a REPLY: it answers READs */
     bool stop;           /* the service is over: the reader leaves */
+    bool finished;       /* the client's FINISH came */
 };
 
 static void drop_message(struct message *m)
@@ -267,10 +268,16 @@ static bool serve_one(struct server *v, const struct message *m, bool *quiet)
         return true;
     }
     case WIRE_FINISH: {
+        /* Whether to print the summary, then how the run ended, if not normally. */
         uint32_t say = 0;
-        if (m->f.len == sizeof say)
-            memcpy(&say, m->data, sizeof say);
-        emm_status st = emm_session_finish(s, say ? stderr : NULL, &e);
+        char ended[96] = "";
+        if (m->f.len < sizeof say || m->f.len >= sizeof say + sizeof ended)
+            return false;
+        memcpy(&say, m->data, sizeof say);
+        memcpy(ended, m->data + sizeof say, (size_t)m->f.len - sizeof say);
+        v->finished = true;
+        emm_status st = emm_session_finish_ended(s, say ? stderr : NULL, ended[0] ? ended : NULL,
+                                                 &e);
         return reply_status(v, st, &e);
     }
     default:
@@ -299,6 +306,17 @@ emm_status emm_server_serve(int fd, emm_error *err)
                 st = emm_fail(err, EMM_ERR_FORMAT, "emm-session: a call it could not serve");
             break;
         }
+    }
+    /* The client left before its FINISH — the program closed the socket
+     * with its other descriptors, or died: the run so far is still the
+     * program's, and its report is written. */
+    if (v.s && !v.finished) {
+        emm_error e;
+        emm_session_finish_ended(v.s, v.cfg.log >= 1 ? stderr : NULL,
+                                 st == EMM_OK ? "the end of the program's connection to "
+                                                "emm-session, before its exit"
+                                              : "a call emm-session could not serve",
+                                 &e);
     }
     /* The client is gone (or spoke nonsense): stop reading, free all. */
     pthread_mutex_lock(&v.lock);

@@ -18,9 +18,9 @@
  *   covers the run); exec: LD_PRELOAD carries the shim into the new image,
  *   which starts its own session.
  * - The session is finished at exit (a destructor, which runs after the
- *   program's atexit handlers), in _exit/_Exit, and on SIGTERM/SIGINT when
- *   the program has no handler of its own (deferred while the signalled
- *   thread is inside the shim or the allocator: on_terminate says why).
+ *   program's atexit handlers), in _exit/_Exit, and on SIGTERM, SIGINT,
+ *   SIGSEGV, SIGBUS, SIGFPE, SIGILL and SIGABRT when the program has no
+ *   handler of its own (on_terminate says when it cannot).
  * - Each thread's buffer is flushed when it fills, when the thread exits and
  *   before the thread tags, frees or ends an iteration. At finish only the
  *   finishing thread's buffer is flushed: threads still running then (not
@@ -478,11 +478,13 @@ int shim_real_sigaction(int sig, const struct sigaction *act, struct sigaction *
     return next(sig, act, old);
 }
 
-/* SIGTERM/SIGINT with the default action: finish, then die of the signal.
+/* SIGTERM, SIGINT and the fatal signals with the default action: finish
+ * (the report says the run "ended" by the signal), then die of it.
  * Finishing allocates and takes the agent's lock, so when the signal lands
  * in a thread that is inside the shim (perhaps holding the lock) or inside
  * the allocator, the handler only notes it, and the thread acts on it as it
- * leaves (shim_leave, alloc_leave); a thread that is not waits for the lock
+ * leaves (shim_leave, alloc_leave) — a fault there would only come back, so
+ * the program dies of it unreported; a thread that is not waits for the lock
  * another thread may hold. Finishing here is still not async-signal-safe
  * (the interrupted code may hold another library's lock): session.h says
  * what that trades. */
@@ -491,7 +493,7 @@ static void terminate_now(int sig)
     /* The thread's own buffer is not flushed: the signal may have landed
      * in shim_record, between taking a slot and filling it. */
     shim_busy++;
-    emm_agent_finish(shim.agent);
+    emm_agent_finish_signal(shim.agent, sig);
     shim_busy--;
     struct sigaction dfl;
     memset(&dfl, 0, sizeof dfl);
@@ -513,10 +515,12 @@ void shim_deliver_pending(void)
 
 static void on_terminate(int sig)
 {
-    if (emm_agent_active(shim.agent) && (shim_busy || shim_in_alloc))
-        __atomic_store_n(&shim_pending_signal, sig, __ATOMIC_RELEASE);
-    else
+    if (!emm_agent_active(shim.agent) || !(shim_busy || shim_in_alloc))
         terminate_now(sig);
+    else if (sig == SIGTERM || sig == SIGINT)
+        __atomic_store_n(&shim_pending_signal, sig, __ATOMIC_RELEASE);
+    else /* a fault in the shim or the allocator would come back: die without a report */
+        shim.enabled = false, shim.agent = NULL, terminate_now(sig);
 }
 
 static void install_terminate(int sig)
@@ -628,7 +632,12 @@ __attribute__((constructor(101))) static void shim_init(void)
         shim_leave();
         return;
     }
-    /* List mode captures nothing. */
+    /* The program dies of these as natively, after the report (a fault
+     * capture's SIGSEGV handler, installed next, passes the program's own
+     * faults on to it). List mode captures nothing. */
+    static const int fatal[] = {SIGTERM, SIGINT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
+    for (size_t i = 0; i < sizeof fatal / sizeof *fatal && !shim.config.list_sites; i++)
+        install_terminate(fatal[i]);
     shim.capture = shim.config.list_sites ? EMM_CAPTURE_AUTO : pick_capture();
     if (shim.ops->init && !shim.ops->init(msg, sizeof msg)) {
         step_aside(msg);
@@ -650,10 +659,6 @@ __attribute__((constructor(101))) static void shim_init(void)
     }
     pthread_key_create(&thread_key, thread_exit);
     pthread_atfork(fork_prepare, fork_parent, fork_child);
-    if (!shim.config.list_sites) {
-        install_terminate(SIGTERM);
-        install_terminate(SIGINT);
-    }
     shim.min_block = emm_agent_min_block(shim.agent);
     __atomic_store_n(&shim.enabled, true, __ATOMIC_RELEASE);
     shim_leave();

@@ -167,6 +167,10 @@ EMM_API const emm_agent_filter *emm_agent_filter_of(const emm_agent *a);
  * the lock (a caller in a signal handler must know no thread of its own
  * holds it). Later calls do nothing. */
 EMM_API void emm_agent_finish(emm_agent *a);
+/* As emm_agent_finish, from the handler of a fatal signal `sig` about to
+ * kill the program: the summary and the report say the run ended by it
+ * ("ended": "signal 11 (SIGSEGV)"). */
+EMM_API void emm_agent_finish_signal(emm_agent *a, int sig);
 /* Around fork(): the parent holds the lock across it; the child's agent
  * goes quiet (no session, no report: the parent's covers the run). */
 EMM_API void emm_agent_lock(emm_agent *a);

@@ -172,6 +172,12 @@ EMM_API emm_status emm_session_decide_rest(emm_session *s, emm_error *err);
  * for the report. Either way a file is whole or absent: each is renamed
  * into place only once complete. */
 EMM_API emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *err);
+/* As emm_session_finish, for a run that did not end normally: `ended` says
+ * how ("signal 11 (SIGSEGV)"). The summary says so, and the report's
+ * "ended" holds it ("exit" after emm_session_finish): what was simulated
+ * is the run up to its last access before that. */
+EMM_API emm_status emm_session_finish_ended(emm_session *s, FILE *summary, const char *ended,
+                                            emm_error *err);
 
 EMM_API void emm_session_free(emm_session *s);
 
