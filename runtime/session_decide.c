@@ -317,6 +317,80 @@ static void note_axis_blocks(session *s, session_array *const src[3], uint64_t n
              src[0]->type == EMM_F32 ? "f32" : "f64", rules);
 }
 
+/* Whether every vertex index of triangle array t names a record of vertex
+ * array v. */
+static bool indices_fit(session *s, session_array *t, const session_array *v)
+{
+    if (!session_readable(s, t))
+        return false;
+    for (uint64_t i = 0, nt = in_use(t); i < nt; i++)
+        for (unsigned c = 0; c < 3; c++) {
+            int64_t x = read_index(session_scalar_at(s, t, i, c), t->type);
+            if (x < 0 || (uint64_t)x >= v->count)
+                return false;
+        }
+    return true;
+}
+
+/* Several meshes (threads that each load one, a program that keeps two):
+ * the best triangle and vertex arrays apart may be of different meshes.
+ * When the indices of *gt do not fit *gv, the pair to simulate is the best
+ * triangle array (written to its end first, then better_mesh order) with
+ * the smallest vertex array its indices fit; the summary says which, and
+ * that the others are not simulated. */
+static void pair_mesh(session *s, int *gv, int *gt)
+{
+    if (*gv < 0 || *gt < 0 || s->arrays[*gv].axis >= 0 ||
+        !session_readable(s, &s->arrays[*gv]) ||
+        indices_fit(s, &s->arrays[*gt], &s->arrays[*gv]))
+        return;
+    int nv = 0, nt = 0, bv = -1, bt = -1;
+    for (int i = 0; i < s->narrays; i++) {
+        const session_array *a = &s->arrays[i];
+        nv += session_usable(a) && a->live && a->kind == EMM_ARRAY_VERTICES;
+        nt += session_usable(a) && a->live && a->kind == EMM_ARRAY_TRIANGLES;
+    }
+    for (int t = 0; t < s->narrays; t++) {
+        session_array *ta = &s->arrays[t];
+        if (!session_usable(ta) || ta->kind != EMM_ARRAY_TRIANGLES || ta->shape == EMM_TAG_SOUP)
+            continue;
+        /* A block written to its end before one still being filled (its
+         * thread was loading when the window closed), then better_mesh. */
+        if (bt >= 0) {
+            const session_array *b = &s->arrays[bt];
+            bool whole = in_use(ta) == ta->count, bwhole = in_use(b) == b->count;
+            if (whole != bwhole ? !whole : !better_mesh(ta, b))
+                continue;
+        }
+        /* Of the vertex arrays the indices fit, the tightest: a larger one
+         * (another thread's bigger mesh) fits too. */
+        int fv = -1;
+        for (int v = 0; v < s->narrays; v++) {
+            session_array *va = &s->arrays[v];
+            const session_array *f = fv >= 0 ? &s->arrays[fv] : NULL;
+            if (session_usable(va) && va->kind == EMM_ARRAY_VERTICES && va->axis < 0 &&
+                session_readable(s, va) &&
+                (!f || va->count < f->count || (va->count == f->count && better_mesh(va, f))) &&
+                indices_fit(s, ta, va))
+                fv = v;
+        }
+        if (fv >= 0)
+            bv = fv, bt = t;
+    }
+    if (bt < 0)
+        return; /* none fits: read_geometry says why for the best pair */
+    *gv = bv;
+    *gt = bt;
+    char vo[512], to[512];
+    size_t used = strlen(s->pick_note);
+    snprintf(s->pick_note + used, sizeof s->pick_note - used,
+             "%sthe tagged arrays hold several meshes (%d vertex and %d triangle arrays live): "
+             "simulated %s with %s, the smallest vertex array its indices fit; the others "
+             "are not simulated",
+             used ? "; " : "", nv, nt, session_origin(s, &s->arrays[bt], to, sizeof to),
+             session_origin(s, &s->arrays[bv], vo, sizeof vo));
+}
+
 /* "Freeze the data": copies the positions and the triangles' vertex indices
  * out of the program's arrays, checking them. Without a triangle array the
  * geometry is the vertices alone (nt = 0: the layouts cut cells of
@@ -327,6 +401,7 @@ static emm_status read_geometry(session *s, emm_error *err)
     char vo[512], to[512];
     if (gt >= 0 && s->arrays[gt].shape == EMM_TAG_SOUP)
         return read_soup(s, &s->arrays[gt], err);
+    pair_mesh(s, &gv, &gt);
     if (gv < 0)
         return emm_fail(err, EMM_ERR_INVALID,
                         "%s: no vertex array was tagged (emm_tag_vertices or an EMM_TAG "
