@@ -50,6 +50,9 @@ struct agent_rules {
      * the rule follows (a hash; 0: none yet) and the blocks it selected.
      * Atomic. */
     uint64_t *seen, *bound, *selected;
+    /* Per rule: the blocks it would have taken that an earlier rule took
+     * first — the first such rule (index + 1), how many, the largest. Atomic. */
+    uint64_t *shadow_by, *shadow_n, *shadow_size;
     bool have_unwinder;
     struct unwinder unw;
     const void *own_base; /* this library's load address: its frames are left out */
@@ -103,8 +106,12 @@ emm_status agent_rules_new(const emm_tag_rules *rs, bool stacks, agent_rules **o
         m->seen = calloc(n, sizeof *m->seen);
         m->bound = calloc(n, sizeof *m->bound);
         m->selected = calloc(n, sizeof *m->selected);
+        m->shadow_by = calloc(n, sizeof *m->shadow_by);
+        m->shadow_n = calloc(n, sizeof *m->shadow_n);
+        m->shadow_size = calloc(n, sizeof *m->shadow_size);
     }
-    if (!m || !m->seen || !m->bound || !m->selected) {
+    if (!m || !m->seen || !m->bound || !m->selected || !m->shadow_by || !m->shadow_n ||
+        !m->shadow_size) {
         agent_rules_free(m);
         return emm_fail(err, EMM_ERR_NOMEM, "libemmshim.so: out of memory for the rules");
     }
@@ -129,6 +136,9 @@ void agent_rules_free(agent_rules *m)
     free(m->seen);
     free(m->bound);
     free(m->selected);
+    free(m->shadow_by);
+    free(m->shadow_n);
+    free(m->shadow_size);
     free(m->sites);
     free(m);
 }
@@ -270,37 +280,51 @@ static void note_site(agent_rules *m, const char *name, size_t size)
     pthread_mutex_unlock(&m->lock);
 }
 
+/* Whether rule i selects a block of `size` allocated on the stack of
+ * name/ip (taken on the first rule with a site=, *nframes then >= 0): its
+ * min=, its site= among the frames (*f: which; *path: the call path to
+ * it, 0 without site=) and its shape. Neither nth= nor the call path the
+ * rule follows is looked at. */
+static bool rule_selects(agent_rules *m, size_t i, size_t size, const char **name, uintptr_t *ip,
+                         int *nframes, int *f, uint64_t *path)
+{
+    const emm_tag_rule *r = &m->rs->rule[i];
+    *path = 0;
+    if (size < r->min)
+        return false;
+    if (r->site[0]) {
+        if (*nframes < 0) {
+            *nframes = agent_rules_stack(m, name, ip);
+            note_site(m, *nframes > 0 ? name[0] : NULL, size);
+        }
+        *f = 0;
+        while (*f < *nframes && !(name[*f] && emm_tag_site_matches(r->site, name[*f],
+                                                                   name[*f] + strlen(name[*f]) + 1)))
+            (*f)++;
+        if (*f == *nframes)
+            return false;
+        /* The call path, innermost frame of the program's to the site. */
+        uint64_t h = 14695981039346656037ull;
+        for (int k = 0; k <= *f; k++)
+            h = (h ^ ip[k]) * 1099511628211ull;
+        *path = h | 1;
+    }
+    /* Not the array, or a wrong stride (or n=): never tagged; the line at
+     * exit names the site's blocks that do not fit. */
+    return emm_tag_rule_fits(r, size);
+}
+
 int agent_rules_match(agent_rules *m, size_t size, const char **site)
 {
     const char *name[AGENT_MAX_FRAMES];
     uintptr_t ip[AGENT_MAX_FRAMES];
-    int nframes = -1;
+    int nframes = -1, f = 0;
+    uint64_t path;
     *site = NULL;
     for (size_t i = 0; i < m->rs->n; i++) {
-        const emm_tag_rule *r = &m->rs->rule[i];
-        if (size < r->min)
+        if (!rule_selects(m, i, size, name, ip, &nframes, &f, &path))
             continue;
-        uint64_t path = 0;
-        if (r->site[0]) {
-            if (nframes < 0) {
-                nframes = agent_rules_stack(m, name, ip);
-                note_site(m, nframes > 0 ? name[0] : NULL, size);
-            }
-            int f = 0;
-            while (f < nframes && !(name[f] && emm_tag_site_matches(r->site, name[f],
-                                                                    name[f] + strlen(name[f]) + 1)))
-                f++;
-            if (f == nframes)
-                continue;
-            /* The call path, innermost frame of the program's to the site. */
-            path = 14695981039346656037ull;
-            for (int k = 0; k <= f; k++)
-                path = (path ^ ip[k]) * 1099511628211ull;
-            path |= 1;
-            /* Not the array, or a wrong stride (or n=): never tagged; the
-             * line at exit names the site's blocks that do not fit. */
-            if (!emm_tag_rule_fits(r, size))
-                continue;
+        if (path) {
             /* A rule follows the first call path it selects; the site's
              * other allocations are left to the later rules. */
             uint64_t expect = 0;
@@ -309,12 +333,28 @@ int agent_rules_match(agent_rules *m, size_t size, const char **site)
                 expect != path)
                 continue;
             *site = name[f];
-        } else if (!emm_tag_rule_fits(r, size)) {
-            continue;
         }
-        if (r->nth && __atomic_add_fetch(&m->seen[i], 1, __ATOMIC_RELAXED) != r->nth)
+        if (m->rs->rule[i].nth && __atomic_add_fetch(&m->seen[i], 1, __ATOMIC_RELAXED) !=
+                                      m->rs->rule[i].nth)
             continue;
         __atomic_add_fetch(&m->selected[i], 1, __ATOMIC_RELAXED);
+        /* A later rule that selects this block too has it taken from it:
+         * noted, so the line at exit says where its block went. */
+        for (size_t j = i + 1; j < m->rs->n; j++) {
+            int fj = 0;
+            uint64_t expect = 0, pj;
+            if (__atomic_load_n(&m->selected[j], __ATOMIC_RELAXED) ||
+                !rule_selects(m, j, size, name, ip, &nframes, &fj, &pj))
+                continue;
+            __atomic_compare_exchange_n(&m->shadow_by[j], &expect, i + 1, false,
+                                        __ATOMIC_RELAXED, __ATOMIC_RELAXED);
+            __atomic_add_fetch(&m->shadow_n[j], 1, __ATOMIC_RELAXED);
+            uint64_t big = __atomic_load_n(&m->shadow_size[j], __ATOMIC_RELAXED);
+            while (size > big && !__atomic_compare_exchange_n(&m->shadow_size[j], &big, size,
+                                                              true, __ATOMIC_RELAXED,
+                                                              __ATOMIC_RELAXED)) {
+            }
+        }
         return (int)i;
     }
     return -1;
@@ -326,9 +366,27 @@ void agent_rules_report(agent_rules *m, void (*say)(void *ctx, const char *line)
         if (__atomic_load_n(&m->selected[i], __ATOMIC_RELAXED))
             continue;
         char line[1024];
-        pthread_mutex_lock(&m->lock);
-        emm_tag_unmatched_message(&m->rs->rule[i], i, m->sites, m->nsites, line, sizeof line);
-        pthread_mutex_unlock(&m->lock);
+        uint64_t by = __atomic_load_n(&m->shadow_by[i], __ATOMIC_RELAXED);
+        if (by) {
+            char mine[256], theirs[256];
+            emm_tag_rule_format(&m->rs->rule[i], mine, sizeof mine);
+            emm_tag_rule_format(&m->rs->rule[by - 1], theirs, sizeof theirs);
+            uint64_t n = __atomic_load_n(&m->shadow_n[i], __ATOMIC_RELAXED);
+            snprintf(line, sizeof line,
+                     "EMM_TAG rule %zu (%s) tagged nothing: the %llu block%s it selects (up to "
+                     "%llu bytes) went to rule %llu (%s) first, which tagged %s as %s; narrow "
+                     "rule %llu (site=, min=, nth=) or put rule %zu before it",
+                     i + 1, mine, (unsigned long long)n, n == 1 ? "" : "s",
+                     (unsigned long long)__atomic_load_n(&m->shadow_size[i], __ATOMIC_RELAXED),
+                     (unsigned long long)by, theirs, n == 1 ? "it" : "them",
+                     m->rs->rule[by - 1].kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles",
+                     (unsigned long long)by, i + 1);
+        } else {
+            pthread_mutex_lock(&m->lock);
+            emm_tag_unmatched_message(&m->rs->rule[i], i, m->sites, m->nsites, line,
+                                      sizeof line);
+            pthread_mutex_unlock(&m->lock);
+        }
         say(ctx, line);
     }
 }
