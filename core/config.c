@@ -21,15 +21,21 @@ typedef bool (*row_parser)(emm_config *c, const char *v, long pid, char *why, si
 
 static const char *const capture_names[EMM_CAPTURE_COUNT] = {
     "auto",
-#define CAPTURE_NAME(N, n, caps, help) #n,
+#define CAPTURE_NAME(N, n, caps, work, help) #n,
     EMM_CAPTURE_LIST(CAPTURE_NAME)
 #undef CAPTURE_NAME
 };
 static const unsigned capture_caps[EMM_CAPTURE_COUNT] = {
     0,
-#define CAPTURE_CAPS(N, n, caps, help) caps,
+#define CAPTURE_CAPS(N, n, caps, work, help) caps,
     EMM_CAPTURE_LIST(CAPTURE_CAPS)
 #undef CAPTURE_CAPS
+};
+static const char *const capture_work_units[EMM_CAPTURE_COUNT] = {
+    NULL,
+#define CAPTURE_WORK(N, n, caps, work, help) work,
+    EMM_CAPTURE_LIST(CAPTURE_WORK)
+#undef CAPTURE_WORK
 };
 static const char *const compare_names[EMM_COMPARE_COUNT] = {"baselines", "all", "none"};
 static const char *const log_words[] = {"quiet", "summary", "verbose"};
@@ -42,6 +48,11 @@ const char *emm_capture_name(emm_capture c)
 unsigned emm_capture_caps(emm_capture c)
 {
     return (unsigned)c < EMM_CAPTURE_COUNT ? capture_caps[c] : 0;
+}
+
+const char *emm_capture_work_unit(emm_capture c)
+{
+    return (emm_capture_caps(c) & EMM_CAP_WORK) ? capture_work_units[c] : NULL;
 }
 
 const char *emm_compare_name(emm_compare c)
@@ -301,8 +312,8 @@ struct row {
 };
 
 /* EMM_CAPTURE's accepted words and help, from the list of backends. */
-#define CAPTURE_ACCEPTS(N, n, caps, help) ", " #n
-#define CAPTURE_HELP(N, n, caps, help) "  " #n ": " help "\n"
+#define CAPTURE_ACCEPTS(N, n, caps, work, help) ", " #n
+#define CAPTURE_HELP(N, n, caps, work, help) "  " #n ": " help "\n"
 
 /* The table, in emm_config_key order. */
 static const struct row rows[EMM_CONFIG_COUNT] = {

@@ -637,6 +637,7 @@ void session_simulate(session *s, const emm_trace_record *recs, size_t n)
     }
     s->accesses += n;
     for (size_t k = 0; k < n; k++) {
+        s->work += recs[k].work;
         s->elements += !s->eany || recs[k].array != s->elast_array ||
                        recs[k].element != s->elast_element;
         s->eany = true;

@@ -213,6 +213,8 @@ typedef struct session {
     uint64_t accesses;   /* records simulated */
     uint64_t elements;   /* of them, element accesses (consecutive ones to one element count
                             once) */
+    uint64_t work;       /* their work fields summed: the capture's count between accesses,
+                            in its unit (emm_capture_work_unit) */
     bool eany;
     uint32_t elast_array;
     uint64_t elast_element;

@@ -195,6 +195,65 @@ static bool answer_tie(const session *s, const emm_result *res, const emm_error 
     return emm_decide_is_tie(res[0].total, r->total) != 0;
 }
 
+/* Whether the run's compute counts the capture's work as well as its
+ * accesses: compute.per_work set, and a capture that counts work
+ * (docs/machine.md "Compute"). */
+static bool work_charged(const session *s)
+{
+    return emm_machine_get(s->machine, "compute.per_work") != 0 &&
+           emm_capture_work_unit(s->capture) != NULL;
+}
+
+/* "compute" (docs/report.md): how the compute bucket was counted. */
+static void write_compute(json_writer *w, const session *s)
+{
+    const char *unit = emm_capture_work_unit(s->capture);
+    json_key(w, "compute");
+    json_begin_object(w);
+    json_key(w, "counted");
+    json_string(w, work_charged(s) ? "per access and work" : "per access");
+    json_key(w, "per_access");
+    json_u64(w, emm_machine_get(s->machine, "compute.per_access"));
+    json_key(w, "per_work");
+    json_u64(w, emm_machine_get(s->machine, "compute.per_work"));
+    json_key(w, "work_unit");
+    if (unit)
+        json_string(w, unit);
+    else
+        json_null(w);
+    json_key(w, "work");
+    json_u64(w, s->work);
+    json_end_object(w);
+}
+
+/* How compute was counted: a line of the summary when the capture's work
+ * is charged (the figures then depend on the capture), else a verbose
+ * line. */
+static void print_compute(FILE *out, const session *s)
+{
+    char num[32], work[32];
+    const char *unit = emm_capture_work_unit(s->capture);
+    uint64_t pa = emm_machine_get(s->machine, "compute.per_access"),
+             pw = emm_machine_get(s->machine, "compute.per_work");
+    emm_grouped(s->work, work);
+    if (work_charged(s))
+        fprintf(out, "emm:   compute: %s cycles: %llu per access and %llu per unit of the %s "
+                     "capture's work (%s %s; compute.per_work = %llu): these figures depend on "
+                     "the capture (docs/machine.md \"Compute\")\n",
+                emm_grouped(pa * s->accesses + pw * s->work, num), (unsigned long long)pa,
+                (unsigned long long)pw, emm_capture_name(s->capture), work, unit,
+                (unsigned long long)pw);
+    else if (unit)
+        fprintf(out, "emm: compute: %llu cycle%s per access, whatever the capture; the %s "
+                     "capture's work between accesses (%s %s) is not charged "
+                     "(compute.per_work = 0)\n",
+                (unsigned long long)pa, pa == 1 ? "" : "s", emm_capture_name(s->capture), work,
+                unit);
+    else
+        fprintf(out, "emm: compute: %llu cycle%s per access, whatever the capture\n",
+                (unsigned long long)pa, pa == 1 ? "" : "s");
+}
+
 static void report_extra(json_writer *w, void *ctx)
 {
     const report_ctx *c = ctx;
@@ -206,6 +265,7 @@ static void report_extra(json_writer *w, void *ctx)
     json_string(w, emm_capture_name(s->capture));
     json_key(w, "ended");
     json_string(w, s->ended[0] ? s->ended : "exit");
+    write_compute(w, s);
     json_key(w, "pattern");
     if (s->has_profile)
         json_string(w, s->decision.novel ? "novel" : s->decision.pattern);
@@ -587,6 +647,8 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
     if (s->ended[0])
         fprintf(out, "emm:   the run ended by %s: what was captured up to then is simulated\n",
                 s->ended);
+    if (work_charged(s))
+        print_compute(out, s);
     if (s->pick_note[0])
         fprintf(out, "emm:   %s\n", s->pick_note);
     if (s->vertex_only)
@@ -651,6 +713,8 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
                 s->tarrays[a].record_size, (unsigned long long)s->tarrays[a].base);
     fprintf(out, "emm: %llu accesses simulated; window %zu element reads, %llu iterations\n",
             (unsigned long long)s->accesses, s->nD, (unsigned long long)s->iterations);
+    if (!work_charged(s))
+        print_compute(out, s);
     if (s->dropped)
         fprintf(out, "emm: %llu accesses to tagged arrays outside the traced mesh were ignored\n",
                 (unsigned long long)s->dropped);

@@ -1,7 +1,7 @@
 /* The sancov capture backend (docs/design.md "The shim and the session", Capture backends:
  * sancov). A program compiled with
  *   clang -fsanitize-coverage=trace-pc-guard,trace-loads,trace-stores
- *         -fno-vectorize -fno-slp-vectorize
+ *         -fno-vectorize -fno-slp-vectorize -mllvm -disable-machine-sink
  * calls __sanitizer_cov_load/store<N>(addr) before every load and store and
  * __sanitizer_cov_trace_pc_guard at every edge. It is linked against
  * libemmhooks.so, whose definitions are no-ops; the preloaded shim's come

@@ -586,7 +586,7 @@ static emm_capture pick_capture(void)
 {
     static const struct shim_capture_ops *const all[EMM_CAPTURE_COUNT] = {
         NULL,
-#define SHIM_CAPTURE_ENTRY(N, n, caps, help) &shim_capture_##n,
+#define SHIM_CAPTURE_ENTRY(N, n, caps, work, help) &shim_capture_##n,
         EMM_CAPTURE_LIST(SHIM_CAPTURE_ENTRY)
 #undef SHIM_CAPTURE_ENTRY
     };

@@ -49,7 +49,7 @@ struct shim_capture_ops {
 
 /* One per backend of EMM_CAPTURE_LIST (emm/config.h): shim_capture_NAME,
  * defined in shim/capture_NAME.c. */
-#define SHIM_CAPTURE_DECLARE(N, n, caps, help) \
+#define SHIM_CAPTURE_DECLARE(N, n, caps, work, help) \
     extern const struct shim_capture_ops shim_capture_##n SHIM_HIDDEN;
 EMM_CAPTURE_LIST(SHIM_CAPTURE_DECLARE)
 #undef SHIM_CAPTURE_DECLARE

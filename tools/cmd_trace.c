@@ -408,7 +408,8 @@ static int trace_synth(int argc, char **argv)
          .help = "region: start at the corner triangle (lowest x + y centroid) instead of one "
                  "drawn from the seed"},
         {.name = "--work", .metavar = "W", .kind = OPT_U64, .dst = &work, .max = UINT32_MAX,
-         .show_default = true, .help = "compute cycles recorded before each access"},
+         .show_default = true, .help = "work recorded before each access, charged at compute.per_work cycles a unit "
+                 "(by default 0: not charged; docs/machine.md \"Compute\")"},
         {.name = "--compress", .kind = OPT_FLAG, .dst = &opt.compress,
          .help = "zstd-compress the trace's blocks"},
         OPTS_END,

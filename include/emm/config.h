@@ -39,24 +39,27 @@ typedef enum emm_capture_cap {
                                         its own (emm-session) */
 } emm_capture_cap;
 
-/* The capture backends, one X(NAME, name, capabilities, help) each, in the
- * order EMM_CAPTURE=auto tries them; the last is the one it falls back to.
- * The enum, the names EMM_CAPTURE accepts, its help and the shim's table of
- * backends (one shim/capture_name.c each) follow this list. */
+/* The capture backends, one X(NAME, name, capabilities, work, help) each, in
+ * the order EMM_CAPTURE=auto tries them; the last is the one it falls back
+ * to. `work` names the unit of the records' work field for a backend with
+ * EMM_CAP_WORK (NULL without): charged only at compute.per_work cycles a
+ * unit (docs/machine.md "Compute"). The enum, the names EMM_CAPTURE
+ * accepts, its help and the shim's table of backends (one
+ * shim/capture_name.c each) follow this list. */
 #define EMM_CAPTURE_LIST(X)                                                                   \
     X(VALGRIND, valgrind,                                                                     \
       EMM_CAP_WHOLE_RUN | EMM_CAP_PCS | EMM_CAP_WORK | EMM_CAP_THREADS_EXACT | EMM_CAP_VALGRIND, \
-      "emm's Valgrind tool, the whole run of an unmodified binary; emm run starts it")       \
-    X(SANCOV, sancov, EMM_CAP_WHOLE_RUN | EMM_CAP_PCS | EMM_CAP_WORK,                          \
+      "superblocks", "emm's Valgrind tool, the whole run of an unmodified binary; emm run starts it") \
+    X(SANCOV, sancov, EMM_CAP_WHOLE_RUN | EMM_CAP_PCS | EMM_CAP_WORK, "edges",                 \
       "a build with emm_sancov_executable")                                                   \
-    X(API, api, EMM_CAP_WHOLE_RUN, "programs using emm_mesh_*")                              \
-    X(FAULT, fault, 0, "page protection, profiling window only")
+    X(API, api, EMM_CAP_WHOLE_RUN, NULL, "programs using emm_mesh_*")                        \
+    X(FAULT, fault, 0, NULL, "page protection, profiling window only")
 
 /* How accesses are captured: EMM_CAPTURE_AUTO (the shim picks), then the
  * list's backends. */
 typedef enum emm_capture {
     EMM_CAPTURE_AUTO = 0,
-#define EMM_CAPTURE_ENUM_(N, n, caps, help) EMM_CAPTURE_##N,
+#define EMM_CAPTURE_ENUM_(N, n, caps, work, help) EMM_CAPTURE_##N,
     EMM_CAPTURE_LIST(EMM_CAPTURE_ENUM_)
 #undef EMM_CAPTURE_ENUM_
     EMM_CAPTURE_COUNT
@@ -67,6 +70,10 @@ EMM_API const char *emm_capture_name(emm_capture c);
 /* The backend's capabilities (emm_capture_cap bits); 0 for auto and for
  * other values. */
 EMM_API unsigned emm_capture_caps(emm_capture c);
+/* The unit of the backend's records' work field ("edges", "superblocks"),
+ * or NULL when it counts none (no EMM_CAP_WORK), for auto and for other
+ * values. */
+EMM_API const char *emm_capture_work_unit(emm_capture c);
 
 /* What the session simulates beside the chosen strategy. */
 typedef enum emm_compare {

@@ -42,7 +42,8 @@ typedef struct emm_synth_options {
     /* region: start in the corner of the bounding box (the lowest x + y
      * centroid) instead of a triangle chosen by the seed. */
     int corner_seed;
-    /* Compute cycles charged between records (the record's work field). */
+    /* Work recorded before each record (its work field), charged at
+     * compute.per_work cycles a unit (0 by default: docs/machine.md). */
     uint32_t work;
     int compress;
     /* region: when has_start, grow from triangle `start` (over corner_seed

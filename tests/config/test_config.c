@@ -64,12 +64,32 @@ static void many_rules(void)
     emm_config_free(&d);
 }
 
+/* Each backend that counts work between accesses names its unit, which the
+ * report's compute says (docs/machine.md "Compute"); one that counts none
+ * names none. */
+static void work_units(void)
+{
+    CHECK(emm_capture_work_unit(EMM_CAPTURE_AUTO) == NULL);
+    CHECK(emm_capture_work_unit(EMM_CAPTURE_COUNT) == NULL);
+    for (int c = EMM_CAPTURE_AUTO + 1; c < EMM_CAPTURE_COUNT; c++) {
+        const char *unit = emm_capture_work_unit((emm_capture)c);
+        bool counts = (emm_capture_caps((emm_capture)c) & EMM_CAP_WORK) != 0;
+        CHECKF(counts == (unit != NULL && unit[0] != '\0'), "%s: work %s, unit %s",
+               emm_capture_name((emm_capture)c), counts ? "counted" : "not counted",
+               unit ? unit : "(none)");
+    }
+    CHECK(strcmp(emm_capture_work_unit(EMM_CAPTURE_SANCOV), "edges") == 0);
+    CHECK(strcmp(emm_capture_work_unit(EMM_CAPTURE_VALGRIND), "superblocks") == 0);
+    CHECK(emm_capture_work_unit(EMM_CAPTURE_FAULT) == NULL);
+}
+
 int main(void)
 {
     emm_config e;
     char msg[600];
     emm_config_init(&e);
     many_rules();
+    work_units();
 
     nvars = 0;
     CHECK(parse(&e, msg));

@@ -312,6 +312,12 @@ static void test_decide_from_table(void)
     CHECK(has(json, "\"novel\": false"));
     CHECK(has(json, "\"source\": \"table\""));
     CHECK(has(json, "\"capture\": \"api\""));
+    /* Compute per access; the records' work (3 a record, some of it on
+     * strays the session hands on) is summed, not charged. */
+    CHECK(has(json, "\"counted\": \"per access\""));
+    CHECK(has(json, "\"work_unit\": null"));
+    CHECK(has_u64(json, "work", 3 * (uint64_t)nrecs));
+    CHECK(has_u64(json, "compute", nrecs));
     CHECK(has_u64(json, "element_accesses", WINDOW));
     CHECK(has_u64(json, "accesses", nrecs));
     CHECK(has_u64(json, "total", expect_direct.total));
