@@ -43,6 +43,9 @@ struct emm_guard {
         uintptr_t lo, hi;
     } lifted[LIFTED];
     unsigned nlifted;   /* atomic: lifted ranges ever recorded */
+    int building;       /* atomic: no read has faulted yet */
+    uintptr_t kept[EMM_GUARD_BUILD_PAGES]; /* atomic: pages kept open while building, 0 free */
+    unsigned nkept;     /* atomic: pages ever kept */
     size_t page;
     emm_sigaction_fn real;             /* the C library's sigaction */
     struct sigaction saved_segv, saved_trap; /* the program's handlers */
@@ -56,6 +59,7 @@ emm_guard *emm_guard_new(void)
     pthread_mutex_init(&g->lock, NULL);
     g->page = (size_t)sysconf(_SC_PAGESIZE);
     g->watching = 1;
+    g->building = 1;
     return g;
 }
 
@@ -220,6 +224,53 @@ void emm_guard_step_done(emm_guard *g, emm_guard_region *r, uintptr_t page)
         mprotect((void *)page, g->page, PROT_READ | PROT_WRITE);
 }
 
+/* Protects a page kept open while building again, unless its region left
+ * (emm_guard_step_done's checks), after telling `note` the last word of the
+ * array on it that is not 0. */
+static void close_kept(emm_guard *g, uintptr_t page, void (*note)(uintptr_t addr))
+{
+    int in;
+    emm_guard_region *r = page ? emm_guard_find(g, page, &in) : NULL;
+    if (!r)
+        return;
+    uintptr_t lo = __atomic_load_n(&r->lo, __ATOMIC_RELAXED);
+    uintptr_t hi = __atomic_load_n(&r->hi, __ATOMIC_RELAXED);
+    uintptr_t a = page > lo ? page + ((lo - page) & 7) : lo, end = page + g->page;
+    if (end > hi)
+        end = hi;
+    uintptr_t last = 0;
+    for (; a + 8 <= end; a += 8)
+        if (*(const volatile uint64_t *)a != 0)
+            last = a;
+    if (last)
+        note(last);
+    emm_guard_step_done(g, r, page);
+}
+
+int emm_guard_build_open(emm_guard *g, emm_guard_region *r, uintptr_t page, int write,
+                         void (*note)(uintptr_t addr))
+{
+    if (!__atomic_load_n(&g->building, __ATOMIC_SEQ_CST))
+        return 0;
+    if (!write) {
+        if (__atomic_exchange_n(&g->building, 0, __ATOMIC_SEQ_CST))
+            for (unsigned k = 0; k < EMM_GUARD_BUILD_PAGES; k++)
+                close_kept(g, __atomic_exchange_n(&g->kept[k], 0, __ATOMIC_SEQ_CST), note);
+        return 0;
+    }
+    /* The array's last page single-steps: where an array of the size of
+     * its records ends, what was written there is seen write by write. */
+    if (page + g->page >= __atomic_load_n(&r->hi, __ATOMIC_RELAXED))
+        return 0;
+    mprotect((void *)page, g->page, PROT_READ | PROT_WRITE);
+    unsigned k = __atomic_fetch_add(&g->nkept, 1, __ATOMIC_RELAXED) % EMM_GUARD_BUILD_PAGES;
+    close_kept(g, __atomic_exchange_n(&g->kept[k], page, __ATOMIC_SEQ_CST), note);
+    /* The build ended while this page opened: the sweep may have missed it. */
+    if (!__atomic_load_n(&g->building, __ATOMIC_SEQ_CST))
+        close_kept(g, page, note);
+    return 1;
+}
+
 int emm_guard_install(emm_guard *g, emm_sigaction_fn real,
                       void (*on_segv)(int, siginfo_t *, void *),
                       void (*on_trap)(int, siginfo_t *, void *))
@@ -246,6 +297,18 @@ int emm_guard_sigaction(emm_guard *g, int sig, const struct sigaction *act, stru
     if (act)
         *pa = *act;
     return 0;
+}
+
+emm_signal_handler emm_guard_signal(emm_guard *g, int sig, emm_signal_handler handler)
+{
+    struct sigaction act, old;
+    memset(&act, 0, sizeof act);
+    act.sa_handler = handler;
+    sigemptyset(&act.sa_mask);
+    act.sa_flags = SA_RESTART;
+    emm_guard_sigaction(g, sig, &act, &old);
+    return (old.sa_flags & SA_SIGINFO) ? (emm_signal_handler)(void (*)(void))old.sa_sigaction
+                                       : old.sa_handler;
 }
 
 void emm_guard_chain(emm_guard *g, int sig, siginfo_t *si, void *uctx)

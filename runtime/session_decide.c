@@ -333,16 +333,15 @@ static bool indices_fit(session *s, session_array *t, const session_array *v)
 }
 
 /* Several meshes (threads that each load one, a program that keeps two):
- * the best triangle and vertex arrays apart may be of different meshes.
- * When the indices of *gt do not fit *gv, the pair to simulate is the best
+ * the best triangle and vertex arrays apart may be of different meshes, or
+ * a mesh still being built. With several live arrays of each kind, or when
+ * the indices of *gt do not fit *gv, the pair to simulate is the best
  * triangle array (written to its end first, then better_mesh order) with
  * the smallest vertex array its indices fit; the summary says which, and
  * that the others are not simulated. */
 static void pair_mesh(session *s, int *gv, int *gt)
 {
-    if (*gv < 0 || *gt < 0 || s->arrays[*gv].axis >= 0 ||
-        !session_readable(s, &s->arrays[*gv]) ||
-        indices_fit(s, &s->arrays[*gt], &s->arrays[*gv]))
+    if (*gv < 0 || *gt < 0 || s->arrays[*gv].axis >= 0)
         return;
     int nv = 0, nt = 0, bv = -1, bt = -1;
     for (int i = 0; i < s->narrays; i++) {
@@ -350,6 +349,11 @@ static void pair_mesh(session *s, int *gv, int *gt)
         nv += session_usable(a) && a->live && a->kind == EMM_ARRAY_VERTICES;
         nt += session_usable(a) && a->live && a->kind == EMM_ARRAY_TRIANGLES;
     }
+    /* One mesh (beside per-element data of one kind): the arrays apart are
+     * it, and read_geometry checks them. */
+    if ((nv < 2 || nt < 2) && (!session_readable(s, &s->arrays[*gv]) ||
+                               indices_fit(s, &s->arrays[*gt], &s->arrays[*gv])))
+        return;
     for (int t = 0; t < s->narrays; t++) {
         session_array *ta = &s->arrays[t];
         if (!session_usable(ta) || ta->kind != EMM_ARRAY_TRIANGLES || ta->shape == EMM_TAG_SOUP)
@@ -377,8 +381,8 @@ static void pair_mesh(session *s, int *gv, int *gt)
         if (fv >= 0)
             bv = fv, bt = t;
     }
-    if (bt < 0)
-        return; /* none fits: read_geometry says why for the best pair */
+    if (bt < 0 || (bt == *gt && bv == *gv))
+        return; /* none fits (read_geometry says why), or the pair apart is it */
     *gv = bv;
     *gt = bt;
     char vo[512], to[512];

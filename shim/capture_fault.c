@@ -13,6 +13,8 @@
  *   instruction is not worth it; write from the page-fault error code),
  *   unprotect the page, set the trap flag so that SIGTRAP follows the one
  *   instruction, then protect the page again and clear the flag.
+ * - Until the first read, writes open their page for the next ones
+ *   (emm_guard_build_open): a loader faults once a page, not once a write.
  * - Costs tens of microseconds per access, so it covers the profiling window
  *   only: when the session wants to decide, every protection is lifted and
  *   capture stops (the report says capture "fault").
@@ -26,7 +28,6 @@
 #include <dlfcn.h>
 #include <signal.h>
 #include <stdio.h>
-#include <string.h>
 #include <sys/mman.h>
 #include <sys/socket.h>
 #include <ucontext.h>
@@ -86,6 +87,13 @@ static void fork_child(void)
     npending = 0;
 }
 
+/* The end of what a loader wrote on a page it had open (emm_guard_build_open). */
+static void note_written(uintptr_t a)
+{
+    if (emm_guard_watching(guard) && !shim_busy)
+        shim_record(a, 8, true);
+}
+
 static void on_segv(int sig, siginfo_t *si, void *uctx)
 {
     uintptr_t a = (uintptr_t)si->si_addr;
@@ -104,6 +112,8 @@ static void on_segv(int sig, siginfo_t *si, void *uctx)
     bool write = (uc->uc_mcontext.gregs[REG_ERR] & 2) != 0;
     if (emm_guard_watching(guard) && !shim_busy && in_array)
         shim_record(a, 8, write);
+    if (emm_guard_build_open(guard, r, page, write, note_written))
+        return; /* the mesh is being built: the page stays open, no single step */
     mprotect((void *)page, page_size, PROT_READ | PROT_WRITE);
     if (npending < 4) {
         pending[npending].page = page;
@@ -157,18 +167,11 @@ int sigaction(int sig, const struct sigaction *act, struct sigaction *old)
 sighandler_t signal(int sig, sighandler_t handler)
 {
     static sighandler_t (*next)(int, sighandler_t);
-    if (!__atomic_load_n(&installed, __ATOMIC_ACQUIRE) || (sig != SIGSEGV && sig != SIGTRAP)) {
-        if (!next)
-            next = (sighandler_t (*)(int, sighandler_t))dlsym(RTLD_NEXT, "signal");
-        return next(sig, handler);
-    }
-    struct sigaction act, old;
-    memset(&act, 0, sizeof act);
-    act.sa_handler = handler;
-    sigemptyset(&act.sa_mask);
-    act.sa_flags = SA_RESTART;
-    sigaction(sig, &act, &old);
-    return (old.sa_flags & SA_SIGINFO) ? (sighandler_t)(void (*)(void))old.sa_sigaction : old.sa_handler;
+    if (__atomic_load_n(&installed, __ATOMIC_ACQUIRE) && (sig == SIGSEGV || sig == SIGTRAP))
+        return emm_guard_signal(guard, sig, handler);
+    if (!next)
+        next = (sighandler_t (*)(int, sighandler_t))dlsym(RTLD_NEXT, "signal");
+    return next(sig, handler);
 }
 
 /* --- system calls on protected memory ---------------------------------- */

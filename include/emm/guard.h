@@ -59,6 +59,25 @@ EMM_API int emm_guard_retry(const emm_guard *g, uintptr_t addr, uintptr_t *retri
  * system call has it open. Signal-safe. */
 EMM_API void emm_guard_step_done(emm_guard *g, emm_guard_region *r, uintptr_t page);
 
+/* While the mesh is being built — no read of a tagged array has faulted
+ * yet — a write fault does not single-step: its page opens and stays open
+ * for the next writes, with the EMM_GUARD_BUILD_PAGES pages opened last
+ * (the oldest is protected again as another opens), so a loader that fills
+ * its arrays faults once a page instead of once a write (the array's last
+ * page excepted: there each write single-steps). The first read
+ * fault ends the build for good: the pages still open are protected again
+ * and every access single-steps from then on. The writes to an open page
+ * after the one that opened it are not seen one by one: when the page
+ * closes, `note` is given the last word of the array on it that is not 0
+ * (the end of what was written there, on pages of its own that start as
+ * zeros), so the records in use stay known — up to trailing zeros on a
+ * block larger than what was written, a capacity. Returns 1 when it opened the
+ * page of region r (no single step), 0 once the build is over.
+ * Signal-safe. */
+#define EMM_GUARD_BUILD_PAGES 8
+EMM_API int emm_guard_build_open(emm_guard *g, emm_guard_region *r, uintptr_t page, int write,
+                                 void (*note)(uintptr_t addr));
+
 /* The signals: the C library's sigaction (`real`; the shim interposes
  * sigaction), on_segv and on_trap installed for SIGSEGV and SIGTRAP
  * (SA_SIGINFO), the program's own handlers of them kept. False when they
@@ -71,6 +90,10 @@ EMM_API int emm_guard_install(emm_guard *g, emm_sigaction_fn real,
  * handler is kept for emm_guard_chain, ours stays in place. */
 EMM_API int emm_guard_sigaction(emm_guard *g, int sig, const struct sigaction *act,
                                 struct sigaction *old);
+/* signal() for SIGSEGV or SIGTRAP once installed, as emm_guard_sigaction
+ * with SA_RESTART: the program's previous handler. */
+typedef void (*emm_signal_handler)(int);
+EMM_API emm_signal_handler emm_guard_signal(emm_guard *g, int sig, emm_signal_handler handler);
 /* A SIGSEGV or SIGTRAP that is not the guard's: the program's handler, or
  * the default action (a real fault re-runs and faults again without us; a
  * sent or trap-made signal is raised again). From the handler. */
