@@ -356,6 +356,27 @@ static void report_extra(json_writer *w, void *ctx)
             json_end_object(w);
         }
         json_end_array(w);
+        json_key(w, "ran_to_end");
+        json_u64(w, rounds ? kept[rounds - 1] : contest_entrants(s->contest));
+        /* The candidates dropped, by name: their cycles stop where they
+         * were dropped, so they are not in results. */
+        const size_t *idx;
+        const uint64_t *dat, *dcycles;
+        size_t nd = contest_dropped(s->contest, &idx, &dat, &dcycles);
+        json_key(w, "dropped");
+        json_begin_array(w);
+        for (size_t k = 0; k < nd; k++) {
+            json_begin_object(w);
+            json_key(w, "strategy");
+            emm_strategy_format(&s->mstrat[idx[k]], name, sizeof name);
+            json_string(w, name);
+            json_key(w, "at");
+            json_u64(w, dat[k]);
+            json_key(w, "cycles");
+            json_u64(w, dcycles[k]);
+            json_end_object(w);
+        }
+        json_end_array(w);
         json_end_object(w);
     } else {
         json_null(w);
@@ -484,7 +505,11 @@ static const char *how_predicted(const session *s)
     }
 }
 
-/* How the answer was reached: the window's prediction, or the contest. */
+/* How the answer was reached: the window's prediction, or the contest.
+ * The contest measured over the run only the candidates that ran to the
+ * end; those it dropped were slower when dropped, not necessarily over the
+ * run, so the answer is called the fastest of the former, and the latter
+ * are counted as dropped. */
 static const char *how_decided(const session *s, char *buf, size_t cap)
 {
     if (!s->contest || s->answer_model == SIZE_MAX)
@@ -492,11 +517,27 @@ static const char *how_decided(const session *s, char *buf, size_t cap)
     const uint64_t *at;
     const size_t *kept;
     size_t rounds = contest_rounds(s->contest, &at, &kept);
-    size_t in = rounds ? kept[rounds - 1] : contest_entrants(s->contest);
+    size_t entrants = contest_entrants(s->contest);
+    size_t in = rounds ? kept[rounds - 1] : entrants;
+    if (in >= entrants) {
+        snprintf(buf, cap, "measured over the run: the fastest of %zu candidates, every one run "
+                           "to the end", entrants);
+        return buf;
+    }
+    /* "2, 4, 8 and 16": the windows of records at which the halvings came. */
+    char when[160] = "";
+    uint64_t unit = contest_unit(s->contest), lead = contest_lead(s->contest);
+    for (size_t k = 0; k < rounds; k++) {
+        size_t used = strlen(when);
+        snprintf(when + used, sizeof when - used, "%s%llu",
+                 k == 0 ? "" : k + 1 == rounds ? " and " : ", ",
+                 (unsigned long long)((at[k] - lead) / unit));
+    }
     snprintf(buf, cap,
-             "measured over the run: the fastest of %zu candidates, %s%zu of them run to the end",
-             contest_entrants(s->contest),
-             rounds ? "the slower half dropped at 2, 4, 8, ... windows; " : "", in);
+             "measured over the run: the fastest of the %zu candidates that ran to the end; the "
+             "other %zu of %zu were dropped at %s windows, slower then, and not measured to the "
+             "end",
+             in, entrants - in, entrants, when);
     return buf;
 }
 
@@ -547,7 +588,7 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
                                              : NULL;
     else if (s->has_wd && s->wd.has_runner_up)
         runner = find_result(res, nres, &s->wd.runner_up);
-    char how[200];
+    char how[400];
     if (chosen) {
         emm_strategy_format(&chosen->strategy, name, sizeof name);
         emm_strategy_words(&chosen->strategy, words, sizeof words);
