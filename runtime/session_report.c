@@ -340,7 +340,10 @@ static void report_extra(json_writer *w, void *ctx)
         json_key(w, "entrants");
         json_u64(w, contest_entrants(s->contest));
         json_key(w, "finalists");
-        json_u64(w, s->cfg.finalists);
+        if (s->cfg.finalists == EMM_CONFIG_FINALISTS_ALL)
+            json_string(w, "all");
+        else
+            json_u64(w, s->cfg.finalists);
         json_key(w, "lead");
         json_u64(w, contest_lead(s->contest));
         json_key(w, "unit");

@@ -698,6 +698,64 @@ static void test_contest(void)
     free(json);
 }
 
+/* EMM_FINALISTS=all: no candidate is dropped, every one is in the report's
+ * results over the whole run, and the answer is the fewest cycles among
+ * them (the cache is a reference on this machine). */
+static void test_contest_all(void)
+{
+    emm_error err;
+    emm_session *s;
+    write_table("table.txt", "direct", 0);
+    emm_session_config c = base_config();
+    tcfg.finalists = EMM_CONFIG_FINALISTS_ALL;
+    strcpy(tcfg.report, "contest-all.json");
+    remove("contest-all.json");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    CHECK(feed(s, 300, 0) == 1);
+    FILE *sum = fopen("contest-all.txt", "w+");
+    REQUIRE(sum);
+    CHECKF(emm_session_finish(s, sum, &err) == EMM_OK, "%s", err.message);
+    emm_session_free(s);
+    char text[8192] = "";
+    rewind(sum);
+    CHECK(fread(text, 1, sizeof text - 1, sum) > 0);
+    fclose(sum);
+    tcfg.finalists = EMM_CONFIG_DEFAULT_FINALISTS;
+    size_t entrants = offered_candidates();
+    char line[160];
+    snprintf(line, sizeof line,
+             "(measured over the run: the fastest of %zu candidates, every one run to the end",
+             entrants);
+    CHECKF(has(text, line), "%s", text);
+    char *json = slurp("contest-all.json");
+    REQUIRE(json);
+    CHECK(has(json, "\"finalists\": \"all\"") && has(json, "\"dropped\": []"));
+    snprintf(line, sizeof line, "\"ran_to_end\": %zu", entrants);
+    CHECK(has(json, line));
+    /* The answer is results[0]; no candidate's total is below it. */
+    const char *p = strstr(json, "\"results\"");
+    const char *end = p ? strstr(p, "\"program\"") : NULL;
+    REQUIRE(p && end);
+    const char *t = strstr(p, "\"total\": ");
+    REQUIRE(t && t < end);
+    uint64_t answer = strtoull(t + 9, NULL, 10);
+    size_t seen = 0;
+    while ((p = strstr(p, "\"strategy\": \"")) && p < end) {
+        p += 13;
+        t = strstr(p, "\"total\": ");
+        const char *next = strstr(p, "\"strategy\": \"");
+        if (!t || t > end || (next && t > next))
+            continue; /* one that could not run: no cycles */
+        if (strncmp(p, "cache", 5) != 0) {
+            CHECKF(strtoull(t + 9, NULL, 10) >= answer, "%.40s", p);
+            seen++;
+        }
+    }
+    CHECKF(seen + 1 >= entrants - 8, "%zu candidates in the results of %zu", seen, entrants);
+    free(json);
+}
+
 /* The window counted in emm_iteration() calls. */
 static void test_iterations(void)
 {
@@ -1104,6 +1162,7 @@ int main(void)
     test_window_not_filled();
     test_novel();
     test_contest();
+    test_contest_all();
     test_compare_all();
     test_iterations();
     test_report_whole_or_absent();
