@@ -377,9 +377,11 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
         "write the access trace, for emm replay", {{0}}}, parse_trace},
     [EMM_CONFIG_TIMELINE] = {{"EMM_TIMELINE", "--timeline", "FILE",
         "a file path in a writable directory (%p: pid)", "(none)",
-        "write the chosen strategy's simulated run as a Chrome/Perfetto trace-event JSON:\n"
-        "a track per DMA channel, the core's stalls, cell entries, the window and phases;\n"
-        "at most " EMM_TIMELINE_MAX_EVENTS_TEXT " events (the file says when the cap was hit)",
+        "write the answer's simulated run as a Chrome/Perfetto trace-event JSON: a track\n"
+        "per DMA channel, the core's stalls, cell entries, the window and phases; at most\n"
+        EMM_TIMELINE_MAX_EVENTS_TEXT " events (the file says when the cap was hit); the answer\n"
+        "is known at the end, so its run is simulated again then over the run's trace\n"
+        "(EMM_TRACE's, or one of its own in TMPDIR, removed after)",
         {{0}}}, parse_timeline},
     [EMM_CONFIG_LOG] = {{"EMM_LOG", "--log", "LEVEL", "0, 1, 2, quiet, summary or verbose", "1",
         "0: nothing on stderr; 1: the summary at exit; 2: also what the shim does",

@@ -760,6 +760,20 @@ out:
     return st;
 }
 
+void session_decide_answer(session *s)
+{
+    size_t top[2], in = 0;
+    s->answer_model = s->runner_model = SIZE_MAX;
+    if (s->contest)
+        in = contest_standing(s->contest, top, 2);
+    if (in >= 1)
+        s->answer_model = top[0];
+    if (in >= 2)
+        s->runner_model = top[1];
+    if (session_overruled(s))
+        s->chosen = s->mstrat[s->answer_model];
+}
+
 emm_status session_decide_read(session *s, emm_error *err)
 {
     emm_status st;

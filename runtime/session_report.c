@@ -651,6 +651,7 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
                     name, how_predicted(s), emm_grouped(pred->total, num),
                     (double)pred->total / (double)chosen->total);
         }
+        session_print_stall_lines(s, out);
     } else if (s->strategy_note[0]) {
         fprintf(out, "emm: no answer: the chosen strategy cannot be simulated: %s\n",
                 s->strategy_note);
