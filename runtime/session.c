@@ -899,6 +899,7 @@ static void engine_free(emm_session *h)
 {
     session *s = (session *)h;
     contest_free(s->contest);
+    contest_free(s->window_rank);
     session_lines_free(s);
     emm_runner_free(s->runner);
     emm_model_share_unref(s->layouts);

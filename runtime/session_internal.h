@@ -198,9 +198,20 @@ typedef struct session {
                                 mesh: the window's decision and the phases' compute each once */
     contest *contest;    /* the run's confirmation of the choice, or NULL (docs/profile.md
                             "The contest") */
-    /* At finish, with a contest: the models of the answer and of the
-     * runner-up (SIZE_MAX: none) among the finalists. */
+    /* A capture that sees the window only: every candidate is simulated
+     * over it beside the prediction, and an EMM strategy slower than direct
+     * reads there is never the answer (session_decide_answer). */
+    bool window_check;
+    contest *window_rank; /* with it: every candidate over the window, none dropped (only
+                             ranked at the end: contest_standing) */
+    size_t direct_model; /* the runner's model of direct reads, or SIZE_MAX */
+    /* At finish, with a contest or a window check: the models of the
+     * answer and of the runner-up (SIZE_MAX: none); `ranked`: they are the
+     * first two of the candidates ranked by their cycles (the contest's
+     * finalists, or every candidate over the window when the prediction
+     * lost to direct reads there), not the window's prediction. */
     size_t answer_model, runner_model;
+    bool ranked;
     size_t nmodels;      /* models added to the runner (built or skipped) */
     emm_strategy *mstrat; /* their strategies, nmodels */
     emm_error *merr;     /* why each could not be built (status != EMM_OK), nmodels */
@@ -251,25 +262,28 @@ typedef struct session {
     } stall_lines[SESSION_STALL_LINES];
 } session;
 
-/* The window's choice (model 0) when the run's contest answered otherwise,
- * else NULL (and NULL until the session's finish). */
+/* The window's choice (model 0) when the run's contest (or the window's
+ * check) answered otherwise, else NULL (and NULL until the session's
+ * finish). */
 static inline const emm_strategy *session_overruled(const session *s)
 {
     return s->answer_model != SIZE_MAX && s->answer_model != 0 ? &s->mstrat[0] : NULL;
 }
 
-/* The runner's model of the answer: the one the contest named at finish,
- * else the chosen strategy's (model 0); SIZE_MAX when nothing was chosen. */
+/* The runner's model of the answer: the one the contest or the window's
+ * check named at finish, else the chosen strategy's (model 0); SIZE_MAX
+ * when nothing was chosen. */
 static inline size_t session_answer_model(const session *s)
 {
     return s->answer_model != SIZE_MAX ? s->answer_model : s->has_chosen ? 0 : SIZE_MAX;
 }
 
 /* Whether the runner's model i may turn out to be the answer: the
- * prediction's, or any candidate's when a contest ranks them at the end. */
+ * prediction's, or any candidate's when a contest or the window's check
+ * ranks them at the end. */
 static inline bool session_may_answer(const session *s, size_t i)
 {
-    return i == 0 || s->contest;
+    return i == 0 || s->contest || s->window_check;
 }
 
 /* Live, or gone with its fields kept for the decision. */
@@ -376,8 +390,9 @@ static inline const char *session_path(const char *p)
 emm_status session_decide_read(session *s, emm_error *err);
 emm_status session_decide_rest(session *s, emm_error *err);
 /* At finish, the answer among the models that ran: the contest's fastest
- * finalist, else the chosen strategy. Sets answer_model, runner_model
- * and chosen. */
+ * finalist; under a window check the prediction unless direct reads beat
+ * it over the window, then the fastest candidate there; else the chosen
+ * strategy. Sets answer_model, runner_model, ranked and chosen. */
 void session_decide_answer(session *s);
 
 /* Only the window was captured and simulated: a backend that sees the

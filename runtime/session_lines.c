@@ -3,8 +3,8 @@
  * emm annotate), the timeline (EMM_TIMELINE), and the source lines the
  * answer's DMA stalls came from, named in the summary and the report.
  *
- * The answer is known only at the end: the run's contest names it among
- * the candidates. So
+ * The answer is known only at the end: the run's contest (or, for a
+ * window-only capture, the window's) names it among the candidates. So
  * every model that may be the answer reports each DMA stall with the record
  * that waited (emm_model_stalls, as emm annotate's costed run would charge
  * it), summed by program counter per model (annotate.c, as emm annotate

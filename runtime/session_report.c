@@ -179,7 +179,7 @@ static void write_phases(json_writer *w, const session *s)
 static bool answer_tie(const session *s, const emm_result *res, const emm_error *skipped,
                        size_t n)
 {
-    if (s->contest) {
+    if (s->contest || s->ranked) {
         const emm_result *r = s->runner_model != SIZE_MAX
                                   ? find_result(res, n, &s->mstrat[s->runner_model])
                                   : NULL;
@@ -254,6 +254,33 @@ static void print_compute(FILE *out, const session *s)
                 (unsigned long long)pa, pa == 1 ? "" : "s");
 }
 
+static const emm_strategy direct_strategy = {EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL,
+                                             EMM_FETCH_NONE, 0};
+
+/* "decision.window_check" (docs/report.md): a window-only capture's
+ * prediction against every candidate and direct reads over the window. */
+static void write_window_check(json_writer *w, const report_ctx *c)
+{
+    const session *s = c->s;
+    json_key(w, "window_check");
+    const emm_result *pred = find_result(c->res, c->n, &s->mstrat[0]);
+    const emm_result *direct = find_result(c->res, c->n, &direct_strategy);
+    if (!s->window_check || !pred || !direct) {
+        json_null(w);
+        return;
+    }
+    json_begin_object(w);
+    json_key(w, "candidates");
+    json_u64(w, contest_entrants(s->window_rank));
+    json_key(w, "predicted_cycles");
+    json_u64(w, pred->total);
+    json_key(w, "direct_cycles");
+    json_u64(w, direct->total);
+    json_key(w, "kept");
+    json_bool(w, !s->ranked);
+    json_end_object(w);
+}
+
 static void report_extra(json_writer *w, void *ctx)
 {
     const report_ctx *c = ctx;
@@ -310,10 +337,10 @@ static void report_extra(json_writer *w, void *ctx)
                        ? "direct, the EMM strategies and the cache"
                        : "direct and the EMM strategies (the cache is a reference)");
     json_key(w, "runner_up");
-    if (s->contest && s->runner_model != SIZE_MAX) {
+    if ((s->contest || s->ranked) && s->runner_model != SIZE_MAX) {
         emm_strategy_format(&s->mstrat[s->runner_model], name, sizeof name);
         json_string(w, name);
-    } else if (!s->contest && s->has_wd && s->wd.has_runner_up) {
+    } else if (!s->contest && !s->ranked && s->has_wd && s->wd.has_runner_up) {
         emm_strategy_format(&s->wd.runner_up, name, sizeof name);
         json_string(w, name);
         json_key(w, "runner_up_margin");
@@ -384,6 +411,7 @@ static void report_extra(json_writer *w, void *ctx)
     } else {
         json_null(w);
     }
+    write_window_check(w, c);
     json_key(w, "classes");
     json_begin_array(w);
     for (size_t k = 0; s->has_wd && k < s->wd.nclasses; k++) {
@@ -477,8 +505,6 @@ static const emm_result *find_result(const emm_result *res, size_t n, const emm_
     return NULL;
 }
 
-static const emm_strategy direct_strategy = {EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL,
-                                             EMM_FETCH_NONE, 0};
 static const emm_strategy cache_strategy = {EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL,
                                             EMM_FETCH_NONE, 0};
 
@@ -508,13 +534,33 @@ static const char *how_predicted(const session *s)
     }
 }
 
-/* How the answer was reached: the window's prediction, or the contest.
- * The contest measured over the run only the candidates that ran to the
- * end; those it dropped were slower when dropped, not necessarily over the
- * run, so the answer is called the fastest of the former, and the latter
- * are counted as dropped. */
-static const char *how_decided(const session *s, char *buf, size_t cap)
+/* How the answer was reached: the window's prediction, the window's check
+ * of it, or the contest. The contest measured over the run only the
+ * candidates that ran to the end; those it dropped were slower when
+ * dropped, not necessarily over the run, so the answer is called the
+ * fastest of the former, and the latter are counted as dropped. A
+ * window-only capture measured the window alone, and says so. */
+static const char *how_decided(const session *s, const emm_result *res, size_t nres, char *buf,
+                               size_t cap)
 {
+    const emm_result *pred = s->window_check ? find_result(res, nres, &s->mstrat[0]) : NULL;
+    const emm_result *direct = find_result(res, nres, &direct_strategy);
+    if (pred && direct && pred->total && direct->total) {
+        char vs[48], pname[64];
+        if (!s->ranked) {
+            snprintf(buf, cap, "%s; checked over the profiling window only, the part of the run "
+                               "seen: %s direct reads there",
+                     how_predicted(s), versus(pred->total, direct->total, vs, sizeof vs));
+            return buf;
+        }
+        emm_strategy_format(&pred->strategy, pname, sizeof pname);
+        snprintf(buf, cap, "over the profiling window only, the part of the run seen: the fastest "
+                           "of %zu candidates there; the window's prediction, %s, took %.2fx the "
+                           "cycles of direct reads",
+                 contest_entrants(s->window_rank), pname,
+                 (double)pred->total / (double)direct->total);
+        return buf;
+    }
     if (!s->contest || s->answer_model == SIZE_MAX)
         return how_predicted(s);
     const uint64_t *at;
@@ -586,7 +632,7 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
     const emm_result *direct = find_result(res, nres, &direct_strategy);
     const emm_result *cache = find_result(res, nres, &cache_strategy);
     const emm_result *runner = NULL;
-    if (s->contest)
+    if (s->contest || s->ranked)
         runner = s->runner_model != SIZE_MAX ? find_result(res, nres, &s->mstrat[s->runner_model])
                                              : NULL;
     else if (s->has_wd && s->wd.has_runner_up)
@@ -597,29 +643,31 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
         emm_strategy_words(&chosen->strategy, words, sizeof words);
         /* The other of a tie: the simulated runner-up, or the decision's
          * (not simulated with EMM_COMPARE=none). */
-        const emm_strategy *tied =
-            runner && runner != chosen
-                ? (emm_decide_is_tie(chosen->total, runner->total) ? &runner->strategy : NULL)
-            : !s->contest && s->has_wd && s->wd.tie && s->wd.has_runner_up ? &s->wd.runner_up
-                                                                          : NULL;
+        const emm_strategy *tied = NULL;
+        if (runner && runner != chosen)
+            tied = emm_decide_is_tie(chosen->total, runner->total) ? &runner->strategy : NULL;
+        else if (!s->contest && !s->ranked && s->has_wd && s->wd.tie && s->wd.has_runner_up)
+            tied = &s->wd.runner_up;
         if (tied) {
             char other[64];
             emm_strategy_format(tied, other, sizeof other);
             fprintf(out, "emm: answer: a tie between %s and %s (within %.0f%%: either will "
                          "do); %s named first (%s)\n",
                     name, other, EMM_DECIDE_TIE_MARGIN * 100, name,
-                    how_decided(s, how, sizeof how));
+                    how_decided(s, res, nres, how, sizeof how));
         } else {
-            fprintf(out, "emm: answer: %s (%s)\n", name, how_decided(s, how, sizeof how));
+            fprintf(out, "emm: answer: %s (%s)\n", name,
+                    how_decided(s, res, nres, how, sizeof how));
         }
         fprintf(out, "emm:   %s\n", words);
+        const char *over = session_window_only(s) ? " over the window" : "";
         if (direct && direct != chosen)
-            fprintf(out, "emm:   %s cycles, %s direct reads (%s cycles)\n",
-                    emm_grouped(chosen->total, num), versus(chosen->total, direct->total, vs,
-                                                            sizeof vs),
+            fprintf(out, "emm:   %s cycles%s, %s direct reads (%s cycles)\n",
+                    emm_grouped(chosen->total, num), over,
+                    versus(chosen->total, direct->total, vs, sizeof vs),
                     emm_grouped(direct->total, num2));
         else
-            fprintf(out, "emm:   %s cycles\n", emm_grouped(chosen->total, num));
+            fprintf(out, "emm:   %s cycles%s\n", emm_grouped(chosen->total, num), over);
         if (runner && runner != chosen) {
             emm_strategy_format(&runner->strategy, name, sizeof name);
             double d = chosen->total ? (double)runner->total / (double)chosen->total - 1 : 0;
@@ -627,7 +675,7 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
              * there than the answer lost on what the choice weighs: the
              * pattern's long run on this mesh (the window is cold). */
             const char *span = session_window_only(s) ? "over the window" : "over the run";
-            if (d < 0 && !s->contest && s->has_wd && s->wd.has_runner_up &&
+            if (d < 0 && !s->contest && !s->ranked && s->has_wd && s->wd.has_runner_up &&
                 s->wd.runner_margin > 0)
                 fprintf(out,
                         "emm:   runner-up %s: %s cycles (%.1f%% faster %s, which starts cold; "
@@ -682,9 +730,11 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
     else if (session_window_only(s))
         fprintf(out, "emm:   simulated: the profiling window only, %s accesses, %s element "
                      "accesses (the %s capture stops at the decision; its share of the run is "
-                     "unknown); the valgrind capture or an instrumented build (sancov) "
-                     "simulates the whole run\n",
-                emm_grouped(s->accesses, num), elems, emm_capture_name(s->capture));
+                     "unknown): the answer covers the window; for an answer over the whole run, "
+                     "capture all of it: emm run --capture valgrind -- %s ..., or a build with "
+                     "clang's sanitizer coverage (pkg-config emm-sancov) under --capture "
+                     "sancov\n",
+                emm_grouped(s->accesses, num), elems, emm_capture_name(s->capture), s->program);
     else
         fprintf(out, "emm:   simulated: the whole run from the frozen mesh on, %s accesses, %s "
                      "element accesses (the %s capture)\n",

@@ -7,7 +7,9 @@
 # With EMM_CLI (a sancov build: the whole run and program counters), also
 # the answer's timeline and stall lines; EMM_TEST_OVERRULED=1 says the
 # run's contest answers other than the window's prediction here, so that
-# they are shown to be the answer's, not the prediction's.
+# they are shown to be the answer's, not the prediction's. Without it (a
+# plain build under plain LD_PRELOAD, where auto picks the fault capture),
+# the window-only answer.
 EMM_TEST_DECIDE=1
 . "$(dirname "$0")/lib.sh"
 want_pattern=$1; want_strategy=$2; shift 2
@@ -82,5 +84,29 @@ PY
          grep -q "^emm:   the answer's DMA stalls come from " ||
          { cat "$WORK/decide.shim.err" >&2; fail "the summary does not name the answer's stall lines"; } ;;
   esac
+else
+  # A window-only capture answers over its window: every candidate set
+  # against direct reads there, and never an EMM strategy slower than them.
+  python3 - "$EMM_REPORT" <<'PY' || { cat "$WORK/decide.shim.err" >&2; fail "the window-only answer"; }
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["capture"] == "fault" and r["coverage"]["simulated"] == "window", (r["capture"], r["coverage"])
+runs = {x["strategy"]: x["cycles"]["total"] for x in r["results"] if "cycles" in x}
+check = r["decision"]["window_check"]
+cands = {k: v for k, v in runs.items() if not k.startswith("cache")}
+assert check and check["candidates"] == len(cands), (check, len(cands))
+answer, direct = runs[r["strategy"]], runs["direct"]
+assert answer <= direct, "answer %s: %d cycles, direct %d" % (r["strategy"], answer, direct)
+pred = r["decision"]["predicted"]
+assert check["predicted_cycles"] == runs[pred] and check["direct_cycles"] == direct
+if check["kept"]:
+    assert r["strategy"] == pred and runs[pred] <= direct
+else:
+    assert runs[pred] > direct and answer == min(cands.values()), (pred, runs[pred], direct)
+print("window-only answer %s: %d cycles, direct %d; predicted %s: %d (%s)"
+      % (r["strategy"], answer, direct, pred, runs[pred], "kept" if check["kept"] else "replaced"))
+PY
+  expect_err decide '^emm: answer: .*over the profiling window only'
+  expect_err decide 'for an answer over the whole run, capture all of it: emm run --capture valgrind'
 fi
 echo "decide: ok"
