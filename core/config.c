@@ -368,7 +368,8 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
         {{0}}}, parse_table},
     [EMM_CONFIG_REPORT] = {{"EMM_REPORT", "--report", "FILE",
         "a file path in a writable directory (%p: pid)", "(none)",
-        "write the JSON report there at exit (docs/report.md)", {{0}}}, parse_report},
+        "write the JSON report there at exit (docs/report.md), also when nothing was\n"
+        "simulated: then with the reason", {{0}}}, parse_report},
     [EMM_CONFIG_PROFILE_DUMP] = {{"EMM_PROFILE_DUMP", "--dump", "FILE",
         "a file path in a writable directory (%p: pid)", "(none)",
         "write the window's distance profile as CSV (i,D_i)", {{0}}}, parse_dump},

@@ -74,6 +74,7 @@ emm_status session_engine_new(const emm_session_config *sc, emm_session **out, e
         s->mem = *sc->memory;
         s->memory = &s->mem;
     }
+    clock_gettime(CLOCK_REALTIME_COARSE, &s->started);
     s->program = strdup(sc->program ? sc->program : "program");
     s->capture = sc->capture;
     s->threads = sc->threads;
@@ -796,15 +797,32 @@ static emm_status engine_finish(emm_session *h, FILE *summary, const char *ended
         s->phase = PHASE_DECIDE;
     if (s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE)
         engine_decide(s, NULL);
+    if (s->phase == PHASE_SIMULATING) {
+        flush_chunk(s);
+        /* Models with no record are no answer: the program ended before
+         * reading its mesh, or the capture saw none of its reads. */
+        if (s->accesses == 0) {
+            emm_fail(&s->failure, EMM_ERR_UNSUPPORTED,
+                     "%s: no access to the tagged arrays was seen (the program ended before "
+                     "reading them, or the %s capture saw none of their accesses)",
+                     s->program, emm_capture_name(s->capture));
+            s->phase = PHASE_FAILED;
+        }
+    }
     if (s->phase == PHASE_FAILED) {
+        /* Nothing simulated: the summary says why, and so does the report
+         * when one was asked for; the trace and the timeline have nothing
+         * to hold. */
+        session_lines_free(s);
         if (summary && s->cfg.log >= 1)
             session_print_summary(s, summary, NULL, 0);
+        if (s->cfg.report[0] && session_write_nothing(s, &e) != EMM_OK)
+            output_failed(s, summary, &e);
         if (err)
             *err = s->failure;
         s->phase = PHASE_DONE;
         return s->failure.status;
     }
-    flush_chunk(s);
     session_phases_close(s);
     /* The answer and the runner-up: the contest's finalists, or the
      * window's check, fastest first; then what is the answer's. */

@@ -124,6 +124,8 @@ typedef struct session {
     char *program;
     char ended[96];      /* how the run ended when not normally ("": an exit) */
     emm_capture capture;
+    struct timespec started; /* CLOCK_REALTIME_COARSE at its start: a report written
+                                since is another process's (session_write_nothing) */
     emm_threads threads;
     emm_machine *machine;
     emm_table *table;    /* NULL: no table (a configured strategy without one) */
@@ -451,6 +453,11 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
  * skipped[i].status != EMM_OK marks one that could not be built. */
 emm_status session_write_report(const session *s, const emm_result *res,
                                 const emm_error *skipped, size_t nres, emm_error *err);
+/* The JSON report at cfg.report when nothing was simulated: why is
+ * s->failure's message (docs/report.md "Nothing simulated"); a report
+ * written since the session started is left as it is (a child's: the
+ * program a wrapper ran). */
+emm_status session_write_nothing(const session *s, emm_error *err);
 /* The CSV of the window's profile at cfg.profile_dump. */
 emm_status session_write_csv(const session *s, emm_error *err);
 

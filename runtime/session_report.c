@@ -7,6 +7,7 @@
 
 #include <math.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "error.h"
 #include "json.h"
@@ -827,6 +828,114 @@ emm_status session_write_csv(const session *s, emm_error *err)
         st = emm_outfile_commit(&o, "the profile", &e);
     }
     return st == EMM_OK ? EMM_OK : emm_fail(err, st, "%s: %s", session_source(s, EMM_CONFIG_PROFILE_DUMP), e.message);
+}
+
+/* A report with nothing simulated (docs/report.md "Nothing simulated"):
+ * the keys of a session's report, with no results, coverage.simulated
+ * "nothing" and coverage.reason. s (NULL when no session started) adds what
+ * was seen before the session stepped aside. */
+struct nothing_ctx {
+    const session *s;
+    const char *program, *why;
+    emm_capture capture;
+};
+
+static void nothing_extra(json_writer *w, void *ctx)
+{
+    const struct nothing_ctx *c = ctx;
+    const session *s = c->s;
+    json_key(w, "program");
+    json_string(w, c->program);
+    json_key(w, "capture");
+    json_string(w, emm_capture_name(c->capture));
+    json_key(w, "pattern");
+    json_null(w);
+    json_key(w, "strategy");
+    json_null(w);
+    json_key(w, "decision");
+    json_null(w);
+    json_key(w, "coverage");
+    json_begin_object(w);
+    json_key(w, "simulated");
+    json_string(w, "nothing");
+    json_key(w, "reason");
+    json_string(w, c->why);
+    json_key(w, "accesses");
+    json_u64(w, 0);
+    json_key(w, "element_accesses");
+    json_u64(w, 0);
+    json_key(w, "share");
+    json_null(w);
+    json_key(w, "loader_writes");
+    json_u64(w, s ? s->loader_writes : 0);
+    json_key(w, "window_records");
+    json_u64(w, s ? s->wreads + s->wwrites : 0);
+    json_end_object(w);
+    json_key(w, "mesh");
+    json_null(w);
+    json_key(w, "window");
+    json_null(w);
+    json_key(w, "profile");
+    json_null(w);
+    json_key(w, "phases_probed");
+    json_bool(w, false);
+    json_key(w, "phases");
+    json_begin_array(w);
+    json_end_array(w);
+}
+
+/* Whether the file at path was modified at or after *since: another
+ * process of the run wrote it after this one started. */
+static bool written_since(const char *path, const struct timespec *since)
+{
+    struct stat st;
+    if (!since || stat(path, &st) != 0)
+        return false;
+    return st.st_mtim.tv_sec > since->tv_sec ||
+           (st.st_mtim.tv_sec == since->tv_sec && st.st_mtim.tv_nsec >= since->tv_nsec);
+}
+
+static emm_status write_nothing(const char *path, const emm_machine *m,
+                                const struct nothing_ctx *c, const struct timespec *since,
+                                emm_error *err)
+{
+    if (written_since(path, since))
+        return EMM_OK;
+    return emm_report_write_extra(path, "", m, 0, NULL, NULL, 0, nothing_extra, (void *)c, err);
+}
+
+emm_status session_write_nothing(const session *s, emm_error *err)
+{
+    struct nothing_ctx c = {s, s->program, s->failure.message, s->capture};
+    emm_error e;
+    emm_status st = write_nothing(s->cfg.report, s->machine, &c, &s->started, &e);
+    if (st != EMM_OK)
+        return emm_fail(err, st, "%s: %s", session_source(s, EMM_CONFIG_REPORT), e.message);
+    return EMM_OK;
+}
+
+emm_status emm_session_report_nothing(const emm_config *cfg, const char *program,
+                                      emm_capture capture, const char *why,
+                                      const struct timespec *since, emm_error *err)
+{
+    if (!cfg->report[0])
+        return EMM_OK;
+    /* The machine in effect: the configured file's, when it can be read
+     * (it may be why nothing started), else the built-in one. */
+    emm_machine *m = NULL;
+    emm_error e;
+    emm_status st = emm_machine_new(&m, &e);
+    if (st == EMM_OK && cfg->machine[0] && emm_machine_load(m, cfg->machine, &e) != EMM_OK) {
+        emm_machine_free(m);
+        st = emm_machine_new(&m, &e);
+    }
+    struct nothing_ctx c = {NULL, program ? program : "program", why, capture};
+    if (st == EMM_OK)
+        st = write_nothing(cfg->report, m, &c, since, &e);
+    emm_machine_free(m);
+    const char *as = cfg->source[EMM_CONFIG_REPORT] ? cfg->source[EMM_CONFIG_REPORT]
+                                                    : emm_config_row_get(EMM_CONFIG_REPORT)->var;
+    return st == EMM_OK ? EMM_OK : emm_fail(err, st, "%s: %s", as, e.message);
 }
 
 emm_status session_write_report(const session *s, const emm_result *res,
