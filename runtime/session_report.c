@@ -848,6 +848,8 @@ static void nothing_extra(json_writer *w, void *ctx)
     json_string(w, c->program);
     json_key(w, "capture");
     json_string(w, emm_capture_name(c->capture));
+    json_key(w, "ended");
+    json_string(w, s && s->ended[0] ? s->ended : "exit");
     json_key(w, "pattern");
     json_null(w);
     json_key(w, "strategy");
