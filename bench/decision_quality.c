@@ -8,9 +8,18 @@
  * summary: mean regret within 3 %, none above 15 %. A benchmark, not a
  * test.
  *
+ * It also holds the run's contest over each whole trace, as a session that
+ * sees the whole run does (emm_contest_trace: every candidate from the
+ * start, the slower half dropped at 2, 4, 8, ... windows until
+ * EMM_FINALISTS remain, the fastest of those the answer), and counts how
+ * often and by how much its answer misses the best candidate, which
+ * --finalists all (none dropped) would answer: the price of halving.
+ *
  * usage: decision_quality [--table FILE] [--quick] [--window-only]
+ *                         [--seed-offset K] [--finalists N]
  * (--window-only: decide by the sweep on the window alone, for comparison;
- * --seed-offset K: other meshes and traversals again — every seed plus K)
+ * --seed-offset K: other meshes and traversals again — every seed plus K;
+ * --finalists N: the contest's, default EMM_FINALISTS's default, 4)
  * (the default table, plus FILE or $EMM_TABLE when given) */
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,6 +28,7 @@
 #include "emm/config.h"
 #include "emm/mesh.h"
 #include "emm/profile.h"
+#include "emm/replay.h"
 #include "emm/sim.h"
 #include "emm/synth.h"
 #include "emm/table.h"
@@ -79,6 +89,7 @@ int main(int argc, char **argv)
     const char *user = NULL;
     int quick = 0, simulate = 0;
     uint64_t offset = 0;
+    unsigned finalists = EMM_CONFIG_DEFAULT_FINALISTS;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--table") == 0 && i + 1 < argc)
             user = argv[++i];
@@ -88,8 +99,11 @@ int main(int argc, char **argv)
             simulate = 1;
         else if (strcmp(argv[i], "--seed-offset") == 0 && i + 1 < argc)
             offset = strtoull(argv[++i], NULL, 10);
+        else if (strcmp(argv[i], "--finalists") == 0 && i + 1 < argc)
+            finalists = (unsigned)strtoul(argv[++i], NULL, 10);
         else {
-            fprintf(stderr, "usage: decision_quality [--table FILE] [--quick] [--window-only] [--seed-offset K]\n");
+            fprintf(stderr, "usage: decision_quality [--table FILE] [--quick] [--window-only] "
+                            "[--seed-offset K] [--finalists N]\n");
             return 2;
         }
     }
@@ -112,12 +126,13 @@ int main(int argc, char **argv)
     emm_table_default_path(def, sizeof def);
     printf("table: %zu samples (%s%s%s)\n", emm_table_count(t), def,
            user ? " + " : "", user ? user : "");
-    printf("%-30s %6s %-7s %-24s %-24s %8s %8s %7s %s\n", "case", "window", "how", "chosen",
-           "best", "regret", "vs cache", "dist", "nearest");
+    printf("%-30s %6s %-7s %-24s %-24s %8s %8s %7s %-24s %8s %s\n", "case", "window", "how",
+           "chosen", "best", "regret", "vs cache", "dist", "contest", "regret", "nearest");
 
     size_t nmesh = quick ? 1 : sizeof meshes / sizeof meshes[0];
-    size_t cases = 0, worse_than_cache = 0, skipped = 0;
-    double sum_regret = 0, max_regret = 0, max_vs_cache = -1;
+    size_t cases = 0, worse_than_cache = 0, skipped = 0, contests = 0, missed = 0;
+    size_t pred_off = 0, fixed = 0; /* predictions not the best; of them, the contest's best */
+    double sum_regret = 0, max_regret = 0, max_vs_cache = -1, sum_contest = 0, max_contest = 0;
     for (size_t g = 0; g < nmesh; g++) {
         emm_gen_options go = {meshes[g].faces, meshes[g].seed + offset, meshes[g].density,
                               EMM_ORDER_INPUT};
@@ -152,6 +167,16 @@ int main(int argc, char **argv)
                 emm_window_decision d;
                 if (emm_profile_trace_window(r, windows[w], path, &recs, &n, &err) != EMM_OK)
                     die(patterns[p].name, &err);
+                /* The window's leading index-order sweep, which the profile
+                 * leaves out: the contest counts its windows after it. */
+                size_t lead = 0;
+                emm_profiler *pf;
+                if (emm_profiler_new(info, windows[w], EMM_PROFILE_PLANE, path, &pf, &err) !=
+                        EMM_OK ||
+                    emm_profiler_add(pf, recs, n, &err) != EMM_OK)
+                    die(patterns[p].name, &err);
+                emm_profiler_swept(pf, &lead);
+                emm_profiler_free(pf);
                 if (n >= nall) {
                     /* The window is the whole trace: not a decision ahead of time. */
                     free(recs);
@@ -184,9 +209,30 @@ int main(int argc, char **argv)
                 uint64_t c = whole->result[k].total;
                 double regret = (double)c / (double)best - 1;
                 double vs_cache = (double)c / (double)cache - 1;
-                printf("%-30s %6zu %-7s %-24s %-24s %7.2f%% %7.2f%% %7.3f %s\n", cname,
-                       d.accesses, emm_decided_name(d.how), chosen, bestname, 100 * regret,
-                       100 * vs_cache, d.table.distance, d.table.nearest);
+                /* The run's contest over the whole trace from this
+                 * window's prediction, the halvings at 2, 4, 8, ... of its
+                 * records past the leading sweep, as the session counts. */
+                emm_contest_result cr;
+                if (emm_contest_trace(path, m, &d.strategy, lead, n > lead ? n - lead : 1,
+                                      finalists, NULL, &cr, &err) != EMM_OK)
+                    die(patterns[p].name, &err);
+                char cwin[96];
+                emm_strategy_format(&cr.answer.strategy, cwin, sizeof cwin);
+                double cregret = (double)cr.answer.total / (double)best - 1;
+                emm_result_release(&cr.answer);
+                emm_result_release(&cr.runner_up);
+                emm_result_release(&cr.predicted);
+                contests++;
+                missed += cregret > 0;
+                pred_off += regret > 0;
+                fixed += regret > 0 && cregret <= 0;
+                sum_contest += cregret;
+                if (cregret > max_contest)
+                    max_contest = cregret;
+                printf("%-30s %6zu %-7s %-24s %-24s %7.2f%% %7.2f%% %7.3f %-24s %7.2f%% %s\n",
+                       cname, d.accesses, emm_decided_name(d.how), chosen, bestname,
+                       100 * regret, 100 * vs_cache, d.table.distance, cwin, 100 * cregret,
+                       d.table.nearest);
                 cases++;
                 sum_regret += regret;
                 if (regret > max_regret)
@@ -210,6 +256,14 @@ int main(int argc, char **argv)
            100 * mean, 100 * max_regret);
     printf("against the reference cache: worst %+.2f%%; %zu cases more than 5%% slower than it\n",
            100 * max_vs_cache, worse_than_cache);
+    printf("the run's contest (halving to %u finalists) over the whole trace: %zu of %zu answers "
+           "slower than the best candidate (what --finalists all answers); mean regret %.2f%%, "
+           "largest %.2f%%\n",
+           finalists, missed, contests, contests ? 100 * sum_contest / (double)contests : 0,
+           100 * max_contest);
+    printf("  (the prediction, which runs to the end beside the finalists, was the best in %zu of "
+           "them; of the other %zu, the contest found the best in %zu)\n",
+           contests - pred_off, pred_off, fixed);
     printf("goals met: %s\n", cases && mean <= 0.03 && max_regret <= 0.15 ? "yes" : "no");
     emm_table_free(t);
     emm_machine_free(m);

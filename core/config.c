@@ -170,6 +170,10 @@ static bool parse_finalists(emm_config *c, const char *v, long pid, char *why, s
 {
     (void)pid; (void)why; (void)cap;
     uint64_t x;
+    if (strcmp(v, "all") == 0) {
+        c->finalists = EMM_CONFIG_FINALISTS_ALL;
+        return true;
+    }
     if (!emm_parse_u64(v, &x) || x > 64)
         return false;
     c->finalists = (unsigned)x;
@@ -342,10 +346,12 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
     [EMM_CONFIG_COMPARE] = {{"EMM_COMPARE", "--compare", "C", "baselines, all or none", "baselines",
         "also simulate direct reads and the cache (baselines), the whole sweep (all) or nothing",
         {{0}}}, parse_compare},
-    [EMM_CONFIG_FINALISTS] = {{"EMM_FINALISTS", "--finalists", "N", "a count from 0 to 64", "4",
+    [EMM_CONFIG_FINALISTS] = {{"EMM_FINALISTS", "--finalists", "N",
+        "a count from 0 to 64, or all", "4",
         "when the whole run is captured, every candidate runs from the window on and the\n"
-        "slower half is dropped at 2, 4, 8, ... windows until N remain; the fastest of them\n"
-        "over the run is the answer (0: the window's prediction stands, as in the thesis)",
+        "slower half is dropped at 2, 4, 8, ... windows until N remain; the fastest of those\n"
+        "that ran to the end is the answer (all: none is dropped, every candidate is simulated\n"
+        "over the whole run; 0: the window's prediction stands, as in the thesis)",
         {{0}}}, parse_finalists},
     [EMM_CONFIG_PHASES] = {{"EMM_PHASES", NULL, NULL, "0 or 1", "1",
         "1: when the whole run is captured, probe it after the window for the program's\n"
@@ -362,7 +368,8 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
         {{0}}}, parse_table},
     [EMM_CONFIG_REPORT] = {{"EMM_REPORT", "--report", "FILE",
         "a file path in a writable directory (%p: pid)", "(none)",
-        "write the JSON report there at exit (docs/report.md)", {{0}}}, parse_report},
+        "write the JSON report there at exit (docs/report.md), also when nothing was\n"
+        "simulated: then with the reason", {{0}}}, parse_report},
     [EMM_CONFIG_PROFILE_DUMP] = {{"EMM_PROFILE_DUMP", "--dump", "FILE",
         "a file path in a writable directory (%p: pid)", "(none)",
         "write the window's distance profile as CSV (i,D_i)", {{0}}}, parse_dump},
@@ -371,9 +378,11 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
         "write the access trace, for emm replay", {{0}}}, parse_trace},
     [EMM_CONFIG_TIMELINE] = {{"EMM_TIMELINE", "--timeline", "FILE",
         "a file path in a writable directory (%p: pid)", "(none)",
-        "write the chosen strategy's simulated run as a Chrome/Perfetto trace-event JSON:\n"
-        "a track per DMA channel, the core's stalls, cell entries, the window and phases;\n"
-        "at most " EMM_TIMELINE_MAX_EVENTS_TEXT " events (the file says when the cap was hit)",
+        "write the answer's simulated run as a Chrome/Perfetto trace-event JSON: a track\n"
+        "per DMA channel, the core's stalls, cell entries, the window and phases; at most\n"
+        EMM_TIMELINE_MAX_EVENTS_TEXT " events (the file says when the cap was hit); the answer\n"
+        "is known at the end, so its run is simulated again then over the run's trace\n"
+        "(EMM_TRACE's, or one of its own in TMPDIR, removed after)",
         {{0}}}, parse_timeline},
     [EMM_CONFIG_LOG] = {{"EMM_LOG", "--log", "LEVEL", "0, 1, 2, quiet, summary or verbose", "1",
         "0: nothing on stderr; 1: the summary at exit; 2: also what the shim does",
@@ -582,7 +591,10 @@ int emm_config_format(const emm_config *c, emm_config_key k, char *out, size_t c
         emm_strategy_format(&c->strategy, out, cap);
         return true;
     case EMM_CONFIG_COMPARE: n = snprintf(out, cap, "%s", emm_compare_name(c->compare)); break;
-    case EMM_CONFIG_FINALISTS: n = snprintf(out, cap, "%u", c->finalists); break;
+    case EMM_CONFIG_FINALISTS:
+        n = c->finalists == EMM_CONFIG_FINALISTS_ALL ? snprintf(out, cap, "all")
+                                                     : snprintf(out, cap, "%u", c->finalists);
+        break;
     case EMM_CONFIG_PHASES: n = snprintf(out, cap, "%d", c->phases ? 1 : 0); break;
     case EMM_CONFIG_MACHINE: n = snprintf(out, cap, "%s", c->machine); break;
     case EMM_CONFIG_TABLE: n = snprintf(out, cap, "%s", c->table); break;
@@ -621,7 +633,10 @@ void emm_config_dump(const emm_config *c, FILE *out)
         emm_strategy_format(&c->strategy, s, sizeof s);
     fprintf(out, "emm:   EMM_STRATEGY=%s\n", s);
     fprintf(out, "emm:   EMM_COMPARE=%s\n", emm_compare_name(c->compare));
-    fprintf(out, "emm:   EMM_FINALISTS=%u\n", c->finalists);
+    if (c->finalists == EMM_CONFIG_FINALISTS_ALL)
+        fprintf(out, "emm:   EMM_FINALISTS=all\n");
+    else
+        fprintf(out, "emm:   EMM_FINALISTS=%u\n", c->finalists);
     fprintf(out, "emm:   EMM_PHASES=%d\n", c->phases);
     fprintf(out, "emm:   EMM_MACHINE=%s\n", c->machine);
     fprintf(out, "emm:   EMM_TABLE=%s\n", c->table);

@@ -29,6 +29,7 @@
 #include <string.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "agent_rules.h"
@@ -60,6 +61,7 @@ struct emm_agent {
     emm_agent_hooks hooks;
     char *program;
     emm_session *session; /* NULL in list mode */
+    struct timespec started; /* CLOCK_REALTIME_COARSE at its start (list mode's report) */
     emm_sites *sites;      /* list mode: the candidate arrays */
     agent_rules *rules;
     size_t min_block;
@@ -229,6 +231,7 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
         return emm_fail(err, EMM_ERR_NOMEM, "libemmshim.so: out of memory");
     }
     pthread_mutex_init(&a->lock, NULL);
+    clock_gettime(CLOCK_REALTIME_COARSE, &a->started);
     a->capture = c->capture;
     if (c->hooks)
         a->hooks = *c->hooks;
@@ -713,6 +716,21 @@ size_t emm_agent_usable_size(emm_agent *a, const void *p)
 
 static void agent_finish(emm_agent *a, const char *ended);
 
+static void report_nothing(const emm_config *c, emm_capture capture, const char *program,
+                           const char *why, const struct timespec *since)
+{
+    emm_error err;
+    if (emm_session_report_nothing(c, program, capture, why, since, &err) != EMM_OK &&
+        c->log >= 1)
+        emm_agent_say("%s", err.message);
+}
+
+void emm_agent_report_nothing(const emm_config *c, emm_capture capture, const char *program,
+                              const char *why)
+{
+    report_nothing(c, capture, program, why, NULL);
+}
+
 void emm_agent_finish(emm_agent *a)
 {
     agent_finish(a, NULL);
@@ -743,6 +761,10 @@ static void agent_finish(emm_agent *a, const char *ended)
             emm_sites_print(a->sites, a->program, f);
             fclose(f);
         }
+        report_nothing(&a->cfg, a->capture, a->program,
+                       "list mode (--list-sites, EMM_LIST_SITES=1): the program's candidate "
+                       "arrays were listed, nothing is simulated",
+                       &a->started);
         pthread_mutex_unlock(&a->lock);
         return;
     }

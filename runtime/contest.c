@@ -13,7 +13,8 @@ struct contest {
     size_t nin, entrants;
     size_t *pinned;   /* runner indices that keep running when dropped */
     size_t npinned;
-    size_t *retired;  /* runner indices retired */
+    size_t *retired;  /* runner indices retired, in the order they were */
+    uint64_t *retired_at, *retired_cycles; /* the records run then, and its cycles */
     size_t nretired;
     size_t finalists;
     uint64_t lead, unit, done, next, step;
@@ -35,11 +36,14 @@ emm_status contest_new(emm_runner *r, const size_t *models, const bool *pinned, 
         c->in = calloc(n ? n : 1, sizeof *c->in);
         c->pinned = calloc(n ? n : 1, sizeof *c->pinned);
         c->retired = calloc(n ? n : 1, sizeof *c->retired);
+        c->retired_at = calloc(n ? n : 1, sizeof *c->retired_at);
+        c->retired_cycles = calloc(n ? n : 1, sizeof *c->retired_cycles);
         c->order = calloc(n ? n : 1, sizeof *c->order);
         c->total = calloc(n ? n : 1, sizeof *c->total);
         c->strategy = calloc(n ? n : 1, sizeof *c->strategy);
     }
-    if (!c || !c->in || !c->pinned || !c->retired || !c->order || !c->total || !c->strategy) {
+    if (!c || !c->in || !c->pinned || !c->retired || !c->retired_at || !c->retired_cycles ||
+        !c->order || !c->total || !c->strategy) {
         contest_free(c);
         return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the contest of %zu candidates", n);
     }
@@ -148,7 +152,9 @@ static void halve(contest *c)
             c->in[m++] = i;
         } else {
             emm_runner_retire(c->runner, i);
-            c->retired[c->nretired++] = i;
+            c->retired[c->nretired] = i;
+            c->retired_at[c->nretired] = c->done;
+            c->retired_cycles[c->nretired++] = c->total[k];
         }
     }
     c->nin = m;
@@ -213,6 +219,15 @@ bool contest_retired(const contest *c, size_t i)
     return member(c->retired, c->nretired, i);
 }
 
+size_t contest_dropped(const contest *c, const size_t **idx, const uint64_t **at,
+                       const uint64_t **cycles)
+{
+    *idx = c->retired;
+    *at = c->retired_at;
+    *cycles = c->retired_cycles;
+    return c->nretired;
+}
+
 void contest_free(contest *c)
 {
     if (!c)
@@ -220,6 +235,8 @@ void contest_free(contest *c)
     free(c->in);
     free(c->pinned);
     free(c->retired);
+    free(c->retired_at);
+    free(c->retired_cycles);
     free(c->order);
     free(c->total);
     free(c->strategy);

@@ -64,6 +64,13 @@ size_t contest_rounds(const contest *c, const uint64_t **at, const size_t **kept
  * it was dropped, short of the run. */
 bool contest_retired(const contest *c, size_t i);
 
+/* The candidates dropped, in the order they were: their runner indices,
+ * the records run when each was dropped and its cycles then (the slower
+ * half at that point; not its cycles over the run, which were not
+ * measured). Returns how many. */
+size_t contest_dropped(const contest *c, const size_t **idx, const uint64_t **at,
+                       const uint64_t **cycles);
+
 void contest_free(contest *c);
 
 #endif

@@ -74,6 +74,7 @@ emm_status session_engine_new(const emm_session_config *sc, emm_session **out, e
         s->mem = *sc->memory;
         s->memory = &s->mem;
     }
+    clock_gettime(CLOCK_REALTIME_COARSE, &s->started);
     s->program = strdup(sc->program ? sc->program : "program");
     s->capture = sc->capture;
     s->threads = sc->threads;
@@ -796,30 +797,38 @@ static emm_status engine_finish(emm_session *h, FILE *summary, const char *ended
         s->phase = PHASE_DECIDE;
     if (s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE)
         engine_decide(s, NULL);
+    if (s->phase == PHASE_SIMULATING) {
+        flush_chunk(s);
+        /* Models with no record are no answer: the program ended before
+         * reading its mesh, or the capture saw none of its reads. */
+        if (s->accesses == 0) {
+            emm_fail(&s->failure, EMM_ERR_UNSUPPORTED,
+                     "%s: no access to the tagged arrays was seen (the program ended before "
+                     "reading them, or the %s capture saw none of their accesses)",
+                     s->program, emm_capture_name(s->capture));
+            s->phase = PHASE_FAILED;
+        }
+    }
     if (s->phase == PHASE_FAILED) {
+        /* Nothing simulated: the summary says why, and so does the report
+         * when one was asked for; the trace and the timeline have nothing
+         * to hold. */
+        session_lines_free(s);
         if (summary && s->cfg.log >= 1)
             session_print_summary(s, summary, NULL, 0);
+        if (s->cfg.report[0] && session_write_nothing(s, &e) != EMM_OK)
+            output_failed(s, summary, &e);
         if (err)
             *err = s->failure;
         s->phase = PHASE_DONE;
         return s->failure.status;
     }
-    flush_chunk(s);
     session_phases_close(s);
-    session_stall_lines(s);
-    /* The contest's finalists, fastest first: the answer and the runner-up. */
-    s->answer_model = s->runner_model = SIZE_MAX;
-    if (s->contest) {
-        size_t top[2];
-        size_t in = contest_standing(s->contest, top, 2);
-        if (in >= 1)
-            s->answer_model = top[0];
-        if (in >= 2)
-            s->runner_model = top[1];
-        if (session_overruled(s))
-            s->chosen = s->mstrat[s->answer_model];
-    }
+    /* The answer and the runner-up: the contest's finalists, or the
+     * window's check, fastest first; then what is the answer's. */
+    session_decide_answer(s);
     session_phases_answer(s);
+    session_stall_lines(s);
     /* Every model, the answer first, those that could not be built with
      * only their strategy (the report says why), and without the contest's
      * dropped candidates, whose cycles stop short of the run; the summary
@@ -856,7 +865,6 @@ static emm_status engine_finish(emm_session *h, FILE *summary, const char *ended
     }
     if (summary && s->cfg.log >= 1) {
         session_print_summary(s, summary, res, nres);
-        session_print_stall_lines(s, summary);
         fflush(summary);
     }
     if (s->cfg.report[0] && session_write_report(s, all, why, nall, &e) != EMM_OK) {
@@ -871,19 +879,17 @@ static emm_status engine_finish(emm_session *h, FILE *summary, const char *ended
             *err = e;
         first = first == EMM_OK ? e.status : first;
     }
-    if ((s->timeline || s->timeline_failed) && session_timeline_close(s, &e) != EMM_OK) {
+    /* The trace is closed first: the timeline is the answer's run
+     * simulated again over it. A private trace's failure is the
+     * timeline's to tell. */
+    session_trace_close(s);
+    if (session_timeline_write(s, &e) != EMM_OK) {
         output_failed(s, summary, &e);
         if (first == EMM_OK && err)
             *err = e;
         first = first == EMM_OK ? e.status : first;
     }
-    if (s->trace) {
-        emm_status st = emm_trace_writer_close(s->trace, &s->trace_error);
-        s->trace = NULL;
-        if (st != EMM_OK)
-            s->trace_failed = true;
-    }
-    if (s->trace_failed) {
+    if (s->trace_failed && !s->trace_private) {
         emm_fail(&e, s->trace_error.status, "%s: %s", session_source(s, EMM_CONFIG_TRACE),
                  s->trace_error.message);
         output_failed(s, summary, &e);
@@ -911,13 +917,12 @@ static void engine_free(emm_session *h)
 {
     session *s = (session *)h;
     contest_free(s->contest);
+    contest_free(s->window_rank);
     session_lines_free(s);
     emm_runner_free(s->runner);
     emm_model_share_unref(s->layouts);
     decide_cache_free(s->decisions);
     emm_window_decision_release(&s->wd);
-    if (s->trace)
-        emm_trace_writer_abort(s->trace);
     for (int i = 0; i < s->narrays; i++) {
         free(s->arrays[i].snap);
         free(s->arrays[i].view);

@@ -664,15 +664,24 @@ static bool wants_contest(const session *s)
            !session_window_only(s);
 }
 
+/* Whether the window's prediction is checked against every candidate over
+ * the window, the only span a window-only capture sees: the session
+ * decided (a configured strategy is the user's), whatever EMM_FINALISTS
+ * says (it sizes the run's contest, which such a capture cannot hold). */
+static bool wants_window_check(const session *s)
+{
+    return s->has_chosen && s->source != FROM_CONFIG && session_window_only(s);
+}
+
 /* The models: the chosen strategy first, then the comparison, then the
  * contest's other candidates. A comparison strategy that cannot run on
  * this mesh is skipped; the chosen one failing is reported, and the
  * baselines still run. */
 static emm_status build_models(session *s, emm_error *err)
 {
-    bool racing = wants_contest(s);
+    bool racing = wants_contest(s), checking = wants_window_check(s);
     size_t sweep = emm_strategy_sweep(NULL, 0);
-    size_t cap = 4 + (s->cfg.compare == EMM_COMPARE_ALL || racing ? 2 * sweep : 0);
+    size_t cap = 4 + (s->cfg.compare == EMM_COMPARE_ALL || racing || checking ? 2 * sweep : 0);
     emm_strategy *all = calloc(cap, sizeof *all), *list = calloc(cap, sizeof *list);
     emm_error *errs = calloc(cap, sizeof *errs);
     size_t *entrants = calloc(cap, sizeof *entrants);
@@ -697,7 +706,7 @@ static emm_status build_models(session *s, emm_error *err)
     if (s->cfg.compare == EMM_COMPARE_ALL)
         n += emm_strategy_sweep(all + n, cap - n);
     shown = n;
-    if (racing)
+    if (racing || checking)
         n += emm_strategy_sweep(all + n, cap - n);
     for (size_t i = 0; i < n; i++) {
         /* The contest's sweep brings only what the machine offers: a
@@ -711,8 +720,9 @@ static emm_status build_models(session *s, emm_error *err)
         if (j == k)
             list[k++] = all[i];
         /* Every candidate of the sweep the machine offers enters the
-         * contest once; what the report shows keeps running when dropped. */
-        if (racing && i >= shown) {
+         * contest (or the window's check) once; what the report shows keeps
+         * running when dropped. */
+        if ((racing || checking) && i >= shown) {
             bool in = false;
             for (size_t e = 0; e < ne; e++)
                 in = in || entrants[e] == j;
@@ -727,6 +737,10 @@ static emm_status build_models(session *s, emm_error *err)
         goto out;
     s->nmodels = k;
     s->mstrat = list;
+    s->direct_model = SIZE_MAX;
+    for (size_t i = 0; i < k; i++)
+        if (list[i].kind == EMM_STRATEGY_DIRECT)
+            s->direct_model = i;
     s->merr = errs;
     list = NULL;
     errs = NULL;
@@ -755,6 +769,12 @@ static emm_status build_models(session *s, emm_error *err)
                          s->wunit > lead ? s->wunit - lead : 1, s->cfg.finalists, &s->contest,
                          err);
     }
+    /* The window's check ranks the same candidates at the end, none
+     * dropped: the contest's ranking over the window alone. */
+    if (checking && s->has_chosen && s->direct_model != SIZE_MAX &&
+        (st = contest_new(s->runner, entrants, NULL, ne, 0, 1, EMM_CONFIG_FINALISTS_ALL,
+                          &s->window_rank, err)) == EMM_OK)
+        s->window_check = true;
 out:
     free(all);
     free(list);
@@ -762,6 +782,39 @@ out:
     free(entrants);
     free(pinned);
     return st;
+}
+
+static uint64_t model_cycles(const session *s, size_t i)
+{
+    emm_result r;
+    emm_model_result(emm_runner_model(s->runner, i), &r);
+    uint64_t total = r.total;
+    emm_result_release(&r);
+    return total;
+}
+
+void session_decide_answer(session *s)
+{
+    size_t top[2], in = 0;
+    s->answer_model = s->runner_model = SIZE_MAX;
+    s->ranked = false;
+    if (s->contest)
+        in = contest_standing(s->contest, top, 2);
+    else if (s->window_check && s->has_chosen && emm_runner_model(s->runner, 0) &&
+             emm_runner_model(s->runner, s->direct_model) &&
+             model_cycles(s, 0) > model_cycles(s, s->direct_model))
+        /* The prediction took more than direct reads over the window: an
+         * EMM strategy slower than doing nothing there is no answer; the
+         * fastest candidate over the window is (direct, or one faster). */
+        in = contest_standing(s->window_rank, top, 2);
+    if (in >= 1) {
+        s->answer_model = top[0];
+        s->ranked = true;
+    }
+    if (in >= 2)
+        s->runner_model = top[1];
+    if (session_overruled(s))
+        s->chosen = s->mstrat[s->answer_model];
 }
 
 emm_status session_decide_read(session *s, emm_error *err)

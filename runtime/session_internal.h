@@ -124,6 +124,8 @@ typedef struct session {
     char *program;
     char ended[96];      /* how the run ended when not normally ("": an exit) */
     emm_capture capture;
+    struct timespec started; /* CLOCK_REALTIME_COARSE at its start: a report written
+                                since is another process's (session_write_nothing) */
     emm_threads threads;
     emm_machine *machine;
     emm_table *table;    /* NULL: no table (a configured strategy without one) */
@@ -198,14 +200,27 @@ typedef struct session {
                                 mesh: the window's decision and the phases' compute each once */
     contest *contest;    /* the run's confirmation of the choice, or NULL (docs/profile.md
                             "The contest") */
-    /* At finish, with a contest: the models of the answer and of the
-     * runner-up (SIZE_MAX: none) among the finalists. */
+    /* A capture that sees the window only: every candidate is simulated
+     * over it beside the prediction, and an EMM strategy slower than direct
+     * reads there is never the answer (session_decide_answer). */
+    bool window_check;
+    contest *window_rank; /* with it: every candidate over the window, none dropped (only
+                             ranked at the end: contest_standing) */
+    size_t direct_model; /* the runner's model of direct reads, or SIZE_MAX */
+    /* At finish, with a contest or a window check: the models of the
+     * answer and of the runner-up (SIZE_MAX: none); `ranked`: they are the
+     * first two of the candidates ranked by their cycles (the contest's
+     * finalists, or every candidate over the window when the prediction
+     * lost to direct reads there), not the window's prediction. */
     size_t answer_model, runner_model;
+    bool ranked;
     size_t nmodels;      /* models added to the runner (built or skipped) */
     emm_strategy *mstrat; /* their strategies, nmodels */
     emm_error *merr;     /* why each could not be built (status != EMM_OK), nmodels */
     size_t skipped;      /* of them, the comparison's that cannot run on this mesh */
-    emm_trace_writer *trace;
+    emm_trace_writer *trace; /* EMM_TRACE, or the timeline's own (trace_private) */
+    char trace_path[EMM_CONFIG_PATH_MAX];
+    bool trace_private;  /* written for the timeline alone, in TMPDIR: removed at the end */
     emm_error trace_error;
     bool trace_failed;
     emm_trace_record *chunk;
@@ -234,14 +249,11 @@ typedef struct session {
     struct probe_job *probe_job; /* a full probe evaluated beside the run, or NULL */
     uint64_t probe_apply; /* the accesses after which its outcome is applied */
     uint64_t dropped;    /* records of arrays left out of the trace */
-    /* session_lines.c: the timeline and the chosen strategy's stalls by
-     * program counter */
-    emm_timeline *timeline;
-    emm_error timeline_error;
-    bool timeline_failed;
-    uint64_t window_cycles; /* the chosen model's clock after the window's replay */
-    struct emm_annotation *annotation; /* the chosen model's costs by pc, or NULL */
-    uint64_t stall_total;   /* the chosen strategy's DMA stall cycles */
+    /* session_lines.c: the stalls by program counter of every model that
+     * may be the answer, and the answer's stall lines */
+    uint64_t window_records; /* records simulated when the window's replay ended */
+    struct emm_annotation **annotations; /* nmodels of them, NULL where not kept */
+    uint64_t stall_total;   /* the answer's DMA stall cycles */
     bool stall_lines_done;
     size_t nstall_lines;
     struct stall_line {
@@ -252,11 +264,28 @@ typedef struct session {
     } stall_lines[SESSION_STALL_LINES];
 } session;
 
-/* The window's choice (model 0) when the run's contest answered otherwise,
- * else NULL (and NULL until the session's finish). */
+/* The window's choice (model 0) when the run's contest (or the window's
+ * check) answered otherwise, else NULL (and NULL until the session's
+ * finish). */
 static inline const emm_strategy *session_overruled(const session *s)
 {
     return s->answer_model != SIZE_MAX && s->answer_model != 0 ? &s->mstrat[0] : NULL;
+}
+
+/* The runner's model of the answer: the one the contest or the window's
+ * check named at finish, else the chosen strategy's (model 0); SIZE_MAX
+ * when nothing was chosen. */
+static inline size_t session_answer_model(const session *s)
+{
+    return s->answer_model != SIZE_MAX ? s->answer_model : s->has_chosen ? 0 : SIZE_MAX;
+}
+
+/* Whether the runner's model i may turn out to be the answer: the
+ * prediction's, or any candidate's when a contest or the window's check
+ * ranks them at the end. */
+static inline bool session_may_answer(const session *s, size_t i)
+{
+    return i == 0 || s->contest || s->window_check;
 }
 
 /* Live, or gone with its fields kept for the decision. */
@@ -362,6 +391,11 @@ static inline const char *session_path(const char *p)
  * emm_session_decide_read and _rest: deferral, the window's end.) */
 emm_status session_decide_read(session *s, emm_error *err);
 emm_status session_decide_rest(session *s, emm_error *err);
+/* At finish, the answer among the models that ran: the contest's fastest
+ * finalist; under a window check the prediction unless direct reads beat
+ * it over the window, then the fastest candidate there; else the chosen
+ * strategy. Sets answer_model, runner_model, ranked and chosen. */
+void session_decide_answer(session *s);
 
 /* Only the window was captured and simulated: a backend that sees the
  * window alone stops at the decision. */
@@ -387,20 +421,25 @@ void session_phases_free(session *s);
 uint64_t session_switch_cycles(const session *s);
 
 /* session_lines.c: the trace (with the program counters and the program's
- * modules when the capture records them), the timeline and the stall
- * attribution, started at the decision before the window's replay;
- * session_window_done marks the window's end; session_stall_lines
- * resolves the top stall lines (at finish, before the summary); the
- * timeline is closed by session_timeline_close; session_lines_free frees.
- * session_outputs_prepare, in the decision's reading part, fetches what
- * the outputs will need of a program in another process (its objects). */
+ * modules when the capture records them; for the timeline alone, a private
+ * one) and the stall attribution of every model that may be the answer,
+ * started at the decision before the window's replay; session_window_done
+ * marks the window's end; session_stall_lines resolves the answer's top
+ * stall lines (at finish, once the answer is known, before the summary);
+ * session_trace_close ends the trace (its status: EMM_OK, or why it could
+ * not be written, in s->trace_error); session_timeline_write then simulates
+ * the answer again over it with the timeline watching; session_lines_free
+ * frees (and removes a private trace). session_outputs_prepare, in the
+ * decision's reading part, fetches what the outputs will need of a program
+ * in another process (its objects). */
 void session_outputs_prepare(session *s);
 void session_outputs_start(session *s);
 void session_window_done(session *s);
 void session_stall_lines(session *s);
 void session_print_stall_lines(const session *s, FILE *out);
 void session_write_stall_lines(json_writer *w, const session *s);
-emm_status session_timeline_close(session *s, emm_error *err);
+emm_status session_trace_close(session *s);
+emm_status session_timeline_write(session *s, emm_error *err);
 void session_lines_free(session *s);
 
 /* session.c: runs records through the models and the trace writer. */
@@ -414,6 +453,11 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
  * skipped[i].status != EMM_OK marks one that could not be built. */
 emm_status session_write_report(const session *s, const emm_result *res,
                                 const emm_error *skipped, size_t nres, emm_error *err);
+/* The JSON report at cfg.report when nothing was simulated: why is
+ * s->failure's message (docs/report.md "Nothing simulated"); a report
+ * written since the session started is left as it is (a child's: the
+ * program a wrapper ran). */
+emm_status session_write_nothing(const session *s, emm_error *err);
 /* The CSV of the window's profile at cfg.profile_dump. */
 emm_status session_write_csv(const session *s, emm_error *err);
 

@@ -7,6 +7,7 @@
 
 #include <math.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "error.h"
 #include "json.h"
@@ -179,7 +180,7 @@ static void write_phases(json_writer *w, const session *s)
 static bool answer_tie(const session *s, const emm_result *res, const emm_error *skipped,
                        size_t n)
 {
-    if (s->contest) {
+    if (s->contest || s->ranked) {
         const emm_result *r = s->runner_model != SIZE_MAX
                                   ? find_result(res, n, &s->mstrat[s->runner_model])
                                   : NULL;
@@ -254,6 +255,33 @@ static void print_compute(FILE *out, const session *s)
                 (unsigned long long)pa, pa == 1 ? "" : "s");
 }
 
+static const emm_strategy direct_strategy = {EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL,
+                                             EMM_FETCH_NONE, 0};
+
+/* "decision.window_check" (docs/report.md): a window-only capture's
+ * prediction against every candidate and direct reads over the window. */
+static void write_window_check(json_writer *w, const report_ctx *c)
+{
+    const session *s = c->s;
+    json_key(w, "window_check");
+    const emm_result *pred = find_result(c->res, c->n, &s->mstrat[0]);
+    const emm_result *direct = find_result(c->res, c->n, &direct_strategy);
+    if (!s->window_check || !pred || !direct) {
+        json_null(w);
+        return;
+    }
+    json_begin_object(w);
+    json_key(w, "candidates");
+    json_u64(w, contest_entrants(s->window_rank));
+    json_key(w, "predicted_cycles");
+    json_u64(w, pred->total);
+    json_key(w, "direct_cycles");
+    json_u64(w, direct->total);
+    json_key(w, "kept");
+    json_bool(w, !s->ranked);
+    json_end_object(w);
+}
+
 static void report_extra(json_writer *w, void *ctx)
 {
     const report_ctx *c = ctx;
@@ -310,10 +338,10 @@ static void report_extra(json_writer *w, void *ctx)
                        ? "direct, the EMM strategies and the cache"
                        : "direct and the EMM strategies (the cache is a reference)");
     json_key(w, "runner_up");
-    if (s->contest && s->runner_model != SIZE_MAX) {
+    if ((s->contest || s->ranked) && s->runner_model != SIZE_MAX) {
         emm_strategy_format(&s->mstrat[s->runner_model], name, sizeof name);
         json_string(w, name);
-    } else if (!s->contest && s->has_wd && s->wd.has_runner_up) {
+    } else if (!s->contest && !s->ranked && s->has_wd && s->wd.has_runner_up) {
         emm_strategy_format(&s->wd.runner_up, name, sizeof name);
         json_string(w, name);
         json_key(w, "runner_up_margin");
@@ -340,7 +368,10 @@ static void report_extra(json_writer *w, void *ctx)
         json_key(w, "entrants");
         json_u64(w, contest_entrants(s->contest));
         json_key(w, "finalists");
-        json_u64(w, s->cfg.finalists);
+        if (s->cfg.finalists == EMM_CONFIG_FINALISTS_ALL)
+            json_string(w, "all");
+        else
+            json_u64(w, s->cfg.finalists);
         json_key(w, "lead");
         json_u64(w, contest_lead(s->contest));
         json_key(w, "unit");
@@ -356,10 +387,32 @@ static void report_extra(json_writer *w, void *ctx)
             json_end_object(w);
         }
         json_end_array(w);
+        json_key(w, "ran_to_end");
+        json_u64(w, rounds ? kept[rounds - 1] : contest_entrants(s->contest));
+        /* The candidates dropped, by name: their cycles stop where they
+         * were dropped, so they are not in results. */
+        const size_t *idx;
+        const uint64_t *dat, *dcycles;
+        size_t nd = contest_dropped(s->contest, &idx, &dat, &dcycles);
+        json_key(w, "dropped");
+        json_begin_array(w);
+        for (size_t k = 0; k < nd; k++) {
+            json_begin_object(w);
+            json_key(w, "strategy");
+            emm_strategy_format(&s->mstrat[idx[k]], name, sizeof name);
+            json_string(w, name);
+            json_key(w, "at");
+            json_u64(w, dat[k]);
+            json_key(w, "cycles");
+            json_u64(w, dcycles[k]);
+            json_end_object(w);
+        }
+        json_end_array(w);
         json_end_object(w);
     } else {
         json_null(w);
     }
+    write_window_check(w, c);
     json_key(w, "classes");
     json_begin_array(w);
     for (size_t k = 0; s->has_wd && k < s->wd.nclasses; k++) {
@@ -453,8 +506,6 @@ static const emm_result *find_result(const emm_result *res, size_t n, const emm_
     return NULL;
 }
 
-static const emm_strategy direct_strategy = {EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL,
-                                             EMM_FETCH_NONE, 0};
 static const emm_strategy cache_strategy = {EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL,
                                             EMM_FETCH_NONE, 0};
 
@@ -484,19 +535,59 @@ static const char *how_predicted(const session *s)
     }
 }
 
-/* How the answer was reached: the window's prediction, or the contest. */
-static const char *how_decided(const session *s, char *buf, size_t cap)
+/* How the answer was reached: the window's prediction, the window's check
+ * of it, or the contest. The contest measured over the run only the
+ * candidates that ran to the end; those it dropped were slower when
+ * dropped, not necessarily over the run, so the answer is called the
+ * fastest of the former, and the latter are counted as dropped. A
+ * window-only capture measured the window alone, and says so. */
+static const char *how_decided(const session *s, const emm_result *res, size_t nres, char *buf,
+                               size_t cap)
 {
+    const emm_result *pred = s->window_check ? find_result(res, nres, &s->mstrat[0]) : NULL;
+    const emm_result *direct = find_result(res, nres, &direct_strategy);
+    if (pred && direct && pred->total && direct->total) {
+        char vs[48], pname[64];
+        if (!s->ranked) {
+            snprintf(buf, cap, "%s; checked over the profiling window only, the part of the run "
+                               "seen: %s direct reads there",
+                     how_predicted(s), versus(pred->total, direct->total, vs, sizeof vs));
+            return buf;
+        }
+        emm_strategy_format(&pred->strategy, pname, sizeof pname);
+        snprintf(buf, cap, "over the profiling window only, the part of the run seen: the fastest "
+                           "of %zu candidates there; the window's prediction, %s, took %.2fx the "
+                           "cycles of direct reads",
+                 contest_entrants(s->window_rank), pname,
+                 (double)pred->total / (double)direct->total);
+        return buf;
+    }
     if (!s->contest || s->answer_model == SIZE_MAX)
         return how_predicted(s);
     const uint64_t *at;
     const size_t *kept;
     size_t rounds = contest_rounds(s->contest, &at, &kept);
-    size_t in = rounds ? kept[rounds - 1] : contest_entrants(s->contest);
+    size_t entrants = contest_entrants(s->contest);
+    size_t in = rounds ? kept[rounds - 1] : entrants;
+    if (in >= entrants) {
+        snprintf(buf, cap, "measured over the run: the fastest of %zu candidates, every one run "
+                           "to the end", entrants);
+        return buf;
+    }
+    /* "2, 4, 8 and 16": the windows of records at which the halvings came. */
+    char when[160] = "";
+    uint64_t unit = contest_unit(s->contest), lead = contest_lead(s->contest);
+    for (size_t k = 0; k < rounds; k++) {
+        size_t used = strlen(when);
+        snprintf(when + used, sizeof when - used, "%s%llu",
+                 k == 0 ? "" : k + 1 == rounds ? " and " : ", ",
+                 (unsigned long long)((at[k] - lead) / unit));
+    }
     snprintf(buf, cap,
-             "measured over the run: the fastest of %zu candidates, %s%zu of them run to the end",
-             contest_entrants(s->contest),
-             rounds ? "the slower half dropped at 2, 4, 8, ... windows; " : "", in);
+             "measured over the run: the fastest of the %zu candidates that ran to the end; the "
+             "other %zu of %zu were dropped at %s windows, slower then, and not measured to the "
+             "end",
+             in, entrants - in, entrants, when);
     return buf;
 }
 
@@ -542,40 +633,42 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
     const emm_result *direct = find_result(res, nres, &direct_strategy);
     const emm_result *cache = find_result(res, nres, &cache_strategy);
     const emm_result *runner = NULL;
-    if (s->contest)
+    if (s->contest || s->ranked)
         runner = s->runner_model != SIZE_MAX ? find_result(res, nres, &s->mstrat[s->runner_model])
                                              : NULL;
     else if (s->has_wd && s->wd.has_runner_up)
         runner = find_result(res, nres, &s->wd.runner_up);
-    char how[200];
+    char how[400];
     if (chosen) {
         emm_strategy_format(&chosen->strategy, name, sizeof name);
         emm_strategy_words(&chosen->strategy, words, sizeof words);
         /* The other of a tie: the simulated runner-up, or the decision's
          * (not simulated with EMM_COMPARE=none). */
-        const emm_strategy *tied =
-            runner && runner != chosen
-                ? (emm_decide_is_tie(chosen->total, runner->total) ? &runner->strategy : NULL)
-            : !s->contest && s->has_wd && s->wd.tie && s->wd.has_runner_up ? &s->wd.runner_up
-                                                                          : NULL;
+        const emm_strategy *tied = NULL;
+        if (runner && runner != chosen)
+            tied = emm_decide_is_tie(chosen->total, runner->total) ? &runner->strategy : NULL;
+        else if (!s->contest && !s->ranked && s->has_wd && s->wd.tie && s->wd.has_runner_up)
+            tied = &s->wd.runner_up;
         if (tied) {
             char other[64];
             emm_strategy_format(tied, other, sizeof other);
             fprintf(out, "emm: answer: a tie between %s and %s (within %.0f%%: either will "
                          "do); %s named first (%s)\n",
                     name, other, EMM_DECIDE_TIE_MARGIN * 100, name,
-                    how_decided(s, how, sizeof how));
+                    how_decided(s, res, nres, how, sizeof how));
         } else {
-            fprintf(out, "emm: answer: %s (%s)\n", name, how_decided(s, how, sizeof how));
+            fprintf(out, "emm: answer: %s (%s)\n", name,
+                    how_decided(s, res, nres, how, sizeof how));
         }
         fprintf(out, "emm:   %s\n", words);
+        const char *over = session_window_only(s) ? " over the window" : "";
         if (direct && direct != chosen)
-            fprintf(out, "emm:   %s cycles, %s direct reads (%s cycles)\n",
-                    emm_grouped(chosen->total, num), versus(chosen->total, direct->total, vs,
-                                                            sizeof vs),
+            fprintf(out, "emm:   %s cycles%s, %s direct reads (%s cycles)\n",
+                    emm_grouped(chosen->total, num), over,
+                    versus(chosen->total, direct->total, vs, sizeof vs),
                     emm_grouped(direct->total, num2));
         else
-            fprintf(out, "emm:   %s cycles\n", emm_grouped(chosen->total, num));
+            fprintf(out, "emm:   %s cycles%s\n", emm_grouped(chosen->total, num), over);
         if (runner && runner != chosen) {
             emm_strategy_format(&runner->strategy, name, sizeof name);
             double d = chosen->total ? (double)runner->total / (double)chosen->total - 1 : 0;
@@ -583,7 +676,7 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
              * there than the answer lost on what the choice weighs: the
              * pattern's long run on this mesh (the window is cold). */
             const char *span = session_window_only(s) ? "over the window" : "over the run";
-            if (d < 0 && !s->contest && s->has_wd && s->wd.has_runner_up &&
+            if (d < 0 && !s->contest && !s->ranked && s->has_wd && s->wd.has_runner_up &&
                 s->wd.runner_margin > 0)
                 fprintf(out,
                         "emm:   runner-up %s: %s cycles (%.1f%% faster %s, which starts cold; "
@@ -607,6 +700,7 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
                     name, how_predicted(s), emm_grouped(pred->total, num),
                     (double)pred->total / (double)chosen->total);
         }
+        session_print_stall_lines(s, out);
     } else if (s->strategy_note[0]) {
         fprintf(out, "emm: no answer: the chosen strategy cannot be simulated: %s\n",
                 s->strategy_note);
@@ -637,9 +731,11 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
     else if (session_window_only(s))
         fprintf(out, "emm:   simulated: the profiling window only, %s accesses, %s element "
                      "accesses (the %s capture stops at the decision; its share of the run is "
-                     "unknown); the valgrind capture or an instrumented build (sancov) "
-                     "simulates the whole run\n",
-                emm_grouped(s->accesses, num), elems, emm_capture_name(s->capture));
+                     "unknown): the answer covers the window; for an answer over the whole run, "
+                     "capture all of it: emm run --capture valgrind -- %s ..., or a build with "
+                     "clang's sanitizer coverage (pkg-config emm-sancov) under --capture "
+                     "sancov\n",
+                emm_grouped(s->accesses, num), elems, emm_capture_name(s->capture), s->program);
     else
         fprintf(out, "emm:   simulated: the whole run from the frozen mesh on, %s accesses, %s "
                      "element accesses (the %s capture)\n",
@@ -732,6 +828,116 @@ emm_status session_write_csv(const session *s, emm_error *err)
         st = emm_outfile_commit(&o, "the profile", &e);
     }
     return st == EMM_OK ? EMM_OK : emm_fail(err, st, "%s: %s", session_source(s, EMM_CONFIG_PROFILE_DUMP), e.message);
+}
+
+/* A report with nothing simulated (docs/report.md "Nothing simulated"):
+ * the keys of a session's report, with no results, coverage.simulated
+ * "nothing" and coverage.reason. s (NULL when no session started) adds what
+ * was seen before the session stepped aside. */
+struct nothing_ctx {
+    const session *s;
+    const char *program, *why;
+    emm_capture capture;
+};
+
+static void nothing_extra(json_writer *w, void *ctx)
+{
+    const struct nothing_ctx *c = ctx;
+    const session *s = c->s;
+    json_key(w, "program");
+    json_string(w, c->program);
+    json_key(w, "capture");
+    json_string(w, emm_capture_name(c->capture));
+    json_key(w, "ended");
+    json_string(w, s && s->ended[0] ? s->ended : "exit");
+    json_key(w, "pattern");
+    json_null(w);
+    json_key(w, "strategy");
+    json_null(w);
+    json_key(w, "decision");
+    json_null(w);
+    json_key(w, "coverage");
+    json_begin_object(w);
+    json_key(w, "simulated");
+    json_string(w, "nothing");
+    json_key(w, "reason");
+    json_string(w, c->why);
+    json_key(w, "accesses");
+    json_u64(w, 0);
+    json_key(w, "element_accesses");
+    json_u64(w, 0);
+    json_key(w, "share");
+    json_null(w);
+    json_key(w, "loader_writes");
+    json_u64(w, s ? s->loader_writes : 0);
+    json_key(w, "window_records");
+    json_u64(w, s ? s->wreads + s->wwrites : 0);
+    json_end_object(w);
+    json_key(w, "mesh");
+    json_null(w);
+    json_key(w, "window");
+    json_null(w);
+    json_key(w, "profile");
+    json_null(w);
+    json_key(w, "phases_probed");
+    json_bool(w, false);
+    json_key(w, "phases");
+    json_begin_array(w);
+    json_end_array(w);
+}
+
+/* Whether the file at path was modified at or after *since: another
+ * process of the run wrote it after this one started. */
+static bool written_since(const char *path, const struct timespec *since)
+{
+    struct stat st;
+    if (!since || stat(path, &st) != 0)
+        return false;
+    return st.st_mtim.tv_sec > since->tv_sec ||
+           (st.st_mtim.tv_sec == since->tv_sec && st.st_mtim.tv_nsec >= since->tv_nsec);
+}
+
+static emm_status write_nothing(const char *path, const emm_machine *m,
+                                const struct nothing_ctx *c, const struct timespec *since,
+                                emm_error *err)
+{
+    if (written_since(path, since))
+        return EMM_OK;
+    return emm_report_write_extra(path, "", m, 0, NULL, NULL, 0, nothing_extra, (void *)c, err);
+}
+
+emm_status session_write_nothing(const session *s, emm_error *err)
+{
+    struct nothing_ctx c = {s, s->program, s->failure.message, s->capture};
+    emm_error e;
+    emm_status st = write_nothing(s->cfg.report, s->machine, &c, &s->started, &e);
+    if (st != EMM_OK)
+        return emm_fail(err, st, "%s: %s", session_source(s, EMM_CONFIG_REPORT), e.message);
+    return EMM_OK;
+}
+
+emm_status emm_session_report_nothing(const emm_config *cfg, const char *program,
+                                      emm_capture capture, const char *why,
+                                      const struct timespec *since, emm_error *err)
+{
+    if (!cfg->report[0])
+        return EMM_OK;
+    /* The machine in effect: the configured file's, when it can be read
+     * (it may be why nothing started), else the built-in one. */
+    emm_machine *m = NULL;
+    emm_error e;
+    emm_status st = emm_machine_new(&m, &e);
+    if (st == EMM_OK && cfg->machine[0] && emm_machine_load(m, cfg->machine, &e) != EMM_OK) {
+        emm_machine_free(m);
+        st = emm_machine_new(&m, &e);
+    }
+    struct nothing_ctx c = {NULL, program ? program : "program", why, capture};
+    if (st == EMM_OK)
+        st = write_nothing(cfg->report, m, &c, since, &e);
+    emm_machine_free(m);
+    const char *as = cfg->source[EMM_CONFIG_REPORT] ? cfg->source[EMM_CONFIG_REPORT]
+                                                    : emm_config_row_get(EMM_CONFIG_REPORT)->var;
+    return st == EMM_OK ? EMM_OK : emm_fail(err, st, "%s: %s", as, e.message);
 }
 
 emm_status session_write_report(const session *s, const emm_result *res,

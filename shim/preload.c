@@ -573,6 +573,7 @@ static void helper_start(void *ctx)
  * program runs untouched (or, with EMM_STRICT=1, does not run). */
 static void step_aside(const char *msg)
 {
+    emm_agent_report_nothing(&shim.config, shim.capture, program_invocation_short_name, msg);
     if (shim.config.strict) {
         shim_log("%s (EMM_STRICT=1: not running the program)", msg);
         _exit(SHIM_STRICT_EXIT);

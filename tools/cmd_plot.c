@@ -55,12 +55,12 @@ static void usage(FILE *out, const opts *o)
             "  breakdown   cycles per strategy, stacked by bucket (Figs. 6.1, 6.4, 6.6); with\n"
             "              more than %d results, the EMM layouts x fetch schemes at the best\n"
             "              EMM strategy's cell size\n"
-            "  compare     with more than %d results: direct, cache, cache@LAYOUT, the chosen\n"
-            "              strategy and the best EMM strategy (Figs. 6.3, 6.5, 6.8, 6.9)\n"
+            "  compare     with more than %d results: direct, cache, cache@LAYOUT, the answer\n"
+            "              (a session's) and the best EMM strategy (Figs. 6.3, 6.5, 6.8, 6.9)\n"
             "  transfer    total cycles against triangles per cell for each layout and fetch\n"
             "              scheme (Figs. 6.2, 6.7); needs two cell sizes of one of them\n"
             "  cells       the mesh's bounding box and each layout cell coloured by the bytes\n"
-            "              DMA moved for it, for the chosen strategy or else the best EMM one\n"
+            "              DMA moved for it, for the answer or else the best EMM strategy\n"
             "\n"
             "A figure the report has no data for is skipped with a note; the others are\n"
             "still drawn. Nothing is written unless every figure drawn succeeds.\n"
@@ -90,7 +90,7 @@ typedef struct plot_report {
     plot_result *r;
     size_t n, ran;
     const char *program;              /* NULL for a replay report */
-    const char *chosen;               /* the session's strategy, or NULL */
+    const char *chosen;               /* the session's answer (its "strategy"), or NULL */
     const jr_value *profile;          /* NULL when there is none */
 } plot_report;
 
@@ -686,7 +686,7 @@ static emm_status fig_breakdown(plot_ctx *c, const plot_report *rep, int *made_c
     if (rep->ran <= PLOT_MAX_BARS) {
         for (size_t i = 0; i < rep->n; i++)
             if (rep->r[i].ran)
-                label_bar(&bars[n++], &rep->r[i], &rep->r[i] == chosen ? " (chosen)" : NULL);
+                label_bar(&bars[n++], &rep->r[i], &rep->r[i] == chosen ? " (answer)" : NULL);
         snprintf(title, sizeof title, "%s: cycles per strategy", c->title);
         return fig_bars(c, "breakdown", title, bars, n, err);
     }
@@ -718,14 +718,14 @@ static emm_status fig_breakdown(plot_ctx *c, const plot_report *rep, int *made_c
                 snprintf(base, sizeof base, "cache@%s", emm_layout_name((emm_layout_kind)i));
             const plot_result *r = find(rep, base);
             if (r)
-                label_bar(&bars[n++], r, r == chosen ? " (chosen)" : NULL);
+                label_bar(&bars[n++], r, r == chosen ? " (answer)" : NULL);
             chosen_shown |= r && r == chosen;
         }
         if (chosen_shown)
             chosen = NULL; /* drawn in its place among the baselines */
     }
     if (chosen)
-        label_bar(&bars[n++], chosen, chosen == best ? " (chosen, best EMM)" : " (chosen)");
+        label_bar(&bars[n++], chosen, chosen == best ? " (answer, best EMM)" : " (answer)");
     if (best && best != chosen)
         label_bar(&bars[n++], best, " (best EMM)");
     if (n == 0)
@@ -949,7 +949,7 @@ static emm_status make_figures(plot_ctx *c, const plot_report *rep, const char *
                                emm_error *err)
 {
     const plot_result *cells_r = NULL;
-    const char *why = "chosen";
+    const char *why = "the answer";
     int made = 0;
     emm_status st;
 

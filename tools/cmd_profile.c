@@ -152,7 +152,8 @@ static emm_status window_profile(const emm_trace_info *info, const emm_trace_rec
 struct profile_args {
     machine_cli mc;
     const char *trace, *table, *dump, *json, *learn, *pattern;
-    uint64_t window, finalists;
+    uint64_t window;
+    unsigned finalists;
     double threshold;
     int simulate;
 };
@@ -165,7 +166,7 @@ static int profile(void *p)
     uint64_t window = a->window;
     double threshold = a->threshold;
     int simulate = a->simulate;
-    unsigned finalists = (unsigned)a->finalists;
+    unsigned finalists = a->finalists;
     emm_strategy answer;
     int has_answer = 0;
     /* The user table: --table, else $EMM_TABLE; one to learn into may be new. */
@@ -270,10 +271,17 @@ static int profile(void *p)
         char best[96], other[96] = "";
         emm_strategy_format(&cr.answer.strategy, best, sizeof best);
         printf("predicted: %s\n", strat);
-        printf("contest:   %zu candidates over the whole trace (%llu records), the slower half\n"
-               "           dropped at 2, 4, 8, ... windows of %zu records after the leading\n"
-               "           sweep's %zu: %zu finalists\n",
-               cr.entrants, (unsigned long long)cr.accesses, n - skip, skip, cr.finalists);
+        if (cr.finalists < cr.entrants)
+            printf("contest:   %zu candidates over the whole trace (%llu records), the slower half\n"
+                   "           dropped at 2, 4, 8, ... windows of %zu records after the leading\n"
+                   "           sweep's %zu: %zu ran to the end, %zu were dropped (not measured\n"
+                   "           to the end)\n",
+                   cr.entrants, (unsigned long long)cr.accesses, n - skip, skip, cr.finalists,
+                   cr.entrants - cr.finalists);
+        else
+            printf("contest:   %zu candidates over the whole trace (%llu records), every one run\n"
+                   "           to the end\n",
+                   cr.entrants, (unsigned long long)cr.accesses);
         printf("strategy:  %s\n", best);
         printf("run:       %s %llu cycles\n", best, (unsigned long long)cr.answer.total);
         if (cr.has_runner_up) {
@@ -341,6 +349,21 @@ done:
     return rc;
 }
 
+/* --finalists: EMM_FINALISTS's row of the configuration table parses it, so
+ * that emm profile holds the contest emm run would (a count, or all). */
+static bool finalists_option(void *dst, const char *as, const char *value)
+{
+    emm_config c;
+    emm_error err;
+    emm_config_init(&c);
+    if (emm_config_set(&c, EMM_CONFIG_FINALISTS, value, as, 0, &err) != EMM_OK) {
+        cli_bad_value(CMD, &err);
+        return false;
+    }
+    *(unsigned *)dst = c.finalists;
+    return true;
+}
+
 int emm_cmd_profile(int argc, char **argv)
 {
     struct profile_args a = {.pattern = "user", .window = EMM_PROFILE_DEFAULT_WINDOW,
@@ -357,11 +380,12 @@ int emm_cmd_profile(int argc, char **argv)
          .show_default = true, .help = "novelty threshold on the nearest distance"},
         {.name = "--simulate", .kind = OPT_FLAG, .dst = &a.simulate,
          .help = "simulate the sweep on the window even when not novel"},
-        {.name = "--finalists", .metavar = "N", .kind = OPT_U64, .dst = &a.finalists, .max = 64,
-         .show_default = true,
+        {.name = "--finalists", .metavar = "N", .kind = OPT_CALL, .dst = &a.finalists,
+         .call = finalists_option,
          .help = "the run's contest, as emm run holds it: every candidate from the trace's "
                  "start, the slower half dropped at 2, 4, 8, ... windows until N remain; the "
-                 "fastest over the trace is the answer; 0: the window's prediction stands"},
+                 "fastest of those that ran to the end is the answer; all: none is dropped; 0: "
+                 "the window's prediction stands (default 4)"},
         {.name = "--learn", .metavar = "NAME", .kind = OPT_TEXT, .dst = &a.learn,
          .help = "when the sweep ran, append the profile as sample NAME with the sweep's best "
                  "strategy to the user table (--table or $EMM_TABLE, created when missing)"},

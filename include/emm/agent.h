@@ -163,7 +163,8 @@ EMM_API const emm_agent_filter *emm_agent_filter_of(const emm_agent *a);
 /* ---- the end, fork ------------------------------------------------------- */
 
 /* Finishes once: the summary on stderr (EMM_LOG), the outputs, the lines
- * about rules that selected nothing; in list mode the site listing. Takes
+ * about rules that selected nothing; in list mode the site listing (and
+ * the report, when one is asked for, says nothing was simulated). Takes
  * the lock (a caller in a signal handler must know no thread of its own
  * holds it). Later calls do nothing. */
 EMM_API void emm_agent_finish(emm_agent *a);
@@ -176,6 +177,14 @@ EMM_API void emm_agent_finish_signal(emm_agent *a, int sig);
 EMM_API void emm_agent_lock(emm_agent *a);
 EMM_API void emm_agent_unlock(emm_agent *a);
 EMM_API void emm_agent_forked(emm_agent *a);
+
+/* The shim stepped aside before a session could start (`why`: the line it
+ * printed): when c names a report, it is written with nothing simulated
+ * and that reason (emm_session_report_nothing, without `since`: no other
+ * process of the run can have written one yet); a report that cannot be
+ * written is one line on stderr (c->log >= 1). */
+EMM_API void emm_agent_report_nothing(const emm_config *c, emm_capture capture,
+                                      const char *program, const char *why);
 
 /* Whether the program's main object imports `symbol` (the api backend's
  * test for a program written against emm_mesh_*). */

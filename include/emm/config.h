@@ -249,6 +249,10 @@ typedef enum emm_config_key {
 /* Candidates that run to the end of the run to confirm the window's
  * prediction when EMM_FINALISTS is unset (docs/profile.md "The contest"). */
 #define EMM_CONFIG_DEFAULT_FINALISTS 4u
+/* EMM_FINALISTS=all: every candidate runs to the end of the run, none is
+ * dropped (the answer is then the fastest of all of them over the run, at
+ * the cost of simulating every one: as EMM_COMPARE=all). */
+#define EMM_CONFIG_FINALISTS_ALL 0xffffffffu
 /* The most events a timeline holds (EMM_TIMELINE, emm replay --timeline):
  * about 50 MB of JSON, what Perfetto's UI and chrome://tracing open. */
 #define EMM_TIMELINE_MAX_EVENTS 500000u
@@ -268,7 +272,8 @@ typedef struct emm_config {
     int has_strategy;             /* EMM_STRATEGY given: no decision */
     emm_strategy strategy;
     emm_compare compare;          /* EMM_COMPARE */
-    unsigned finalists;           /* EMM_FINALISTS: 0, the window's prediction stands */
+    unsigned finalists;           /* EMM_FINALISTS: 0, the window's prediction stands;
+                                     EMM_CONFIG_FINALISTS_ALL, none is dropped */
     int phases;                   /* EMM_PHASES: probe the run for phases after the window */
     char machine[EMM_CONFIG_PATH_MAX];      /* EMM_MACHINE; "": built-in */
     char table[EMM_CONFIG_PATH_MAX];        /* EMM_TABLE; "": the shipped table only */

@@ -30,6 +30,7 @@
 #include <stdio.h>
 
 #include <stdint.h>
+#include <time.h>
 
 #include "emm/common.h"
 #include "emm/config.h"
@@ -158,9 +159,11 @@ EMM_API emm_status emm_session_decide_rest(emm_session *s, emm_error *err);
 /* Ends the session: decides if the window never filled, writes the summary
  * to `summary` (NULL: none; nothing at log 0), the JSON report, the CSV and
  * the trace, each whole or not at all (a temporary file renamed into place).
- * When the session had stepped aside, the summary says why (so the caller
- * need not print err again) and the failure is returned; no file is
- * written. An output that cannot be written is named in one line on
+ * When the session had stepped aside, or nothing was simulated (no access
+ * to a tagged array was seen), the summary says why (so the caller need
+ * not print err again) and the failure is returned; the report, when one
+ * is asked for, is written with the reason and no results (docs/report.md
+ * "Nothing simulated"), and no other file. An output that cannot be written is named in one line on
  * `summary` (log >= 1) and the first such failure is returned. A second call
  * does nothing and returns EMM_OK.
  *
@@ -180,6 +183,19 @@ EMM_API emm_status emm_session_finish_ended(emm_session *s, FILE *summary, const
                                             emm_error *err);
 
 EMM_API void emm_session_free(emm_session *s);
+
+/* A run in which nothing was simulated and no session could say so (the
+ * shim stepped aside, list mode): when c->report names a file, writes the
+ * JSON report of docs/report.md with no results, coverage.simulated
+ * "nothing" and coverage.reason `why` (program and capture as given),
+ * whole or not at all. With `since` (CLOCK_REALTIME_COARSE; NULL: always),
+ * a report file modified since then is left as it is: another process of
+ * the run (the program a wrapper such as timeout(1) started) wrote it, and
+ * "nothing" is no answer to put over it. EMM_OK without a report path, or
+ * when left; else the writer's error, naming the setting. */
+EMM_API emm_status emm_session_report_nothing(const emm_config *c, const char *program,
+                                              emm_capture capture, const char *why,
+                                              const struct timespec *since, emm_error *err);
 
 /* In a child the program forked: the session is the parent's. A session in
  * another process (config.server) lets go of its connection; every later

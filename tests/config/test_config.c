@@ -188,6 +188,19 @@ int main(void)
     CHECKF(strncmp(err.message, "--tag='garbage': ", 17) == 0, "%s", err.message);
     CHECK(emm_config_set(&e, EMM_CONFIG_COMPARE, "all", "--compare", 1, &err) == EMM_OK);
     CHECK(e.compare == EMM_COMPARE_ALL && strcmp(e.source[EMM_CONFIG_COMPARE], "--compare") == 0);
+    /* --finalists all: none dropped; written back as typed (the server's
+     * start frame carries it so). */
+    char text[16];
+    CHECK(emm_config_set(&e, EMM_CONFIG_FINALISTS, "all", "--finalists", 1, &err) == EMM_OK);
+    CHECK(e.finalists == EMM_CONFIG_FINALISTS_ALL);
+    CHECK(emm_config_format(&e, EMM_CONFIG_FINALISTS, text, sizeof text) &&
+          strcmp(text, "all") == 0);
+    CHECK(emm_config_set(&e, EMM_CONFIG_FINALISTS, "65", "--finalists", 1, &err) ==
+          EMM_ERR_INVALID);
+    CHECKF(strcmp(err.message, "--finalists='65': expected a count from 0 to 64, or all") == 0,
+           "%s", err.message);
+    CHECK(emm_config_set(&e, EMM_CONFIG_FINALISTS, "8", "--finalists", 1, &err) == EMM_OK);
+    CHECK(e.finalists == 8);
 
     FILE *devnull = fopen("/dev/null", "w");
     if (devnull) {

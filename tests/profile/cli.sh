@@ -83,6 +83,17 @@ has profile-contest out.txt "^predicted: cache, [0-9]* cycles over the trace, [0
 has json walk.json '"predicted": "cache"'
 check bad-finalists 2 "$EMM" profile walk.emmt --finalists 65
 has bad-finalists err.txt "finalists"
+# --finalists all: none is dropped, so the answer is the fewest cycles of
+# every candidate over the trace, as emm replay --all counts them.
+check profile-all 0 "$EMM" profile walk.emmt --table user.txt --set cache.present=1 --finalists all
+has profile-all out.txt "^contest: *$sweep candidates over the whole trace (.*), every one run$"
+answer=$(sed -n 's/^run: *\([^ ]*\) \([0-9]*\) cycles$/\1 \2/p' out.txt)
+"$EMM" replay walk.emmt --all --set cache.present=1 --json all.json --quiet || fail=1
+best=$(python3 -c "
+import json
+r = [x for x in json.load(open('all.json'))['results'] if 'cycles' in x]
+print(min(x['cycles']['total'] for x in r))")
+[ "${answer#* }" = "$best" ] || { echo "FAIL profile-all: answer $answer, the fewest cycles of replay --all $best"; fail=1; }
 has json walk.json '"pattern": "walk"'
 has csv walk.csv "^i,D$"
 lines=$(wc -l < walk.csv)

@@ -617,9 +617,29 @@ static void test_contest(void)
     fclose(sum);
     printf("%s", text);
     size_t entrants = offered_candidates();
-    char fastest[96];
-    snprintf(fastest, sizeof fastest, "(measured over the run: the fastest of %zu candidates",
-             entrants);
+    /* The answer is called the fastest of those that ran to the end; the
+     * others are counted as dropped, each named in the report. */
+    char *rj = slurp("contest.json");
+    REQUIRE(rj && strstr(rj, "\"ran_to_end\": "));
+    size_t ran = (size_t)strtoull(strstr(rj, "\"ran_to_end\": ") + 14, NULL, 10);
+    const char *dropped = strstr(rj, "\"dropped\": [");
+    size_t named = 0;
+    for (const char *q = dropped; q && (q = strstr(q + 1, "\"strategy\"")) &&
+                                  q < strstr(dropped, "]");)
+        named++;
+    free(rj);
+    CHECKF(ran >= 1 && ran <= entrants && named == entrants - ran, "%zu ran, %zu named", ran,
+           named);
+    char fastest[200];
+    if (ran == entrants)
+        snprintf(fastest, sizeof fastest,
+                 "(measured over the run: the fastest of %zu candidates, every one run to the end",
+                 entrants);
+    else
+        snprintf(fastest, sizeof fastest,
+                 "(measured over the run: the fastest of the %zu candidates that ran to the end; "
+                 "the other %zu of %zu were dropped at ",
+                 ran, entrants - ran, entrants);
     CHECKF(has(text, fastest), "%s", fastest);
 
     /* The same contest over the same records, from the trace. */
@@ -675,6 +695,64 @@ static void test_contest(void)
     CHECK(seen >= 4); /* the answer, direct, and the other finalists */
     printf("contest: %s, %llu cycles (direct predicted: %llu)\n", want,
            (unsigned long long)cr.answer.total, (unsigned long long)cr.predicted.total);
+    free(json);
+}
+
+/* EMM_FINALISTS=all: no candidate is dropped, every one is in the report's
+ * results over the whole run, and the answer is the fewest cycles among
+ * them (the cache is a reference on this machine). */
+static void test_contest_all(void)
+{
+    emm_error err;
+    emm_session *s;
+    write_table("table.txt", "direct", 0);
+    emm_session_config c = base_config();
+    tcfg.finalists = EMM_CONFIG_FINALISTS_ALL;
+    strcpy(tcfg.report, "contest-all.json");
+    remove("contest-all.json");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    CHECK(feed(s, 300, 0) == 1);
+    FILE *sum = fopen("contest-all.txt", "w+");
+    REQUIRE(sum);
+    CHECKF(emm_session_finish(s, sum, &err) == EMM_OK, "%s", err.message);
+    emm_session_free(s);
+    char text[8192] = "";
+    rewind(sum);
+    CHECK(fread(text, 1, sizeof text - 1, sum) > 0);
+    fclose(sum);
+    tcfg.finalists = EMM_CONFIG_DEFAULT_FINALISTS;
+    size_t entrants = offered_candidates();
+    char line[160];
+    snprintf(line, sizeof line,
+             "(measured over the run: the fastest of %zu candidates, every one run to the end",
+             entrants);
+    CHECKF(has(text, line), "%s", text);
+    char *json = slurp("contest-all.json");
+    REQUIRE(json);
+    CHECK(has(json, "\"finalists\": \"all\"") && has(json, "\"dropped\": []"));
+    snprintf(line, sizeof line, "\"ran_to_end\": %zu", entrants);
+    CHECK(has(json, line));
+    /* The answer is results[0]; no candidate's total is below it. */
+    const char *p = strstr(json, "\"results\"");
+    const char *end = p ? strstr(p, "\"program\"") : NULL;
+    REQUIRE(p && end);
+    const char *t = strstr(p, "\"total\": ");
+    REQUIRE(t && t < end);
+    uint64_t answer = strtoull(t + 9, NULL, 10);
+    size_t seen = 0;
+    while ((p = strstr(p, "\"strategy\": \"")) && p < end) {
+        p += 13;
+        t = strstr(p, "\"total\": ");
+        const char *next = strstr(p, "\"strategy\": \"");
+        if (!t || t > end || (next && t > next))
+            continue; /* one that could not run: no cycles */
+        if (strncmp(p, "cache", 5) != 0) {
+            CHECKF(strtoull(t + 9, NULL, 10) >= answer, "%.40s", p);
+            seen++;
+        }
+    }
+    CHECKF(seen + 1 >= entrants - 8, "%zu candidates in the results of %zu", seen, entrants);
     free(json);
 }
 
@@ -768,7 +846,12 @@ static void test_bad_geometry(void)
     CHECK(fread(text, 1, sizeof text - 1, sum) > 0);
     fclose(sum);
     CHECKF(has(text, "no simulation") && has(text, "vertex index"), "%s", text);
-    CHECK(access("bad.json", F_OK) != 0);
+    /* The report says nothing was simulated, and why. */
+    char *bad = slurp("bad.json");
+    CHECKF(bad && has(bad, "\"simulated\": \"nothing\"") && has(bad, "\"results\": []") &&
+               has(bad, "vertex index"),
+           "%s", bad ? bad : "no bad.json");
+    free(bad);
     emm_session_free(s);
 }
 
@@ -790,10 +873,13 @@ static void test_tags(void)
     uint64_t lo[4], hi[4];
     CHECK(emm_session_ranges(s, lo, hi, 4) == 1 && hi[0] == vbase + nv * VSTRIDE);
     /* The last vertex array leaves before the window is full: the session
-     * asks for the decision now, on the array's fields copied as it left. */
+     * asks for the decision now, on the array's fields copied as it left
+     * (the access before it is simulated; the one after, to an array no
+     * longer tagged, is not). */
+    emm_raw_access x = {vbase + 8, 8, 0, 0};
+    CHECK(emm_session_access(s, &x, 1) == EMM_SESSION_PROFILING);
     CHECK(emm_session_untag(s, vmem) == EMM_SESSION_DECIDE);
     CHECK(emm_session_ranges(s, lo, hi, 4) == 0);
-    emm_raw_access x = {vbase + 8, 8, 0, 0};
     emm_session_access(s, &x, 1);
     CHECK(emm_session_decide(s, &err) == EMM_OK);
     CHECK(emm_session_finish(s, NULL, &err) == EMM_OK);
@@ -1040,7 +1126,8 @@ static void test_axes(void)
     for (int v = 0; v < 4; v++)
         CHECK(xyz[3 * v] == x2[v] && xyz[3 * v + 1] == y2[v] && xyz[3 * v + 2] == 0);
 
-    /* Counts that disagree: one line naming both rules, no report. */
+    /* Counts that disagree: one line naming both rules; the report says
+     * nothing was simulated, and why. */
     static float y3[3] = {0, 0, 1};
     remove("axes.json");
     s = new_tagged("vertices:x=0:f32;vertices:y=0:f32", NULL, "axes.json");
@@ -1055,7 +1142,10 @@ static void test_axes(void)
                          "the y block at ") &&
                has(text, "with 3: the counts disagree") && !strchr(strchr(text, '\n') + 1, '\n'),
            "%s", text);
-    CHECK(access("axes.json", F_OK) != 0);
+    char *axes = slurp("axes.json");
+    CHECKF(axes && has(axes, "\"simulated\": \"nothing\"") && has(axes, "the counts disagree"),
+           "%s", axes ? axes : "no axes.json");
+    free(axes);
     emm_session_free(s);
 
     /* A y that is no coordinate: the y block is refused, by its rule. */
@@ -1084,6 +1174,7 @@ int main(void)
     test_window_not_filled();
     test_novel();
     test_contest();
+    test_contest_all();
     test_compare_all();
     test_iterations();
     test_report_whole_or_absent();

@@ -3,9 +3,10 @@
 #   sh silent.sh SHIM WORKDIR CASE PROGRAM [ARGS...]
 # CASE inlined:  site=load_mesh on a build where load_mesh is inlined into
 #                main: the rule says it matched nothing and names the sites
-#                seen, and nothing is simulated.
+#                seen, and nothing is simulated (the report says so, and why).
 # CASE stride:   a 48-byte stride for 40-byte records selects the triangle
-#                block as vertices: refused in one line (rule, block, why).
+#                block as vertices: refused in one line (rule, block, why),
+#                and in the report, which has nothing simulated.
 # CASE realloc:  a loader that grows its arrays with realloc: the window
 #                does not close at the first realloc, the vertices counted
 #                are the program's (not the capacity), a decision is made.
@@ -25,7 +26,9 @@ inlined)
   expect_err inlined '^emm: EMM_TAG rule 1 \(vertices:site=load_mesh,stride=12,xyz=0:f32\) matched no allocation; sites seen, closest first: '
   expect_err inlined 'a function the compiler inlined is no frame of the stack'
   expect_err inlined 'no vertex array was tagged'
-  [ ! -e "$EMM_REPORT" ] || fail "inlined: a report was written, so something was simulated"
+  [ "$(report "r['coverage']['simulated'], r['results']")" = "nothing []" ] ||
+    fail "inlined: the report does not say nothing was simulated"
+  report "r['coverage']['reason']" | grep -q 'no vertex array was tagged' || fail "inlined: the report's reason"
   grep '^emm: EMM_TAG rule 1' "$WORK/inlined.shim.err"
   ;;
 stride)
@@ -33,7 +36,9 @@ stride)
   run_both stride "$@"
   expect_err stride '^emm: .*EMM_TAG rule 1 \(vertices:site=load_records,stride=48,xyz=0:f64\): the block at 0x[0-9a-f]+ \(7500 records of 48 bytes\) is refused: vertex 0 has x = .*, not a coordinate'
   [ "$(grep -c 'refused' "$WORK/stride.shim.err")" -eq 1 ] || fail "stride: not one line"
-  [ ! -e "$EMM_REPORT" ] || fail "stride: a report was written, so the block was simulated"
+  [ "$(report "r['coverage']['simulated'], r['results']")" = "nothing []" ] ||
+    fail "stride: the report does not say nothing was simulated"
+  report "r['coverage']['reason']" | grep -q 'is refused: vertex 0 has x = ' || fail "stride: the report's reason"
   grep 'refused' "$WORK/stride.shim.err"
   ;;
 realloc)

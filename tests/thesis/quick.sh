@@ -2,7 +2,8 @@
 # bench/thesis --quick --calibrate on a 2,000-face mesh: it must finish, print
 # the table of each of Figs. 6.1-6.9, exactly one REPRODUCED / NOT REPRODUCED
 # verdict for each of the 5 claims (and a summary that counts them), the
-# profiler's choice for each workload, and the calibration's grid and outcome.
+# profiler's choice for each workload, the contest's halving against every
+# candidate, and the calibration's grid and outcome.
 # The verdicts themselves are not checked: they are the model's findings.
 # Usage: quick.sh BENCH_THESIS BUILD_DIR WORK_DIR
 set -eu
@@ -29,6 +30,8 @@ sum=$(grep -E '^[0-5] of 5 claims reproduced$' "$out" | awk '{ s += $1 } END { p
 for w in "short curves" "long curves" "region growing" "random access"; do
   grep -Eq "^  $w +[a-z-]+ +[a-z]" "$out" || no "no profiler choice for $w"
 done
+grep -Eq '^  halving missed the best in [0-4] of 4 workloads; mean regret ' "$out" ||
+  no "no line on the contest's halving against every candidate"
 grep -Eq '^  16 +125 ' "$out" || no "calibration grid incomplete"
 grep -Eq '^  (fitted|NOT FITTED): ' "$out" || no "no calibration outcome"
 for f in curves-short curves-long region random; do
