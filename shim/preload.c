@@ -624,6 +624,8 @@ __attribute__((constructor(101))) static void shim_init(void)
     char msg[1024];
     emm_error err;
     resolve();
+    if (!emm_agent_enter(program_invocation_short_name))
+        return; /* a helper, a symbolizer: not entered */
     shim_busy++;
     shim.ops = &list_ops;
     emm_config_init(&shim.config);

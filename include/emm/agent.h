@@ -73,6 +73,37 @@ typedef struct emm_agent_config {
                                      cannot start, here. NULL: here */
 } emm_agent_config;
 
+/* ---- the process tree ---------------------------------------------------- */
+
+/* Two variables of emm run's and the shim's own, not settings (the
+ * configuration table holds those): each is set and taken out of the
+ * environment by emm and never read from the user.
+ *
+ * EMM_AGENT_READY_VAR, "FD:PID": emm run started the program as process PID
+ * with FD the write end of a pipe. The shim in that process writes one byte
+ * there and closes it, so that emm run can tell a program the shim never
+ * loaded into (statically linked, set-user-ID: the loader preloads nothing
+ * into them) and say so.
+ * EMM_AGENT_ROOT_VAR: the pid of the program, the first process of the tree
+ * the shim loaded into (emm run clears it for the program it starts). A
+ * process of another pid is one the program started (an exec'd tool): it
+ * says nothing unless it tagged an array. */
+#define EMM_AGENT_READY_VAR "EMM_RUN_READY"
+#define EMM_AGENT_ROOT_VAR "EMM_SHIM_ROOT"
+
+/* Programs the shim never enters, by the start of their name
+ * (llvm-symbolizer-14 is llvm-symbolizer): symbolizers, which a sanitizer
+ * runtime or a crash handler starts to print a stack; none is the
+ * program's work. emm run keeps Valgrind out of them too. */
+#define EMM_AGENT_HELPERS(X) X("llvm-symbolizer") X("llvm-addr2line") X("addr2line") \
+    X("eu-addr2line")
+
+/* The shim's first call, before it reads any setting: answers emm run
+ * (EMM_AGENT_READY_VAR) and marks the tree's root (EMM_AGENT_ROOT_VAR).
+ * Returns 0 when `program` (the executable's name) is one of
+ * EMM_AGENT_HELPERS: the shim then stays out of the process, silent. */
+EMM_API int emm_agent_enter(const char *program);
+
 /* Starts the session (or, in list mode, the site table) and opens the
  * unwinder when a rule uses site= or the mode lists sites. On failure err
  * says why in one line and *out is NULL: the caller steps aside. */
@@ -163,7 +194,9 @@ EMM_API const emm_agent_filter *emm_agent_filter_of(const emm_agent *a);
 /* ---- the end, fork ------------------------------------------------------- */
 
 /* Finishes once: the summary on stderr (EMM_LOG), the outputs, the lines
- * about rules that selected nothing; in list mode the site listing. Takes
+ * about rules that selected nothing; in list mode the site listing. A
+ * process the program started (EMM_AGENT_ROOT_VAR) that tagged or listed
+ * nothing prints none of these but with EMM_LOG=2. Takes
  * the lock (a caller in a signal handler must know no thread of its own
  * holds it). Later calls do nothing. */
 EMM_API void emm_agent_finish(emm_agent *a);
