@@ -41,6 +41,7 @@
 #include "emm/session.h"
 
 #define SHIM_NAME "libemmshim.so"
+#define HOOKS_NAME "libemmhooks.so"
 #define VGTOOL_NAME "emm/valgrind/emm-amd64-linux"
 
 static void usage(FILE *out, const opts *o)
@@ -56,8 +57,11 @@ static void usage(FILE *out, const opts *o)
             "A summary goes to stderr at exit; PROGRAM's output and exit status are its own.\n"
             "emm run waits for PROGRAM and ends as it did. When the shim could not load into\n"
             "it (a statically linked or set-user-ID program), it runs untouched and emm run\n"
-            "says so in one line. Programs PROGRAM starts get the shim too; one that tags\n"
-            "nothing says nothing (--verbose: what it did), and symbolizers are not entered.\n"
+            "says so in one line (so does a program the loader could not start). Programs\n"
+            "PROGRAM starts get the shim too; one that tags nothing says nothing (--verbose:\n"
+            "what it did), and symbolizers are not entered. This emm's library directory\n"
+            "goes first in LD_LIBRARY_PATH: a program built against an emm (emm-sancov.pc,\n"
+            "emm_sancov_executable) finds its libraries there even after the install moved.\n"
             "\n"
             "Options (each sets its EMM_* variable; %%p in a FILE becomes the process id):\n");
     emm_config_help(out, 1);
@@ -273,6 +277,26 @@ static const char *get_env(const char *name)
     return getenv(name);
 }
 
+/* Puts `value` first in the colon-separated list of variable `name`;
+ * returns setenv's result (-1 with errno on failure). */
+static int prepend_env(const char *name, const char *value)
+{
+    const char *old = getenv(name);
+    size_t len = strlen(value) + (old ? strlen(old) + 1 : 0) + 1;
+    char *list = malloc(len);
+    if (!list) {
+        errno = ENOMEM;
+        return -1;
+    }
+    if (old && *old)
+        snprintf(list, len, "%s:%s", value, old);
+    else
+        snprintf(list, len, "%s", value);
+    int rc = setenv(name, list, 1);
+    free(list);
+    return rc;
+}
+
 /* ---- starting the program and waiting for it ------------------------------- */
 
 /* The program, while emm run waits for it. */
@@ -321,8 +345,8 @@ static int end_as(int status)
     return 128 + sig; /* a signal that does not end a process by default */
 }
 
-/* Why the shim did not load into the program at `path`. */
-static const char *why_not_loaded(const struct program_file *pf)
+/* Why the shim did not load into the program, which ended with `status`. */
+static const char *why_not_loaded(const struct program_file *pf, int status)
 {
     if (pf->elf && !pf->loader)
         return "it is statically linked, and only the dynamic loader preloads the shim "
@@ -330,6 +354,10 @@ static const char *why_not_loaded(const struct program_file *pf)
     if (pf->setid)
         return "it is set-user-ID or set-group-ID, and the loader preloads nothing from a "
                "path into such a program (run a copy without the bit)";
+    /* The loader's own status when a library is missing: it said why. */
+    if (pf->loader && WIFEXITED(status) && WEXITSTATUS(status) == 127)
+        return "the dynamic loader could not start it (exit status 127: a library it needs "
+               "was not found, its message is above)";
     return "the loader did not preload libemmshim.so into it";
 }
 
@@ -399,7 +427,8 @@ static int run_program(const char *file, char **av, bool search, const char *sho
         return e == ENOENT ? 127 : 126;
     }
     if (!answered && say)
-        cli_error("run: %s ran without emm, nothing captured: %s", shown, why_not_loaded(pf));
+        cli_error("run: %s ran without emm, nothing captured: %s", shown,
+                  why_not_loaded(pf, status));
     return end_as(status);
 no_pipe:
     cli_error("run: cannot make a pipe: %s", strerror(errno));
@@ -502,21 +531,18 @@ int emm_cmd_run(int argc, char **argv)
             cli_error("run: cannot find %s; tried %s", SHIM_NAME, tried);
             return EMM_EXIT_FAIL;
         }
-        const char *old = getenv("LD_PRELOAD");
-        size_t len = strlen(shim) + (old ? strlen(old) + 1 : 0) + 1;
-        char *preload = malloc(len);
-        if (!preload) {
-            cli_error("run: out of memory");
-            free(shim);
-            return EMM_EXIT_FAIL;
-        }
-        if (old && *old)
-            snprintf(preload, len, "%s:%s", shim, old);
-        else
-            snprintf(preload, len, "%s", shim);
+        bad |= prepend_env("LD_PRELOAD", shim);
         free(shim);
-        bad |= setenv("LD_PRELOAD", preload, 1);
-        free(preload);
+    }
+    /* This emm's libdir goes first in LD_LIBRARY_PATH: a program built
+     * against an emm (libemmhooks.so, libemm.so) finds the libraries of
+     * the emm that runs it, whatever run path its build recorded — an
+     * install moved since, or another one (docs/design.md "Processes"). */
+    char tried[4096], *hooks = find_beside(HOOKS_NAME, tried, sizeof tried);
+    if (hooks) {
+        *strrchr(hooks, '/') = '\0';
+        bad |= prepend_env("LD_LIBRARY_PATH", hooks);
+        free(hooks);
     }
     for (int k = 0; k < EMM_CONFIG_COUNT; k++)
         if (values[k])

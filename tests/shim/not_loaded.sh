@@ -4,9 +4,9 @@
 # preloading captures, --list-sites and the valgrind capture, and a
 # set-user-ID copy of a dynamic one when the system honours the bit. A
 # program the shim did load gets no such line; --quiet says nothing.
-#   sh not_loaded.sh SHIM WORKDIR EMM STATIC DYNAMIC
+#   sh not_loaded.sh SHIM WORKDIR EMM STATIC DYNAMIC NEEDS_LIB
 . "$(dirname "$0")/lib.sh"
-EMM=$1 STATIC=$2 DYNAMIC=$3
+EMM=$1 STATIC=$2 DYNAMIC=$3 NEEDS_LIB=$4
 # check NAME PATTERN EMM_RUN_ARGS...: status 3, stdout as natively, and
 # exactly one line of emm run, matching PATTERN ("" for none).
 check() {
@@ -50,4 +50,13 @@ if [ "$(id -u)" = 0 ] && id nobody >/dev/null 2>&1; then
     echo "set-user-ID: not honoured here (nosuid?): skipped"
   fi
 fi
+# A program the loader cannot start (a library it needs is not found): the
+# loader's own message, then emm run's line saying so, and status 127.
+"$EMM" run --capture api -- "$NEEDS_LIB" > "$WORK/needs.out" 2> "$WORK/needs.err"; rc=$?
+cat "$WORK/needs.err"
+[ $rc = 127 ] || fail "needs-lib: exit status $rc, not 127"
+grep -q 'error while loading shared libraries' "$WORK/needs.err" || fail "needs-lib: no message from the loader"
+[ "$(grep -c '^emm: ' "$WORK/needs.err")" = 1 ] || fail "needs-lib: not one line from emm"
+grep -q "^emm: run: $NEEDS_LIB ran without emm, nothing captured: the dynamic loader could not start it (exit status 127" \
+  "$WORK/needs.err" || fail "needs-lib: emm run's line does not say the loader could not start it"
 echo "not_loaded: ok"
