@@ -299,7 +299,7 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
                                  NULL};
         st = emm_session_new(&sc, &a->session, err);
         if (st != EMM_OK && sc.server) {
-            if (a->cfg.log >= 2)
+            if (a->cfg.log >= 2 && !a->child)
                 emm_agent_say("the session runs in the program: %s", err->message);
             sc.server = NULL;
             st = emm_session_new(&sc, &a->session, err);
@@ -309,14 +309,21 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
             agent_free(a);
             return st;
         }
-        if (sc.server && a->cfg.log >= 2)
+        if (sc.server && a->cfg.log >= 2 && !a->child)
             emm_agent_say("the session runs natively in its own process, %s", sc.server);
         a->min_block = a->rules ? agent_rules_min(a->rules) : SIZE_MAX;
     }
     a->state = EMM_SESSION_PROFILING;
-    if (a->cfg.log >= 2) {
-        emm_agent_say("libemmshim.so in %s (pid %ld%s), capture %s", a->program, (long)getpid(),
-                      a->child ? ", started by the program" : "", emm_capture_name(a->capture));
+    /* A process the program started says one line under --verbose: the
+     * settings are the program's, already shown; its end says more only
+     * when it tagged an array. */
+    if (a->cfg.log >= 2 && a->child) {
+        emm_agent_say("libemmshim.so in %s (pid %ld, started by the program), capture %s: "
+                      "silent unless it tags an array",
+                      a->program, (long)getpid(), emm_capture_name(a->capture));
+    } else if (a->cfg.log >= 2) {
+        emm_agent_say("libemmshim.so in %s (pid %ld), capture %s", a->program, (long)getpid(),
+                      emm_capture_name(a->capture));
         FILE *f = say_stream();
         if (f) {
             emm_config_dump(&a->cfg, f);
@@ -789,7 +796,7 @@ static void agent_finish(emm_agent *a, const char *ended)
     __atomic_store_n(&a->active, 0, __ATOMIC_RELEASE);
     /* A tool the program ran (/bin/echo, a compiler) that tagged nothing is
      * none of the answer: the program's own lines say what was found. */
-    bool quiet = a->child && !a->tagged_total && !a->listed && a->cfg.log < 2;
+    bool quiet = a->child && !a->tagged_total && !a->listed;
     if (a->sites) { /* list mode: the candidate arrays, nothing simulated */
         FILE *f = quiet ? NULL : say_stream();
         if (f) {
@@ -803,7 +810,7 @@ static void agent_finish(emm_agent *a, const char *ended)
         a->hooks.before_decide();
     if (a->cfg.log >= 1 && a->rules && !quiet)
         agent_rules_report(a->rules, say_line, NULL);
-    if (a->cfg.log >= 2) {
+    if (a->cfg.log >= 2 && !quiet) {
         for (size_t i = 0; i < a->ntags; i++)
             emm_agent_say("at exit: %s at %p, %zu records of %zu bytes", kind_name(a->tags[i].kind),
                       (void *)a->tags[i].base, a->tags[i].bytes / a->tags[i].stride,

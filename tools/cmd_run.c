@@ -59,7 +59,7 @@ static void usage(FILE *out, const opts *o)
             "it (a statically linked or set-user-ID program), it runs untouched and emm run\n"
             "says so in one line (so does a program the loader could not start). Programs\n"
             "PROGRAM starts get the shim too; one that tags nothing says nothing (--verbose:\n"
-            "what it did), and symbolizers are not entered. This emm's library directory\n"
+            "one line), and symbolizers are not entered. This emm's library directory\n"
             "goes first in LD_LIBRARY_PATH: a program built against an emm (emm-sancov.pc,\n"
             "emm_sancov_executable) finds its libraries there even after the install moved.\n"
             "\n"

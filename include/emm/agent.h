@@ -196,7 +196,8 @@ EMM_API const emm_agent_filter *emm_agent_filter_of(const emm_agent *a);
 /* Finishes once: the summary on stderr (EMM_LOG), the outputs, the lines
  * about rules that selected nothing; in list mode the site listing. A
  * process the program started (EMM_AGENT_ROOT_VAR) that tagged or listed
- * nothing prints none of these but with EMM_LOG=2. Takes
+ * nothing prints none of these, whatever EMM_LOG (under EMM_LOG=2 it said
+ * one line as it started). Takes
  * the lock (a caller in a signal handler must know no thread of its own
  * holds it). Later calls do nothing. */
 EMM_API void emm_agent_finish(emm_agent *a);
