@@ -6,8 +6,9 @@
 # 1. Wall-time ratio of `curve_tracing.sancov --long` on a 1,000,000-face
 #    mesh under libemmshim.so (EMM_COMPARE=baselines: the chosen strategy,
 #    direct and cache simulated over the whole run) to the plain build's
-#    native run. Median of 3 runs each. Target: at most 5x (Cachegrind runs
-#    20-100x slower than native, DynamoRIO's cache simulator 15-100x).
+#    native run, and the same of CPU times. Median of 3 runs each.
+#    Target: at most 5x (Cachegrind runs 20-100x slower than native,
+#    DynamoRIO's cache simulator 15-100x).
 # 2. The cost of one access captured by EMM_CAPTURE=fault (a page fault and a
 #    single step, then the session): the plain build under fault capture with
 #    a window of 50,000 element accesses; its time beyond the native run's,
@@ -47,29 +48,51 @@ fi
 [ -n "${EMM_STRATEGY:-}" ] && export EMM_STRATEGY
 
 now() { date +%s%N; }
+TIME=
+[ -x /usr/bin/time ] && TIME=/usr/bin/time
 # median3 CMD...: runs CMD three times (stdout to $TMP/out, stderr to
-# $TMP/err) and prints the median wall time in seconds.
+# $TMP/err) and prints the median wall time and the median CPU time (user +
+# system, all threads; "-" without /usr/bin/time) in seconds. The CPU time
+# moves less when other work shares the machine.
 median3() {
   for i in 1 2 3; do
     t0=$(now)
-    "$@" > "$TMP/out" 2> "$TMP/err" || { cat "$TMP/err" >&2; echo "shim_overhead: $* failed" >&2; exit 1; }
-    echo $(( $(now) - t0 ))
-  done | sort -n | sed -n 2p | awk '{ printf "%.3f\n", $1 / 1e9 }'
+    if [ -n "$TIME" ]; then
+      "$TIME" -f '%U %S' -o "$TMP/cpu" "$@" > "$TMP/out" 2> "$TMP/err"
+    else
+      "$@" > "$TMP/out" 2> "$TMP/err"
+    fi || { cat "$TMP/err" >&2; echo "shim_overhead: $* failed" >&2; exit 1; }
+    wall=$(( $(now) - t0 ))
+    cpu=-
+    [ -n "$TIME" ] && cpu=$(tail -1 "$TMP/cpu" | awk '{ printf "%.3f", $1 + $2 }')
+    echo "$wall $cpu"
+  done > "$TMP/times"
+  w=$(awk '{ print $1 }' "$TMP/times" | sort -n | sed -n 2p | awk '{ printf "%.3f", $1 / 1e9 }')
+  c=$(awk '{ print $2 }' "$TMP/times" | sort -n | sed -n 2p)
+  echo "$w $c"
 }
 
-native=$(median3 env -u LD_PRELOAD "$PLAIN" --long "$MESH") || exit 1
+# shellcheck disable=SC2046 # two words: the wall and the CPU time
+set -- $(median3 env -u LD_PRELOAD "$PLAIN" --long "$MESH") || exit 1
+native=$1 native_cpu=$2
 cp "$TMP/out" "$TMP/native.out"
-hooks=$(median3 env -u LD_PRELOAD "$SANCOV" --long "$MESH") || exit 1
-shim=$(median3 env LD_PRELOAD="$SHIM" EMM_COMPARE=baselines "$SANCOV" --long "$MESH") || exit 1
+# shellcheck disable=SC2046
+set -- $(median3 env -u LD_PRELOAD "$SANCOV" --long "$MESH") || exit 1
+hooks=$1 hooks_cpu=$2
+# shellcheck disable=SC2046
+set -- $(median3 env LD_PRELOAD="$SHIM" EMM_COMPARE=baselines "$SANCOV" --long "$MESH") || exit 1
+shim=$1 shim_cpu=$2
 cmp -s "$TMP/out" "$TMP/native.out" || echo "WARNING: stdout under the shim differs from the native run"
 echo "the last run's summary:"
 sed 's/^/  /' "$TMP/err"
-echo "curve_tracing --long, 1,000,000 faces (median of 3 wall times):"
-echo "  plain build, native:               ${native} s"
-echo "  instrumented build, native:        ${hooks} s (no-op hooks)"
-echo "  instrumented build under the shim: ${shim} s"
-awk -v s="$shim" -v n="$native" 'BEGIN { r = s / n;
-  printf "shim overhead: %.2fx the plain native run (target <= 5x: %s)\n", r, r <= 5 ? "met" : "NOT met" }'
+echo "curve_tracing --long, 1,000,000 faces (medians of 3):"
+printf '  %-36s %8s s wall %8s s cpu\n' "plain build, native:" "$native" "$native_cpu"
+printf '  %-36s %8s s wall %8s s cpu (no-op hooks)\n' "instrumented build, native:" "$hooks" "$hooks_cpu"
+printf '  %-36s %8s s wall %8s s cpu\n' "instrumented build under the shim:" "$shim" "$shim_cpu"
+awk -v s="$shim" -v n="$native" -v sc="$shim_cpu" -v nc="$native_cpu" 'BEGIN { r = s / n;
+  printf "shim overhead: %.2fx the plain native run", r
+  if (sc != "-" && nc > 0) printf " (cpu %.2fx)", sc / nc
+  printf " (target <= 5x: %s)\n", r <= 5 ? "met" : "NOT met" }'
 
 # fault capture: one window; the time beyond the native run per captured access.
 fault_run() { # WINDOW -> wall seconds; the report in $TMP/f$WINDOW.json

@@ -13,7 +13,9 @@
  *   backend's pages open, the valgrind tool told no ranges: the copy is not
  *   the program's access) and its tag side after.
  * - A fork's child goes quiet: no session, no report (the parent's report
- *   covers the run); an exec'd program starts its own session. */
+ *   covers the run); an exec'd program starts its own session, and says
+ *   nothing at its end when it tagged nothing (a tool the program runs is
+ *   none of its answer). Helpers, symbolizers, are not entered at all. */
 #include "emm/agent.h"
 
 #include <dlfcn.h>
@@ -69,6 +71,8 @@ struct emm_agent {
     int active;            /* atomic: not finished, not a forked child's */
     int finishing;         /* atomic: finish has begun */
     bool failed;           /* decide failed: stop feeding the session */
+    bool child;            /* a process the program started (EMM_AGENT_ROOT_VAR) */
+    uint64_t listed;       /* list mode: blocks noted */
     struct tag *tags;      /* ntags of them, ctags allocated */
     size_t ntags, ctags;
     uint64_t tagged_total; /* tag events, for the log */
@@ -199,6 +203,48 @@ size_t emm_agent_min_block(const emm_agent *a)
 
 /* ---- start-up --------------------------------------------------------------- */
 
+static bool is_helper(const char *program)
+{
+    static const char *const helpers[] = {
+#define HELPER_NAME(n) n,
+        EMM_AGENT_HELPERS(HELPER_NAME)
+#undef HELPER_NAME
+    };
+    for (size_t i = 0; program && i < sizeof helpers / sizeof *helpers; i++)
+        if (strncmp(program, helpers[i], strlen(helpers[i])) == 0)
+            return true;
+    return false;
+}
+
+int emm_agent_enter(const char *program)
+{
+    const char *ready = getenv(EMM_AGENT_READY_VAR);
+    if (ready) {
+        /* Only the process emm run started answers, and only into a pipe: a
+         * static program passes the variable on to what it runs, where the
+         * number may be another file's. */
+        char *end;
+        long fd = strtol(ready, &end, 10), pid = *end == ':' ? strtol(end + 1, NULL, 10) : 0;
+        struct stat st;
+        if (pid == (long)getpid() && fd > 2 && fd < 65536 && fstat((int)fd, &st) == 0 &&
+            S_ISFIFO(st.st_mode)) {
+            ssize_t w;
+            while ((w = write((int)fd, "1", 1)) < 0 && errno == EINTR) {
+            }
+            close((int)fd);
+        }
+        unsetenv(EMM_AGENT_READY_VAR);
+    }
+    if (is_helper(program))
+        return 0;
+    if (!getenv(EMM_AGENT_ROOT_VAR)) {
+        char pid[24];
+        snprintf(pid, sizeof pid, "%ld", (long)getpid());
+        setenv(EMM_AGENT_ROOT_VAR, pid, 1);
+    }
+    return 1;
+}
+
 static void agent_free(emm_agent *a)
 {
     if (!a)
@@ -233,6 +279,8 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
     pthread_mutex_init(&a->lock, NULL);
     clock_gettime(CLOCK_REALTIME_COARSE, &a->started);
     a->capture = c->capture;
+    const char *root = getenv(EMM_AGENT_ROOT_VAR);
+    a->child = root && strtol(root, NULL, 10) != (long)getpid();
     if (c->hooks)
         a->hooks = *c->hooks;
     emm_status st = EMM_OK;
@@ -254,7 +302,7 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
                                  NULL};
         st = emm_session_new(&sc, &a->session, err);
         if (st != EMM_OK && sc.server) {
-            if (a->cfg.log >= 2)
+            if (a->cfg.log >= 2 && !a->child)
                 emm_agent_say("the session runs in the program: %s", err->message);
             sc.server = NULL;
             st = emm_session_new(&sc, &a->session, err);
@@ -264,14 +312,21 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
             agent_free(a);
             return st;
         }
-        if (sc.server && a->cfg.log >= 2)
+        if (sc.server && a->cfg.log >= 2 && !a->child)
             emm_agent_say("the session runs natively in its own process, %s", sc.server);
         a->min_block = a->rules ? agent_rules_min(a->rules) : SIZE_MAX;
     }
     a->state = EMM_SESSION_PROFILING;
-    if (a->cfg.log >= 2) {
+    /* A process the program started says one line under --verbose: the
+     * settings are the program's, already shown; its end says more only
+     * when it tagged an array. */
+    if (a->cfg.log >= 2 && a->child) {
+        emm_agent_say("libemmshim.so in %s (pid %ld, started by the program), capture %s: "
+                      "silent unless it tags an array",
+                      a->program, (long)getpid(), emm_capture_name(a->capture));
+    } else if (a->cfg.log >= 2) {
         emm_agent_say("libemmshim.so in %s (pid %ld), capture %s", a->program, (long)getpid(),
-                  emm_capture_name(a->capture));
+                      emm_capture_name(a->capture));
         FILE *f = say_stream();
         if (f) {
             emm_config_dump(&a->cfg, f);
@@ -612,8 +667,10 @@ void emm_agent_allocated(emm_agent *a, int rule, void *p, size_t size, void *map
         for (int k = 0; k < n; k++)
             path = (path ^ ip[k]) * 1099511628211ull;
         pthread_mutex_lock(&a->lock);
-        if (a->active)
+        if (a->active) {
             emm_sites_add(a->sites, path, name, (size_t)n, p, size);
+            a->listed++;
+        }
         pthread_mutex_unlock(&a->lock);
     }
 }
@@ -725,10 +782,15 @@ static void report_nothing(const emm_config *c, emm_capture capture, const char 
         emm_agent_say("%s", err.message);
 }
 
-void emm_agent_report_nothing(const emm_config *c, emm_capture capture, const char *program,
-                              const char *why)
+void emm_agent_step_aside(const emm_config *c, emm_capture capture, const char *program,
+                          const char *why)
 {
     report_nothing(c, capture, program, why, NULL);
+    if (c->strict) {
+        emm_agent_say("%s (EMM_STRICT=1: not running the program)", why);
+        _exit(EMM_AGENT_STRICT_EXIT);
+    }
+    emm_agent_say("%s", why);
 }
 
 void emm_agent_finish(emm_agent *a)
@@ -755,8 +817,11 @@ static void agent_finish(emm_agent *a, const char *ended)
         return;
     }
     __atomic_store_n(&a->active, 0, __ATOMIC_RELEASE);
+    /* A tool the program ran (/bin/echo, a compiler) that tagged nothing is
+     * none of the answer: the program's own lines say what was found. */
+    bool quiet = a->child && !a->tagged_total && !a->listed;
     if (a->sites) { /* list mode: the candidate arrays, nothing simulated */
-        FILE *f = say_stream();
+        FILE *f = quiet ? NULL : say_stream();
         if (f) {
             emm_sites_print(a->sites, a->program, f);
             fclose(f);
@@ -770,9 +835,9 @@ static void agent_finish(emm_agent *a, const char *ended)
     }
     if (a->hooks.before_decide)
         a->hooks.before_decide();
-    if (a->cfg.log >= 1 && a->rules)
+    if (a->cfg.log >= 1 && a->rules && !quiet)
         agent_rules_report(a->rules, say_line, NULL);
-    if (a->cfg.log >= 2) {
+    if (a->cfg.log >= 2 && !quiet) {
         for (size_t i = 0; i < a->ntags; i++)
             emm_agent_say("at exit: %s at %p, %zu records of %zu bytes", kind_name(a->tags[i].kind),
                       (void *)a->tags[i].base, a->tags[i].bytes / a->tags[i].stride,
@@ -783,7 +848,7 @@ static void agent_finish(emm_agent *a, const char *ended)
     ranges_changed_locked(a);
     /* The summary already says why a session had nothing to simulate, and
      * names each output that could not be written. */
-    FILE *f = a->cfg.log >= 1 ? say_stream() : NULL;
+    FILE *f = a->cfg.log >= 1 && !quiet ? say_stream() : NULL;
     emm_session_finish_ended(a->session, f, ended, NULL);
     if (f)
         fclose(f);

@@ -745,6 +745,9 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
                 s->ended);
     if (work_charged(s))
         print_compute(out, s);
+    char remote[256];
+    if (s->ntarrays && emm_machine_remote_warning(s->machine, &s->info, remote, sizeof remote))
+        fprintf(out, "emm:   %s\n", remote);
     if (s->pick_note[0])
         fprintf(out, "emm:   %s\n", s->pick_note);
     if (s->vertex_only)

@@ -6,6 +6,8 @@ set -euo pipefail
 
 packages=(
   cmake make gcc g++ clang pkg-config   # the build (gcc and clang both supported)
+  libc6-dev                             # the C library, libc.a too: tests/shim links a
+                                        # program statically (emm run's line for it)
   libclang-rt-14-dev                    # libFuzzer's runtime (tests/fuzz, make fuzz, make check-asan)
   libqhull-dev                          # Delaunay triangulation for the mesh generator
   libunwind-dev                         # call-site names for the shim's tag rules

@@ -569,16 +569,10 @@ static void helper_start(void *ctx)
     shim_busy++;
 }
 
-/* A bad EMM_* value or a session that cannot start: one line, then the
- * program runs untouched (or, with EMM_STRICT=1, does not run). */
+/* A bad EMM_* value or a session that cannot start (emm_agent_step_aside). */
 static void step_aside(const char *msg)
 {
-    emm_agent_report_nothing(&shim.config, shim.capture, program_invocation_short_name, msg);
-    if (shim.config.strict) {
-        shim_log("%s (EMM_STRICT=1: not running the program)", msg);
-        _exit(SHIM_STRICT_EXIT);
-    }
-    shim_log("%s", msg);
+    emm_agent_step_aside(&shim.config, shim.capture, program_invocation_short_name, msg);
 }
 
 /* The backend EMM_CAPTURE names; for auto, the first of the list that
@@ -625,6 +619,8 @@ __attribute__((constructor(101))) static void shim_init(void)
     char msg[1024];
     emm_error err;
     resolve();
+    if (!emm_agent_enter(program_invocation_short_name))
+        return; /* a helper, a symbolizer: not entered */
     shim_busy++;
     shim.ops = &list_ops;
     emm_config_init(&shim.config);

@@ -22,8 +22,6 @@
 #define SHIM_TLS __attribute__((tls_model("initial-exec")))
 #define SHIM_HIDDEN __attribute__((visibility("hidden")))
 #define SHIM_API __attribute__((visibility("default")))
-/* The exit status of a program stopped by EMM_STRICT=1. */
-#define SHIM_STRICT_EXIT 125
 #define SHIM_TBUF_CAP 1024 /* records per thread buffer before a flush */
 
 struct shim_tbuf {

@@ -119,27 +119,28 @@ static void cl_destroy(emm_model *model)
 static const struct emm_model_ops cache_layout_ops = {cl_run, cl_reset, cl_result, cl_destroy,
                                                       NULL,   NULL,     NULL};
 
-/* Where the image starts: where the program's mesh arrays started, unless
- * that overlaps another array, then past every array (4 KiB aligned, as a
- * fresh allocation would be). */
-static uint64_t image_base(const emm_trace_info *trace, uint32_t varray, uint32_t tarray,
-                           uint64_t image_bytes)
+/* Where the image starts: where the mesh arrays start (`base`: each
+ * array's address, as the models place them), unless that overlaps another
+ * array, then past every array (4 KiB aligned, as a fresh allocation would
+ * be). */
+static uint64_t image_base(const emm_trace_info *trace, const uint64_t *where, uint32_t varray,
+                           uint32_t tarray, uint64_t image_bytes)
 {
     uint64_t base = UINT64_MAX, end_all = 0;
     if (varray != NO_ARRAY)
-        base = trace->arrays[varray].base;
-    if (tarray != NO_ARRAY && trace->arrays[tarray].base < base)
-        base = trace->arrays[tarray].base;
+        base = where[varray];
+    if (tarray != NO_ARRAY && where[tarray] < base)
+        base = where[tarray];
     base &= ~(uint64_t)4095;
     int clash = 0;
     for (uint32_t a = 0; a < trace->narrays; a++) {
         const emm_trace_array *x = &trace->arrays[a];
-        uint64_t end = x->base + x->count * x->record_size;
+        uint64_t end = where[a] + x->count * x->record_size;
         if (end > end_all)
             end_all = end;
         if (a == varray || a == tarray || x->count == 0)
             continue;
-        if (x->base < base + image_bytes && base < end)
+        if (where[a] < base + image_bytes && base < end)
             clash = 1;
     }
     return clash ? (end_all + 4095) & ~(uint64_t)4095 : base;
@@ -232,7 +233,10 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
         goto fail;
     }
 
-    uint64_t base = image_base(trace, m->varray, m->tarray, emm_layout_image_bytes(l));
+    if ((st = emm_addr_map_init(&m->map, trace, err)) != EMM_OK)
+        goto fail;
+    uint64_t base =
+        image_base(trace, m->map.base, m->varray, m->tarray, emm_layout_image_bytes(l));
     for (size_t t = 0; t < nt; t++) {
         m->tri_addr[t] = base + emm_layout_triangle_address(l, (uint32_t)t, 0);
         m->tri_cell[t] = emm_layout_triangle_index(l, (uint32_t)t).cell;
@@ -263,8 +267,6 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
     emm_model_share_release(share, l);
     l = NULL;
 
-    if ((st = emm_addr_map_init(&m->map, trace, err)) != EMM_OK)
-        goto fail;
     if ((st = emm_cache_init(&m->cache, p, err)) != EMM_OK)
         goto fail;
     m->cur_cell = EMM_LAYOUT_NONE;

@@ -43,7 +43,7 @@ static const struct key_desc keys[] = {
      KEY_SIZE, P(local_bytes), K(256), 1, G(64)},
     {{"local.cycles", "cycles", "one local store access; also the local access of a cache miss (thesis 3.2)", "1"},
      KEY_COUNT, P(local_cycles), 1, 0, 1000000},
-    {{"remote.bytes", "bytes", "remote store size; larger data is simulated with a warning (thesis 6.1)", "6M"},
+    {{"remote.bytes", "bytes", "remote store size; a mesh larger than it is simulated, with a warning naming both (thesis 6.1)", "6M"},
      KEY_SIZE, P(remote_bytes), M(6), 1, G(1024)},
     {{"direct.cycles_per_word", "cycles", "one word read directly from remote memory", "32"},
      KEY_COUNT, P(direct_cycles_per_word), 32, 0, 1000000},
@@ -423,6 +423,25 @@ emm_status emm_machine_validate(const emm_machine *m, emm_error *err)
                         (unsigned long long)p->cache_bytes,
                         (unsigned long long)(p->cache_bytes / (p->cache_line * p->cache_assoc)));
     return EMM_OK;
+}
+
+int emm_machine_remote_warning(const emm_machine *m, const emm_trace_info *trace, char *msg,
+                               size_t cap)
+{
+    uint64_t bytes = 0;
+    msg[0] = '\0';
+    for (uint32_t i = 0; i < trace->narrays; i++)
+        if (trace->arrays[i].kind != EMM_ARRAY_RAW)
+            bytes += trace->arrays[i].count * trace->arrays[i].record_size;
+    if (bytes <= m->p.remote_bytes)
+        return 0;
+    char have[32], want[32], key[32];
+    emm_machine_format(m, "remote.bytes", key, sizeof key);
+    snprintf(msg, cap,
+             "the mesh's arrays take %s bytes, more than the machine's remote store of %s "
+             "(remote.bytes = %s): simulated as if they fitted",
+             emm_grouped(bytes, have), emm_grouped(m->p.remote_bytes, want), key);
+    return 1;
 }
 
 uint64_t emm_machine_dma_cycles(const emm_machine *m, uint64_t bytes)

@@ -19,11 +19,12 @@ emm_status emm_addr_map_init(emm_addr_map *map, const emm_trace_info *trace, emm
         emm_addr_map_free(map);
         return emm_fail(err, EMM_ERR_NOMEM, "model: out of memory");
     }
-    for (uint32_t i = 0; i < n; i++) {
-        map->base[i] = trace->arrays[i].base;
+    for (uint32_t i = 0; i < n; i++)
         map->size[i] = trace->arrays[i].record_size;
-    }
-    return EMM_OK;
+    emm_status st = n ? emm_trace_place(trace, map->base, err) : EMM_OK;
+    if (st != EMM_OK)
+        emm_addr_map_free(map);
+    return st;
 }
 
 void emm_addr_map_free(emm_addr_map *map)

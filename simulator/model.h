@@ -37,7 +37,9 @@ struct emm_model {
 };
 
 /* Where each array's records start and how long they are, for turning a
- * record into its original address: base[a] + element * size[a] + offset. */
+ * record into its address: base[a] + element * size[a] + offset, with the
+ * arrays placed by emm_trace_place (the same every run, whatever the
+ * program's own addresses were). */
 typedef struct emm_addr_map {
     uint32_t narrays;
     uint64_t *base;

@@ -77,6 +77,20 @@ static double pct(uint64_t part, uint64_t whole)
     return whole ? 100.0 * (double)part / (double)whole : 0.0;
 }
 
+/* A mesh larger than the machine's remote store: one line on stderr
+ * (docs/machine.md, remote.bytes). */
+static void warn_remote(const char *trace, const emm_machine *m)
+{
+    emm_trace_reader *r;
+    emm_error err;
+    char msg[256];
+    if (emm_trace_reader_open(trace, &r, &err) != EMM_OK)
+        return;
+    if (emm_machine_remote_warning(m, emm_trace_reader_info(r), msg, sizeof msg))
+        fprintf(stderr, "emm replay: %s: %s\n", trace, msg);
+    emm_trace_reader_close(r);
+}
+
 static void print_table(const char *trace, uint64_t accesses, const emm_machine *m,
                         const emm_result *res, size_t n)
 {
@@ -273,6 +287,8 @@ static int replay_main(struct replay_args *a, emm_strategy *strategies, emm_resu
     }
     if (pctx.on)
         fprintf(stderr, "\r\033[K");
+    if (!quiet)
+        warn_remote(trace, m);
     if (ropt.timeline) {
         emm_status ts = emm_timeline_close(ropt.timeline, NULL, results[0].total, &err);
         if (ts == EMM_OK && !quiet) {

@@ -1,9 +1,16 @@
 /* emm run: runs a program under libemmshim.so (docs/design.md "The shim and the session").
  *
- * It only prepares the environment: the shim found beside this executable
- * goes first in LD_PRELOAD, each option becomes its EMM_* variable, and the
- * program replaces this process (exec), so its exit status — or the signal
- * that ended it — is the status the caller sees, unchanged.
+ * It prepares the environment — the shim found beside this executable goes
+ * first in LD_PRELOAD, each option becomes its EMM_* variable — starts the
+ * program and waits for it, and ends as the program did: its exit status,
+ * or the signal that ended it raised again, is the status the caller sees.
+ * It waits so that a program the shim never loaded into (statically linked,
+ * set-user-ID: the loader preloads nothing) is not silently left
+ * unanalysed: the shim answers on a pipe when it loads (emm/agent.h,
+ * EMM_AGENT_READY_VAR), and without an answer emm run says so in one line.
+ * While it waits, SIGINT and SIGQUIT (which the terminal sends the program
+ * too) are ignored, and SIGTERM, SIGHUP, SIGUSR1 and SIGUSR2 are passed on
+ * to the program.
  *
  * Under --capture valgrind (and for --capture auto, a binary that neither
  * links emm's coverage hooks nor calls emm, when Valgrind and emm's tool are
@@ -15,19 +22,26 @@
 #include <dirent.h>
 #include <elf.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <limits.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "cli.h"
 #include "infile.h"
 #include "opts.h"
+#include "emm/agent.h"
 #include "emm/config.h"
 #include "emm/session.h"
 
 #define SHIM_NAME "libemmshim.so"
+#define HOOKS_NAME "libemmhooks.so"
 #define VGTOOL_NAME "emm/valgrind/emm-amd64-linux"
 
 static void usage(FILE *out, const opts *o)
@@ -41,6 +55,13 @@ static void usage(FILE *out, const opts *o)
             "profiled, a strategy is chosen from the strategy table, and the whole run is\n"
             "simulated under that strategy and the baselines (direct reads, the cache).\n"
             "A summary goes to stderr at exit; PROGRAM's output and exit status are its own.\n"
+            "emm run waits for PROGRAM and ends as it did. When the shim could not load into\n"
+            "it (a statically linked or set-user-ID program), it runs untouched and emm run\n"
+            "says so in one line (so does a program the loader could not start). Programs\n"
+            "PROGRAM starts get the shim too; one that tags nothing says nothing (--verbose:\n"
+            "one line), and symbolizers are not entered. This emm's library directory\n"
+            "goes first in LD_LIBRARY_PATH: a program built against an emm (emm-sancov.pc,\n"
+            "emm_sancov_executable) finds its libraries there even after the install moved.\n"
             "\n"
             "Options (each sets its EMM_* variable; %%p in a FILE becomes the process id):\n");
     emm_config_help(out, 1);
@@ -163,15 +184,24 @@ static bool elf_offset(const Elf64_Phdr *ph, size_t nph, uint64_t v, uint64_t *o
     return false;
 }
 
-/* Whether the program at `path` captures its own accesses: a dynamically
- * linked 64-bit ELF that needs libemmhooks.so (a sancov build) or libemm.so
- * (emm_tag_* calls, the mesh interface). Anything unreadable counts as
- * unmodified. */
-static bool links_emm(const char *path)
+/* What emm run reads of the program's file. */
+struct program_file {
+    bool elf;       /* a 64-bit ELF that could be read */
+    bool loader;    /* it names a dynamic loader (PT_INTERP): LD_PRELOAD applies */
+    bool setid;     /* set-user-ID or set-group-ID: the loader ignores LD_PRELOAD paths */
+    bool links_emm; /* it needs libemmhooks.so (a sancov build) or libemm.so (emm_tag_*
+                       calls, the mesh interface): it captures its own accesses */
+};
+
+/* The program at `path`; anything unreadable is an unmodified program. */
+static void read_program(const char *path, struct program_file *pf)
 {
+    memset(pf, 0, sizeof *pf);
+    struct stat st;
+    pf->setid = stat(path, &st) == 0 && (st.st_mode & (S_ISUID | S_ISGID));
     FILE *f = emm_infile_fopen(path, "program", NULL);
     if (!f)
-        return false;
+        return;
     bool found = false;
     Elf64_Ehdr eh;
     Elf64_Phdr ph[64];
@@ -180,6 +210,9 @@ static bool links_emm(const char *path)
         eh.e_phnum == 0 || eh.e_phnum > 64 ||
         !read_at(f, (long)eh.e_phoff, ph, eh.e_phnum * sizeof *ph))
         goto out;
+    pf->elf = true;
+    for (size_t i = 0; i < eh.e_phnum; i++)
+        pf->loader |= ph[i].p_type == PT_INTERP;
     for (size_t i = 0; i < eh.e_phnum && !found; i++) {
         if (ph[i].p_type != PT_DYNAMIC)
             continue;
@@ -205,7 +238,7 @@ static bool links_emm(const char *path)
     }
 out:
     fclose(f);
-    return found;
+    pf->links_emm = found;
 }
 
 /* How the program will run under Valgrind: the tool's directory and the
@@ -242,6 +275,164 @@ static emm_capture valgrind_capture(void)
 static const char *get_env(const char *name)
 {
     return getenv(name);
+}
+
+/* Puts `value` first in the colon-separated list of variable `name`;
+ * returns setenv's result (-1 with errno on failure). */
+static int prepend_env(const char *name, const char *value)
+{
+    const char *old = getenv(name);
+    size_t len = strlen(value) + (old ? strlen(old) + 1 : 0) + 1;
+    char *list = malloc(len);
+    if (!list) {
+        errno = ENOMEM;
+        return -1;
+    }
+    if (old && *old)
+        snprintf(list, len, "%s:%s", value, old);
+    else
+        snprintf(list, len, "%s", value);
+    int rc = setenv(name, list, 1);
+    free(list);
+    return rc;
+}
+
+/* ---- starting the program and waiting for it ------------------------------- */
+
+/* The program, while emm run waits for it. */
+static volatile sig_atomic_t program_pid;
+
+static void pass_on(int sig)
+{
+    if (program_pid > 0)
+        kill((pid_t)program_pid, sig);
+}
+
+/* The signals a supervisor may send emm run meaning the program. */
+static const int passed_on[] = {SIGTERM, SIGHUP, SIGUSR1, SIGUSR2};
+/* The terminal's, which the program (in the same process group) gets
+ * anyway: emm run ignores them, as system() and time(1) do. */
+static const int ignored[] = {SIGINT, SIGQUIT};
+
+static void set_handler(int sig, void (*fn)(int))
+{
+    struct sigaction act;
+    memset(&act, 0, sizeof act);
+    act.sa_handler = fn;
+    act.sa_flags = SA_RESTART;
+    sigemptyset(&act.sa_mask);
+    sigaction(sig, &act, NULL);
+}
+
+/* Ends this process as the program ended: its exit status, or the signal
+ * that ended it raised again (without a second core dump). */
+static int end_as(int status)
+{
+    if (WIFEXITED(status))
+        return WEXITSTATUS(status);
+    if (!WIFSIGNALED(status))
+        return EMM_EXIT_FAIL;
+    int sig = WTERMSIG(status);
+    struct rlimit none = {0, 0};
+    setrlimit(RLIMIT_CORE, &none);
+    fflush(NULL);
+    signal(sig, SIG_DFL);
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, sig);
+    sigprocmask(SIG_UNBLOCK, &set, NULL);
+    raise(sig);
+    return 128 + sig; /* a signal that does not end a process by default */
+}
+
+/* Why the shim did not load into the program, which ended with `status`. */
+static const char *why_not_loaded(const struct program_file *pf, int status)
+{
+    if (pf->elf && !pf->loader)
+        return "it is statically linked, and only the dynamic loader preloads the shim "
+               "(link it dynamically)";
+    if (pf->setid)
+        return "it is set-user-ID or set-group-ID, and the loader preloads nothing from a "
+               "path into such a program (run a copy without the bit)";
+    /* The loader's own status when a library is missing: it said why. */
+    if (pf->loader && WIFEXITED(status) && WEXITSTATUS(status) == 127)
+        return "the dynamic loader could not start it (exit status 127: a library it needs "
+               "was not found, its message is above)";
+    return "the loader did not preload libemmshim.so into it";
+}
+
+/* Starts `file` with `av` (through PATH when `search`), waits for it and
+ * returns the status to end with. With `say`, when the shim did not answer
+ * from the program (emm/agent.h, EMM_AGENT_READY_VAR), one line names it
+ * as `shown` and says why. */
+static int run_program(const char *file, char **av, bool search, const char *shown,
+                       const struct program_file *pf, bool say)
+{
+    int ready[2], failed[2];
+    if (pipe2(ready, O_CLOEXEC) != 0)
+        goto no_pipe;
+    if (pipe2(failed, O_CLOEXEC) != 0) {
+        close(ready[0]);
+        close(ready[1]);
+        goto no_pipe;
+    }
+    fflush(NULL);
+    pid_t pid = fork();
+    if (pid == 0) {
+        /* The write end stays open in the program for the shim; the other
+         * pipe closes at exec, or carries exec's error. */
+        char v[64];
+        snprintf(v, sizeof v, "%d:%ld", ready[1], (long)getpid());
+        if (fcntl(ready[1], F_SETFD, 0) == 0 && setenv(EMM_AGENT_READY_VAR, v, 1) == 0) {
+            if (search)
+                execvp(file, av);
+            else
+                execv(file, av);
+        }
+        int e = errno;
+        ssize_t w = write(failed[1], &e, sizeof e);
+        (void)w;
+        _exit(e == ENOENT ? 127 : 126);
+    }
+    int e = errno;
+    close(ready[1]);
+    close(failed[1]);
+    if (pid < 0) {
+        close(ready[0]);
+        close(failed[0]);
+        cli_error("run: cannot start '%s': %s", file, strerror(e));
+        return EMM_EXIT_FAIL;
+    }
+    program_pid = pid;
+    for (size_t k = 0; k < sizeof passed_on / sizeof *passed_on; k++)
+        set_handler(passed_on[k], pass_on);
+    for (size_t k = 0; k < sizeof ignored / sizeof *ignored; k++)
+        set_handler(ignored[k], SIG_IGN);
+    ssize_t got;
+    e = 0;
+    while ((got = read(failed[0], &e, sizeof e)) < 0 && errno == EINTR) {
+    }
+    close(failed[0]);
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    program_pid = 0;
+    char byte;
+    bool answered = fcntl(ready[0], F_SETFL, O_NONBLOCK) == 0 && read(ready[0], &byte, 1) == 1;
+    close(ready[0]);
+    if (got == (ssize_t)sizeof e) {
+        /* As a shell does: 127 when the program is not found, 126 when it
+         * cannot run. */
+        cli_error("run: cannot run '%s': %s", file, strerror(e));
+        return e == ENOENT ? 127 : 126;
+    }
+    if (!answered && say)
+        cli_error("run: %s ran without emm, nothing captured: %s", shown,
+                  why_not_loaded(pf, status));
+    return end_as(status);
+no_pipe:
+    cli_error("run: cannot make a pipe: %s", strerror(errno));
+    return EMM_EXIT_FAIL;
 }
 
 /* The options as they are parsed, each by its row of the configuration
@@ -312,13 +503,16 @@ int emm_cmd_run(int argc, char **argv)
     /* Valgrind when asked, or for an unmodified binary under auto. */
     char launcher[PATH_MAX], program[PATH_MAX], why[8192];
     char *vgdir = NULL;
+    struct program_file pf = {0};
+    bool found = find_program(argv[i], program, sizeof program);
+    if (found)
+        read_program(program, &pf);
     if (emm_capture_caps(cfg.capture) & EMM_CAP_VALGRIND) {
         if (!(vgdir = valgrind_setup(launcher, sizeof launcher, why, sizeof why))) {
             cli_error("run: --capture valgrind is unavailable: %s", why);
             return EMM_EXIT_FAIL;
         }
-    } else if (cfg.capture == EMM_CAPTURE_AUTO && !cfg.list_sites &&
-               find_program(argv[i], program, sizeof program) && !links_emm(program)) {
+    } else if (cfg.capture == EMM_CAPTURE_AUTO && !cfg.list_sites && found && !pf.links_emm) {
         /* (--list-sites captures nothing: the preloaded shim suffices.) */
         vgdir = valgrind_setup(launcher, sizeof launcher, why, sizeof why);
     }
@@ -337,57 +531,54 @@ int emm_cmd_run(int argc, char **argv)
             cli_error("run: cannot find %s; tried %s", SHIM_NAME, tried);
             return EMM_EXIT_FAIL;
         }
-        const char *old = getenv("LD_PRELOAD");
-        size_t len = strlen(shim) + (old ? strlen(old) + 1 : 0) + 1;
-        char *preload = malloc(len);
-        if (!preload) {
-            cli_error("run: out of memory");
-            free(shim);
-            return EMM_EXIT_FAIL;
-        }
-        if (old && *old)
-            snprintf(preload, len, "%s:%s", shim, old);
-        else
-            snprintf(preload, len, "%s", shim);
+        bad |= prepend_env("LD_PRELOAD", shim);
         free(shim);
-        bad |= setenv("LD_PRELOAD", preload, 1);
-        free(preload);
+    }
+    /* This emm's libdir goes first in LD_LIBRARY_PATH: a program built
+     * against an emm (libemmhooks.so, libemm.so) finds the libraries of
+     * the emm that runs it, whatever run path its build recorded — an
+     * install moved since, or another one (docs/design.md "Processes"). */
+    char tried[4096], *hooks = find_beside(HOOKS_NAME, tried, sizeof tried);
+    if (hooks) {
+        *strrchr(hooks, '/') = '\0';
+        bad |= prepend_env("LD_LIBRARY_PATH", hooks);
+        free(hooks);
     }
     for (int k = 0; k < EMM_CONFIG_COUNT; k++)
         if (values[k])
             bad |= setenv(emm_config_row_get((emm_config_key)k)->var, values[k], 1);
+    /* The program is the root of its tree, even when emm run itself runs
+     * under a shim (emm/agent.h). */
+    bad |= unsetenv(EMM_AGENT_ROOT_VAR);
     if (bad) {
         cli_error("run: cannot set the environment: %s", strerror(errno));
         return EMM_EXIT_FAIL;
     }
-    fflush(NULL);
-    if (under_valgrind) {
-        /* valgrind --tool=emm -q --trace-children=yes PROGRAM ARGS...: exec'd
-         * programs are captured too, as LD_PRELOAD carries the shim for the
-         * other backends; not the session's own process, which runs
-         * natively beside the program (server/, runtime/session_proxy.c). */
-        static const char *const pre[] = {"valgrind", "--tool=emm", "-q", "--trace-children=yes",
-                                          "--trace-children-skip=*/emm-session"};
-        size_t np = sizeof pre / sizeof *pre, na = (size_t)(argc - i);
-        char **vargv = calloc(np + na + 1, sizeof *vargv);
-        if (!vargv) {
-            cli_error("run: out of memory");
-            return EMM_EXIT_FAIL;
-        }
-        for (size_t k = 0; k < np; k++)
-            vargv[k] = (char *)pre[k];
-        for (size_t k = 0; k < na; k++)
-            vargv[np + k] = argv[i + (int)k];
-        execv(launcher, vargv);
-        int e = errno;
-        cli_error("run: cannot run '%s': %s", launcher, strerror(e));
-        free(vargv);
-        return e == ENOENT ? 127 : 126;
+    bool say = cfg.log >= 1 && found;
+    if (!under_valgrind)
+        return run_program(argv[i], argv + i, true, argv[i], &pf, say);
+    /* valgrind --tool=emm -q --trace-children=yes PROGRAM ARGS...: exec'd
+     * programs are captured too, as LD_PRELOAD carries the shim for the
+     * other backends; not the session's own process, which runs natively
+     * beside the program (server/, runtime/session_proxy.c), nor the
+     * helpers the shim never enters (symbolizers). */
+    static const char *const pre[] = {"valgrind", "--tool=emm", "-q", "--trace-children=yes"};
+    char skip[512] = "--trace-children-skip=*/emm-session";
+#define SKIP_HELPER(n) strncat(skip, ",*/" n "*", sizeof skip - strlen(skip) - 1);
+    EMM_AGENT_HELPERS(SKIP_HELPER)
+#undef SKIP_HELPER
+    size_t np = sizeof pre / sizeof *pre, na = (size_t)(argc - i);
+    char **vargv = calloc(np + 1 + na + 1, sizeof *vargv);
+    if (!vargv) {
+        cli_error("run: out of memory");
+        return EMM_EXIT_FAIL;
     }
-    execvp(argv[i], argv + i);
-    /* As a shell does: 127 when the program is not found, 126 when it
-     * cannot run. */
-    int e = errno;
-    cli_error("run: cannot run '%s': %s", argv[i], strerror(e));
-    return e == ENOENT ? 127 : 126;
+    for (size_t k = 0; k < np; k++)
+        vargv[k] = (char *)pre[k];
+    vargv[np] = skip;
+    for (size_t k = 0; k < na; k++)
+        vargv[np + 1 + k] = argv[i + (int)k];
+    rc = run_program(launcher, vargv, false, argv[i], &pf, say);
+    free(vargv);
+    return rc;
 }

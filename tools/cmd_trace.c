@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "machine_cli.h"
 #include "opts.h"
 #include "emm/mesh.h"
 #include "emm/synth.h"
@@ -21,7 +22,7 @@
 
 static const char trace_usage_text[] =
     "usage: emm trace info TRACE [--verify]\n"
-    "       emm trace export --din TRACE [-o FILE]\n"
+    "       emm trace export --din TRACE [-o FILE] [--machine FILE] [--set KEY=VALUE]...\n"
     "       emm trace import --din FILE -o TRACE [--bytes N] [--compress]\n"
     "       emm trace synth --mesh FILE --pattern P -o TRACE [--seed S] [--visits N]\n"
     "                       [--length L] [--corner] [--work W] [--compress]\n"
@@ -44,13 +45,17 @@ static void info_usage(FILE *out, const opts *o)
 
 static void export_usage(FILE *out, const opts *o)
 {
-    fputs("usage: emm trace export --din TRACE [-o FILE]\n"
+    fputs("usage: emm trace export --din TRACE [-o FILE] [--machine FILE] [--set KEY=VALUE]...\n"
           "\n"
-          "Writes the trace in Dinero IV's din format, one line per access:\n"
-          "'LABEL ADDRESS' with label 0 for a read, 1 for a write and the original\n"
-          "address (base + element * record size + offset) in hex. din has no size:\n"
-          "each access becomes one line at its first byte, which Dinero IV reads as\n"
-          "the 4-byte word holding it.\n"
+          "Writes the trace in Dinero IV's din format, 'LABEL ADDRESS' per line, label 0\n"
+          "for a read and 1 for a write, the address in hex. din has no size, and\n"
+          "Dinero IV reads every line as the 4-byte word holding its address, so an\n"
+          "access becomes one line per cache line it touches (the machine's cache.line,\n"
+          "64 by default): its first byte, then the start of each further line. Dinero IV\n"
+          "run with that block size (-l1-dbsize) counts the demand fetches, misses and\n"
+          "prefetches emm's cache counts on the trace (docs/dinero.md). Addresses are\n"
+          "those the models use: the arrays placed as docs/machine.md \"Addresses\"\n"
+          "says, the same every run; raw memory (an imported din trace) keeps its own.\n"
           "\n",
           out);
     opts_help(out, o);
@@ -215,15 +220,24 @@ static int out_close(struct out_file *o, int ok)
     return 0;
 }
 
+/* Room for the din lines of one record: the lines its bytes span at most,
+ * each "L " and 16 hex digits and a newline. */
+static size_t din_record_room(uint64_t line)
+{
+    return (EMM_TRACE_MAX_ACCESS_BYTES / line + 2) * 20;
+}
+
 static int trace_export(int argc, char **argv)
 {
     const char *path = NULL, *out = NULL;
     int din = 0;
+    machine_cli mc = {0};
     opts_row rows[] = {
         {.name = "--din", .kind = OPT_FLAG, .dst = &din, .required = true,
          .help = "the output format (the only one)"},
         {.name = "-o", .alias = "--output", .metavar = "FILE", .kind = OPT_TEXT, .dst = &out,
          .help = "write to FILE (whole or not at all) instead of stdout"},
+        MACHINE_CLI_OPTS(&mc),
         {.metavar = "TRACE", .kind = OPT_TEXT, .dst = &path, .required = true},
         OPTS_END,
     };
@@ -231,45 +245,69 @@ static int trace_export(int argc, char **argv)
     int rc;
     if (opts_parse(&o, argc, argv, &rc))
         return rc;
+    emm_machine *m;
+    if ((rc = machine_cli_build(&mc, "trace export", &m)) != 0)
+        return rc;
+    const uint64_t line = emm_machine_get(m, "cache.line");
+    emm_machine_free(m);
 
     emm_error err;
     emm_trace_reader *r = NULL;
     if (emm_trace_reader_open(path, &r, &err) != EMM_OK)
         return cli_fail(&err);
     const emm_trace_info *info = emm_trace_reader_info(r);
+    const size_t room = din_record_room(line), cap = (size_t)READ_BATCH * 20 + room;
     emm_trace_record *buf = malloc(READ_BATCH * sizeof *buf);
-    char *text = malloc((size_t)READ_BATCH * 20);
+    uint64_t *base = malloc((info->narrays ? info->narrays : 1) * sizeof *base);
+    char *text = malloc(cap);
     struct out_file dest;
-    if (!buf || !text) {
+    if (!buf || !text || !base) {
         cli_error("%s: out of memory", path);
         free(buf);
         free(text);
+        free(base);
         emm_trace_reader_close(r);
         return EMM_EXIT_FAIL;
     }
-    if (out_open(&dest, out) != 0) {
+    int placed = emm_trace_place(info, base, &err) == EMM_OK;
+    if (!placed)
+        cli_fail(&err);
+    if (!placed || out_open(&dest, out) != 0) {
         free(buf);
         free(text);
+        free(base);
         emm_trace_reader_close(r);
         return EMM_EXIT_FAIL;
     }
     int ok = 1;
     size_t got;
-    emm_status s;
-    while ((s = emm_trace_read(r, buf, READ_BATCH, &got, &err)) == EMM_OK && got > 0) {
-        char *p = text;
-        for (size_t i = 0; i < got; i++) {
+    emm_status s = EMM_OK;
+    char *p = text;
+    while (ok && (s = emm_trace_read(r, buf, READ_BATCH, &got, &err)) == EMM_OK && got > 0) {
+        for (size_t i = 0; i < got && ok; i++) {
             const emm_trace_array *a = &info->arrays[buf[i].array];
             /* The reader checked that the address fits 64 bits (raw arrays:
-             * element is the address, base is added modulo 2^64). */
-            uint64_t addr = a->base + buf[i].element * a->record_size + buf[i].offset;
+             * element is the address, base is added modulo 2^64); an access
+             * running past the top ends at the last address, as in the
+             * models. */
+            uint64_t addr = base[buf[i].array] + buf[i].element * a->record_size + buf[i].offset;
+            uint64_t last = buf[i].bytes - 1 > UINT64_MAX - addr ? UINT64_MAX
+                                                                 : addr + (buf[i].bytes - 1);
             p = put_din_line(p, buf[i].write, addr);
+            for (uint64_t l = addr / line + 1; l <= last / line; l++)
+                p = put_din_line(p, buf[i].write, l * line);
+            if ((size_t)(p - text) > cap - room) {
+                if (fwrite(text, 1, (size_t)(p - text), dest.f) != (size_t)(p - text)) {
+                    cli_error("%s: cannot write: %s", out ? out : "stdout", strerror(errno));
+                    ok = 0;
+                }
+                p = text;
+            }
         }
-        if (fwrite(text, 1, (size_t)(p - text), dest.f) != (size_t)(p - text)) {
-            cli_error("%s: cannot write: %s", out ? out : "stdout", strerror(errno));
-            ok = 0;
-            break;
-        }
+    }
+    if (ok && p > text && fwrite(text, 1, (size_t)(p - text), dest.f) != (size_t)(p - text)) {
+        cli_error("%s: cannot write: %s", out ? out : "stdout", strerror(errno));
+        ok = 0;
     }
     if (ok && s != EMM_OK) {
         cli_fail(&err);
@@ -277,6 +315,7 @@ static int trace_export(int argc, char **argv)
     }
     free(buf);
     free(text);
+    free(base);
     emm_trace_reader_close(r);
     return out_close(&dest, ok) == 0 ? EMM_EXIT_OK : EMM_EXIT_FAIL;
 }

@@ -73,6 +73,37 @@ typedef struct emm_agent_config {
                                      cannot start, here. NULL: here */
 } emm_agent_config;
 
+/* ---- the process tree ---------------------------------------------------- */
+
+/* Two variables of emm run's and the shim's own, not settings (the
+ * configuration table holds those): each is set and taken out of the
+ * environment by emm and never read from the user.
+ *
+ * EMM_AGENT_READY_VAR, "FD:PID": emm run started the program as process PID
+ * with FD the write end of a pipe. The shim in that process writes one byte
+ * there and closes it, so that emm run can tell a program the shim never
+ * loaded into (statically linked, set-user-ID: the loader preloads nothing
+ * into them) and say so.
+ * EMM_AGENT_ROOT_VAR: the pid of the program, the first process of the tree
+ * the shim loaded into (emm run clears it for the program it starts). A
+ * process of another pid is one the program started (an exec'd tool): it
+ * says nothing unless it tagged an array. */
+#define EMM_AGENT_READY_VAR "EMM_RUN_READY"
+#define EMM_AGENT_ROOT_VAR "EMM_SHIM_ROOT"
+
+/* Programs the shim never enters, by the start of their name
+ * (llvm-symbolizer-14 is llvm-symbolizer): symbolizers, which a sanitizer
+ * runtime or a crash handler starts to print a stack; none is the
+ * program's work. emm run keeps Valgrind out of them too. */
+#define EMM_AGENT_HELPERS(X) X("llvm-symbolizer") X("llvm-addr2line") X("addr2line") \
+    X("eu-addr2line")
+
+/* The shim's first call, before it reads any setting: answers emm run
+ * (EMM_AGENT_READY_VAR) and marks the tree's root (EMM_AGENT_ROOT_VAR).
+ * Returns 0 when `program` (the executable's name) is one of
+ * EMM_AGENT_HELPERS: the shim then stays out of the process, silent. */
+EMM_API int emm_agent_enter(const char *program);
+
 /* Starts the session (or, in list mode, the site table) and opens the
  * unwinder when a rule uses site= or the mode lists sites. On failure err
  * says why in one line and *out is NULL: the caller steps aside. */
@@ -164,7 +195,10 @@ EMM_API const emm_agent_filter *emm_agent_filter_of(const emm_agent *a);
 
 /* Finishes once: the summary on stderr (EMM_LOG), the outputs, the lines
  * about rules that selected nothing; in list mode the site listing (and
- * the report, when one is asked for, says nothing was simulated). Takes
+ * the report, when one is asked for, says nothing was simulated). A
+ * process the program started (EMM_AGENT_ROOT_VAR) that tagged or listed
+ * nothing prints none of these, whatever EMM_LOG (under EMM_LOG=2 it said
+ * one line as it started). Takes
  * the lock (a caller in a signal handler must know no thread of its own
  * holds it). Later calls do nothing. */
 EMM_API void emm_agent_finish(emm_agent *a);
@@ -178,13 +212,19 @@ EMM_API void emm_agent_lock(emm_agent *a);
 EMM_API void emm_agent_unlock(emm_agent *a);
 EMM_API void emm_agent_forked(emm_agent *a);
 
-/* The shim stepped aside before a session could start (`why`: the line it
- * printed): when c names a report, it is written with nothing simulated
- * and that reason (emm_session_report_nothing, without `since`: no other
- * process of the run can have written one yet); a report that cannot be
- * written is one line on stderr (c->log >= 1). */
-EMM_API void emm_agent_report_nothing(const emm_config *c, emm_capture capture,
-                                      const char *program, const char *why);
+/* The exit status of a program stopped by EMM_STRICT=1. */
+#define EMM_AGENT_STRICT_EXIT 125
+
+/* The shim steps aside before a session could start (a bad EMM_* value, a
+ * session that cannot start): `why` in one line, then the program runs
+ * untouched — or, with c->strict (EMM_STRICT=1), does not run: the line
+ * says so and the process exits with EMM_AGENT_STRICT_EXIT. When c names a
+ * report, it is written first with nothing simulated and that reason
+ * (emm_session_report_nothing, without `since`: no other process of the
+ * run can have written one yet); a report that cannot be written is one
+ * line on stderr (c->log >= 1). */
+EMM_API void emm_agent_step_aside(const emm_config *c, emm_capture capture, const char *program,
+                                  const char *why);
 
 /* Whether the program's main object imports `symbol` (the api backend's
  * test for a program written against emm_mesh_*). */

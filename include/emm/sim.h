@@ -93,6 +93,15 @@ EMM_API int emm_machine_key_is_text(const char *key);
  * simulated as references, never chosen. */
 EMM_API int emm_machine_offers(const emm_machine *m, const emm_strategy *s);
 
+/* The thesis' remote store (remote.bytes, §6.1: 6 MB) is a size, not a
+ * limit of the model: a mesh beyond it is simulated as if it fitted, with
+ * a warning. When the mesh arrays of `trace` (every array but raw memory,
+ * count × record size) take more than remote.bytes, writes that warning,
+ * one line naming both sizes and the key, into msg and returns 1; else 0
+ * and msg is "". */
+EMM_API int emm_machine_remote_warning(const emm_machine *m, const emm_trace_info *trace,
+                                       char *msg, size_t cap);
+
 /* Cycles of one synchronous DMA of `bytes` bytes on an idle engine:
  * program + latency + cycles_per_8b*ceil(bytes/8) +
  * chunk_cycles*(ceil(bytes/chunk)-1); 0 bytes cost nothing. */

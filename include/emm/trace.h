@@ -143,6 +143,17 @@ typedef struct emm_din_counts {
 EMM_API emm_status emm_din_import(FILE *in, const char *name, uint32_t bytes, emm_trace_writer *w,
                                   emm_din_counts *counts, emm_error *err);
 
+/* Where the models put each array (docs/machine.md "Addresses"), so that a
+ * simulation does not depend on where the program's allocations happened
+ * to land in its run (ASLR, the allocations before them): every array but
+ * raw memory is laid out again from EMM_TRACE_PLACE_START, in the trace's
+ * order, each starting a fresh 4 KiB page; arrays whose bytes overlapped
+ * keep their distance (their group's lowest byte starts the page). Raw
+ * memory keeps its addresses. Fills base[0 .. info->narrays - 1]; fails
+ * only for memory. */
+#define EMM_TRACE_PLACE_START 0x10000000u
+EMM_API emm_status emm_trace_place(const emm_trace_info *info, uint64_t *base, emm_error *err);
+
 /* "vertices", "triangles" or "raw" (a static string; "?" for other values). */
 EMM_API const char *emm_trace_kind_name(emm_array_kind kind);
 

@@ -66,8 +66,12 @@ LD_PRELOAD= "$work/bin/emm" run --report "$work/r-%p.json" --strategy cache --pr
 [ $rc -eq 3 ] || fail "exit status $rc, not 3"
 [ "$(cat "$work/out")" = "$shim|$work/r-%p.json|cache|5it|none|0" ] ||
     fail "environment: $(cat "$work/out") (stderr: $(cat "$work/err"))"
-LD_PRELOAD=libdl.so.2 "$work/bin/emm" run sh -c 'echo "$LD_PRELOAD"' >"$work/out" 2>&1
+LD_PRELOAD=libdl.so.2 "$work/bin/emm" run sh -c 'echo "$LD_PRELOAD"' >"$work/out" 2>"$work/err"
 [ "$(cat "$work/out")" = "$shim:libdl.so.2" ] || fail "LD_PRELOAD not prepended: $(cat "$work/out")"
+# The stand-in never answers as the shim does when it loads: one line says
+# the program ran without emm.
+[ "$(cat "$work/err")" = "emm: run: sh ran without emm, nothing captured: the loader did not preload libemmshim.so into it" ] ||
+    fail "a shim that did not load: $(cat "$work/err")"
 "$work/bin/emm" run -- sh -c 'kill -TERM $$' 2>/dev/null; rc=$?
 [ $rc -eq 143 ] || fail "death by SIGTERM: exit $rc, not 143"
 "$work/bin/emm" run -- "$work/no-such-program" 2>"$work/err"; rc=$?

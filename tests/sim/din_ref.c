@@ -143,9 +143,10 @@ int main(int argc, char **argv)
                 }
                 ref_access(&r, v[i].addr, 4, v[i].label == 1);
             }
-            printf("demand_fetches %llu\ndemand_misses %llu\nprefetch_fetches %llu\n",
+            printf("demand_fetches %llu\ndemand_misses %llu\nprefetch_fetches %llu\n"
+                   "prefetch_misses %llu\n",
                    (unsigned long long)r.demand_fetches, (unsigned long long)r.demand_misses,
-                   (unsigned long long)r.prefetch_fetches);
+                   (unsigned long long)r.prefetch_fetches, (unsigned long long)r.prefetch_misses);
             ref_free(&r);
         }
         free(v);
