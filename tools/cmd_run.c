@@ -31,6 +31,9 @@
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -361,6 +364,45 @@ static const char *why_not_loaded(const struct program_file *pf, int status)
     return "the loader did not preload libemmshim.so into it";
 }
 
+/* The valgrind capture's session processes (emm-session) that outlive the
+ * program — it closed their socket with its other descriptors, or died,
+ * before finishing with them — write its report when they see the
+ * connection end. emm run is the subreaper of the program's processes, so
+ * they are its children now: it waits for them, at most 60 s, so that the
+ * report is there and the summary printed when it returns. Any other
+ * orphan that has ended is reaped on the way; one that runs on is left. */
+static void wait_sessions(void)
+{
+    for (int round = 0; round < 1200; round++) {
+        while (waitpid(-1, NULL, WNOHANG) > 0) {
+        }
+        bool any = false;
+        DIR *d = opendir("/proc");
+        struct dirent *e;
+        while (d && !any && (e = readdir(d)) != NULL) {
+            char path[64], line[256];
+            if (e->d_name[0] < '1' || e->d_name[0] > '9')
+                continue;
+            snprintf(path, sizeof path, "/proc/%.20s/stat", e->d_name);
+            FILE *f = fopen(path, "r");
+            if (!f)
+                continue;
+            char comm[64] = "", state = 0;
+            long ppid = 0;
+            if (fgets(line, sizeof line, f) &&
+                sscanf(line, "%*d (%63[^)]) %c %ld", comm, &state, &ppid) == 3)
+                any = ppid == (long)getpid() && state != 'Z' && strcmp(comm, "emm-session") == 0;
+            fclose(f);
+        }
+        if (d)
+            closedir(d);
+        if (!any)
+            return;
+        struct timespec ts = {0, 50 * 1000 * 1000};
+        nanosleep(&ts, NULL);
+    }
+}
+
 /* Starts `file` with `av` (through PATH when `search`), waits for it and
  * returns the status to end with. With `say`, when the shim did not answer
  * from the program (emm/agent.h, EMM_AGENT_READY_VAR), one line names it
@@ -377,6 +419,7 @@ static int run_program(const char *file, char **av, bool search, const char *sho
         goto no_pipe;
     }
     fflush(NULL);
+    prctl(PR_SET_CHILD_SUBREAPER, 1);
     pid_t pid = fork();
     if (pid == 0) {
         /* The write end stays open in the program for the shim; the other
@@ -417,6 +460,7 @@ static int run_program(const char *file, char **av, bool search, const char *sho
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
     program_pid = 0;
+    wait_sessions();
     char byte;
     bool answered = fcntl(ready[0], F_SETFL, O_NONBLOCK) == 0 && read(ready[0], &byte, 1) == 1;
     close(ready[0]);

@@ -49,9 +49,11 @@ if [ "$VG" = 1 ]; then
     > "$WORK/closed.out" 2> "$WORK/closed.err"; rc=$?
   [ $rc = $native_rc ] || { cat "$WORK/closed.err" >&2; fail "closed descriptors: exit status $rc, $native_rc natively"; }
   for f in a b c; do cmp -s "$WORK/all.native/$f.dat" "$WORK/all.vg/$f.dat" || fail "closed descriptors: $f.dat differs"; done
-  # emm-session writes the report once it sees the connection end: emm run
-  # waits for it after the program (TODO-WAIT).
-  for i in $(seq 60); do [ -s "$WORK/closed.json" ] && break; sleep 0.5; done
+  # emm-session writes the report once it sees the connection end; emm run
+  # has waited for it: the report is there, and its summary said how the
+  # run ended.
+  grep -q "^emm:   the run ended by the end of the program's connection" "$WORK/closed.err" ||
+    { cat "$WORK/closed.err" >&2; fail "closed descriptors: the summary does not say how the run ended"; }
   ended closed "$WORK/closed.json" "the end of the program's connection to emm-session, before its exit"
 fi
 echo "crash: ok ($captures, LD_PRELOAD)"
