@@ -246,7 +246,9 @@ static int trace_export(int argc, char **argv)
     if (opts_parse(&o, argc, argv, &rc))
         return rc;
     emm_machine *m;
-    if ((rc = machine_cli_build(&mc, "trace export", &m)) != 0)
+    rc = machine_cli_build(&mc, "trace export", &m);
+    free(mc.sets.v); /* opts_parse's list of --set values (opts_run frees it for others) */
+    if (rc != 0)
         return rc;
     const uint64_t line = emm_machine_get(m, "cache.line");
     emm_machine_free(m);
