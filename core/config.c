@@ -369,7 +369,8 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
     [EMM_CONFIG_REPORT] = {{"EMM_REPORT", "--report", "FILE",
         "a file path in a writable directory (%p: pid)", "(none)",
         "write the JSON report there at exit (docs/report.md), also when nothing was\n"
-        "simulated: then with the reason", {{0}}}, parse_report},
+        "simulated: then with the reason; when another process of the run wrote it\n"
+        "first, to FILE.PID beside it", {{0}}}, parse_report},
     [EMM_CONFIG_PROFILE_DUMP] = {{"EMM_PROFILE_DUMP", "--dump", "FILE",
         "a file path in a writable directory (%p: pid)", "(none)",
         "write the window's distance profile as CSV (i,D_i)", {{0}}}, parse_dump},

@@ -299,7 +299,7 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
         a->min_block = LIST_MIN;
     } else {
         emm_session_config sc = {&a->cfg, a->capture, a->program, 0, c->threads, c->server,
-                                 NULL};
+                                 NULL, 0};
         st = emm_session_new(&sc, &a->session, err);
         if (st != EMM_OK && sc.server) {
             if (a->cfg.log >= 2 && !a->child)
@@ -848,7 +848,14 @@ static void agent_finish(emm_agent *a, const char *ended)
     ranges_changed_locked(a);
     /* The summary already says why a session had nothing to simulate, and
      * names each output that could not be written. */
-    FILE *f = a->cfg.log >= 1 && !quiet ? say_stream() : NULL;
+    if (quiet) {
+        /* Its "nothing simulated" would stand in the way of the program's
+         * own report at the same path. */
+        emm_session_discard(a->session);
+        pthread_mutex_unlock(&a->lock);
+        return;
+    }
+    FILE *f = a->cfg.log >= 1 ? say_stream() : NULL;
     emm_session_finish_ended(a->session, f, ended, NULL);
     if (f)
         fclose(f);

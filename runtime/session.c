@@ -75,6 +75,7 @@ emm_status session_engine_new(const emm_session_config *sc, emm_session **out, e
         s->memory = &s->mem;
     }
     clock_gettime(CLOCK_REALTIME_COARSE, &s->started);
+    s->pid = sc->pid ? sc->pid : (long)getpid();
     s->program = strdup(sc->program ? sc->program : "program");
     s->capture = sc->capture;
     s->threads = sc->threads;
@@ -867,7 +868,7 @@ static emm_status engine_finish(emm_session *h, FILE *summary, const char *ended
         session_print_summary(s, summary, res, nres);
         fflush(summary);
     }
-    if (s->cfg.report[0] && session_write_report(s, all, why, nall, &e) != EMM_OK) {
+    if (s->cfg.report[0] && session_write_report(s, all, why, nall, summary, &e) != EMM_OK) {
         output_failed(s, summary, &e);
         if (first == EMM_OK && err)
             *err = e;
@@ -904,6 +905,12 @@ static emm_status engine_finish(emm_session *h, FILE *summary, const char *ended
     free(order);
     s->phase = PHASE_DONE;
     return first;
+}
+
+/* No output: the trace a session writes is removed (engine_free aborts it). */
+static void engine_discard(emm_session *h)
+{
+    ((session *)h)->phase = PHASE_DONE;
 }
 
 /* A forked child's copy of an engine in this process: nothing to let go
@@ -949,5 +956,5 @@ static void engine_free(emm_session *h)
 static const struct session_transport engine_transport = {
     engine_tag,         engine_move,      engine_untag,  engine_ranges,
     engine_access,      engine_iteration, engine_decide_read,
-    engine_decide_rest, engine_finish,    engine_forked, engine_free,
+    engine_decide_rest, engine_finish,    engine_discard, engine_forked, engine_free,
 };

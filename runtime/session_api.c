@@ -66,6 +66,12 @@ emm_status emm_session_finish_ended(emm_session *s, FILE *summary, const char *e
     return s->transport->finish(s, summary, ended, err);
 }
 
+void emm_session_discard(emm_session *s)
+{
+    if (s)
+        s->transport->discard(s);
+}
+
 void emm_session_forked(emm_session *s)
 {
     if (s)

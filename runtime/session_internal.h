@@ -122,6 +122,7 @@ typedef struct session {
     emm_config cfg;      /* the settings, parsed (a copy, without the tag rules: each
                             array's description comes whole) */
     char *program;
+    long pid;            /* the program's */
     char ended[96];      /* how the run ended when not normally ("": an exit) */
     emm_capture capture;
     struct timespec started; /* CLOCK_REALTIME_COARSE at its start: a report written
@@ -450,9 +451,12 @@ void session_simulate(session *s, const emm_trace_record *recs, size_t n);
  * NULL when the session failed). */
 void session_print_summary(const session *s, FILE *out, const emm_result *res, size_t nres);
 /* The JSON report at cfg.report: res[0..nres) are the models in order, and
- * skipped[i].status != EMM_OK marks one that could not be built. */
+ * skipped[i].status != EMM_OK marks one that could not be built. When
+ * another process of the run wrote that file since the session started,
+ * the report goes beside it as cfg.report.PID, said on `summary`. */
 emm_status session_write_report(const session *s, const emm_result *res,
-                                const emm_error *skipped, size_t nres, emm_error *err);
+                                const emm_error *skipped, size_t nres, FILE *summary,
+                                emm_error *err);
 /* The JSON report at cfg.report when nothing was simulated: why is
  * s->failure's message (docs/report.md "Nothing simulated"); a report
  * written since the session started is left as it is (a child's: the

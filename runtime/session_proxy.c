@@ -345,7 +345,8 @@ static emm_status proxy_finish(emm_session *h, FILE *summary, const char *ended,
         return EMM_OK;
     if (summary)
         fflush(summary);
-    /* Whether to print the summary, then how the run ended, if not normally. */
+    /* Flags (1: print the summary; 2: discard, proxy_discard), then how the
+     * run ended, if not normally. */
     char msg[4 + 96] = {0};
     uint32_t say = summary != NULL;
     memcpy(msg, &say, sizeof say);
@@ -360,6 +361,17 @@ static emm_status proxy_finish(emm_session *h, FILE *summary, const char *ended,
     r->decided = true;
     r->state = EMM_SESSION_OFF;
     return st;
+}
+
+/* FINISH with the discard flag (2): the server ends the session silently. */
+static void proxy_discard(emm_session *h)
+{
+    proxy *r = (proxy *)h;
+    uint32_t flags = 2;
+    if (!r->quiet)
+        status_call(r, WIRE_FINISH, &flags, sizeof flags, NULL, NULL, NULL, NULL);
+    r->decided = true;
+    r->state = EMM_SESSION_OFF;
 }
 
 static void proxy_forked(emm_session *h)
@@ -383,7 +395,7 @@ static void proxy_free(emm_session *h)
 static const struct session_transport proxy_transport = {
     proxy_tag,         proxy_move,       proxy_untag,  proxy_ranges,
     proxy_access,      proxy_iteration,  proxy_decide_read,
-    proxy_decide_rest, proxy_finish,     proxy_forked, proxy_free,
+    proxy_decide_rest, proxy_finish,     proxy_discard, proxy_forked, proxy_free,
 };
 
 emm_status session_proxy_new(const emm_session_config *sc, emm_session **out, emm_error *err)

@@ -943,12 +943,30 @@ emm_status emm_session_report_nothing(const emm_config *cfg, const char *program
     return st == EMM_OK ? EMM_OK : emm_fail(err, st, "%s: %s", as, e.message);
 }
 
+/* One report per process: when another process of the run (a child the
+ * program started, which ended first; the program that started this one)
+ * wrote the report's file since this session started, this one goes beside
+ * it with the program's pid as a suffix, and the summary says so. */
+static const char *report_path(const session *s, char *buf, size_t cap)
+{
+    if (!written_since(s->cfg.report, &s->started))
+        return s->cfg.report;
+    snprintf(buf, cap, "%s.%ld", s->cfg.report, s->pid);
+    return buf;
+}
+
 emm_status session_write_report(const session *s, const emm_result *res,
-                                const emm_error *skipped, size_t nres, emm_error *err)
+                                const emm_error *skipped, size_t nres, FILE *summary,
+                                emm_error *err)
 {
     report_ctx ctx = {s, res, skipped, nres};
     emm_error e;
-    emm_status st = emm_report_write_extra(s->cfg.report, s->cfg.trace, s->machine, s->accesses,
+    char buf[EMM_CONFIG_PATH_MAX + 24];
+    const char *path = report_path(s, buf, sizeof buf);
+    if (path == buf && summary && s->cfg.log >= 1)
+        fprintf(summary, "emm:   report: %s (%s holds another process's of this run)\n",
+                path, s->cfg.report);
+    emm_status st = emm_report_write_extra(path, s->cfg.trace, s->machine, s->accesses,
                                            res, skipped, nres, report_extra, &ctx, &e);
     if (st != EMM_OK)
         return emm_fail(err, st, "%s: %s", session_source(s, EMM_CONFIG_REPORT), e.message);

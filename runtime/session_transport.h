@@ -23,6 +23,7 @@ struct session_transport {
     emm_status (*decide_read)(emm_session *s, emm_error *err);
     emm_status (*decide_rest)(emm_session *s, emm_error *err);
     emm_status (*finish)(emm_session *s, FILE *summary, const char *ended, emm_error *err);
+    void (*discard)(emm_session *s);
     void (*forked)(emm_session *s);
     void (*free)(emm_session *s);
 };

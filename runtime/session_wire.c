@@ -185,7 +185,7 @@ bool wire_start_encode(const emm_session_config *sc, long pid, unsigned char **o
 
 emm_status wire_start_decode(const unsigned char *data, size_t len, emm_config *cfg,
                              char **strings, emm_capture *capture, int *table_only,
-                             const char **program, emm_error *err)
+                             const char **program, long *program_pid, emm_error *err)
 {
     struct cursor c = {data, data ? data + len : data};
     uint64_t version, cap, only, pid, count;
@@ -200,6 +200,7 @@ emm_status wire_start_decode(const unsigned char *data, size_t len, emm_config *
         return emm_fail(err, EMM_ERR_FORMAT, "emm-session: a malformed start");
     *capture = (emm_capture)cap;
     *table_only = only != 0;
+    *program_pid = (long)pid;
     /* The sources must outlive cfg: one copy of the rest of the payload. */
     size_t rest = (size_t)(c.end - c.p);
     char *copy = malloc(rest ? rest : 1);

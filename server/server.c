@@ -170,13 +170,14 @@ static emm_status serve_new(struct server *v, const struct message *m, emm_error
     emm_capture capture;
     int table_only;
     const char *program;
+    long pid;
     emm_status st = wire_start_decode(m->data, (size_t)m->f.len, &v->cfg, &v->strings, &capture,
-                                      &table_only, &program, err);
+                                      &table_only, &program, &pid, err);
     if (st != EMM_OK)
         return st;
     v->memory = (emm_session_memory){read_program, program_modules, v};
     emm_session_config sc = {&v->cfg, capture, program, table_only, {0, NULL, NULL}, NULL,
-                             &v->memory};
+                             &v->memory, pid};
     return emm_session_new(&sc, &v->s, err);
 }
 
@@ -268,7 +269,8 @@ static bool serve_one(struct server *v, const struct message *m, bool *quiet)
         return true;
     }
     case WIRE_FINISH: {
-        /* Whether to print the summary, then how the run ended, if not normally. */
+        /* Flags (1: print the summary; 2: discard the session, no output),
+         * then how the run ended, if not normally. */
         uint32_t say = 0;
         char ended[96] = "";
         if (m->f.len < sizeof say || m->f.len >= sizeof say + sizeof ended)
@@ -276,6 +278,10 @@ static bool serve_one(struct server *v, const struct message *m, bool *quiet)
         memcpy(&say, m->data, sizeof say);
         memcpy(ended, m->data + sizeof say, (size_t)m->f.len - sizeof say);
         v->finished = true;
+        if (say & 2) {
+            emm_session_discard(s);
+            return reply_status(v, EMM_OK, &e);
+        }
         emm_status st = emm_session_finish_ended(s, say ? stderr : NULL, ended[0] ? ended : NULL,
                                                  &e);
         return reply_status(v, st, &e);

@@ -70,6 +70,8 @@ typedef struct emm_session_config {
                                * to this process's stderr. */
     const emm_session_memory *memory; /* NULL: the tagged arrays are this process's memory;
                                * else how to read the program's (copied) */
+    long pid;                 /* the program's pid (0: this process's), for the name of a
+                               * report another process of the run already wrote */
 } emm_session_config;
 
 /* One captured access, as the capture backends record it: the address, the
@@ -181,6 +183,11 @@ EMM_API emm_status emm_session_finish(emm_session *s, FILE *summary, emm_error *
  * is the run up to its last access before that. */
 EMM_API emm_status emm_session_finish_ended(emm_session *s, FILE *summary, const char *ended,
                                             emm_error *err);
+/* Ends the session with no output at all — no summary, no report, no
+ * trace: a process the program started that tagged nothing (a tool it
+ * ran), whose "nothing simulated" would only stand in the way of the
+ * program's own report. Later calls to finish do nothing. */
+EMM_API void emm_session_discard(emm_session *s);
 
 EMM_API void emm_session_free(emm_session *s);
 
