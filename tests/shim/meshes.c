@@ -9,31 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-struct vert { uint32_t id; double xyz[3]; };
-struct tri { uint32_t id; int32_t v[3]; };
-
-static __attribute__((noinline)) int load_grid(int n, struct vert **vs, struct tri **ts, size_t *nt)
-{
-    struct vert *v = malloc(sizeof *v * (size_t)(n * n));
-    struct tri *t = malloc(sizeof *t * 2 * (size_t)((n - 1) * (n - 1)));
-    if (!v || !t)
-        return -1;
-    for (int i = 0; i < n * n; i++)
-        v[i] = (struct vert){(uint32_t)i, {i % n, i / n, 0}};
-    size_t k = 0;
-    for (int y = 0; y + 1 < n; y++)
-        for (int x = 0; x + 1 < n; x++) {
-            int a = y * n + x;
-            t[k] = (struct tri){(uint32_t)k, {a, a + 1, a + n}};
-            k++;
-            t[k] = (struct tri){(uint32_t)k, {a + 1, a + n + 1, a + n}};
-            k++;
-        }
-    *vs = v;
-    *ts = t;
-    *nt = k;
-    return 0;
-}
+#include "grid.h"
 
 struct job { int id; double sum; };
 
@@ -46,9 +22,7 @@ static void *work(void *arg)
     if (load_grid(24 + 8 * j->id, &v, &t, &nt) != 0)
         abort();
     for (int pass = 0; pass < 6; pass++)
-        for (size_t i = 0; i < nt; i++)
-            for (int c = 0; c < 3; c++)
-                j->sum += v[t[i].v[c]].xyz[0] + 2 * v[t[i].v[c]].xyz[1];
+        j->sum += walk_grid(v, t, nt);
     /* Kept alive to the end, as a program's meshes are. */
     return NULL;
 }
