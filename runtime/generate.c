@@ -383,24 +383,18 @@ static uint64_t hilbert_key(double x, double y)
     return d;
 }
 
-struct keyed {
-    uint64_t key;
-    uint32_t index; /* ties keep the earlier element first */
-};
-
-static int keyed_cmp(const void *pa, const void *pb)
+/* Ties keep the earlier element first. */
+int emm_gen_keyed_cmp(const void *pa, const void *pb)
 {
-    const struct keyed *a = pa, *b = pb;
+    const emm_gen_keyed *a = pa, *b = pb;
     if (a->key != b->key)
         return a->key < b->key ? -1 : 1;
     return a->index < b->index ? -1 : a->index > b->index;
 }
 
-/* Keeps the used points only, numbers vertices and triangles in `order`,
- * and writes the result into `out`. */
 /* A random key for element i under `seed` (splitmix64): the `random`
  * order, the same for the same seed. */
-static uint64_t random_key(uint64_t seed, uint64_t i)
+uint64_t emm_gen_random_key(uint64_t seed, uint64_t i)
 {
     uint64_t z = seed * 0x9e3779b97f4a7c15ull + i + 0x632be59bd9b4e019ull;
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
@@ -408,11 +402,13 @@ static uint64_t random_key(uint64_t seed, uint64_t i)
     return z ^ (z >> 31);
 }
 
+/* Keeps the used points only, numbers vertices and triangles in `order`,
+ * and writes the result into `out`. */
 static emm_status compact(const double *xy, size_t n, const int32_t *tri, size_t nt,
                           emm_order order, uint64_t seed, emm_gen_arrays *out, emm_error *err)
 {
     int32_t *map = malloc(n * sizeof *map);
-    struct keyed *keys = malloc((n > nt ? n : nt) * sizeof *keys);
+    emm_gen_keyed *keys = malloc((n > nt ? n : nt) * sizeof *keys);
     double *xyz = NULL;
     int32_t *ntri = malloc((nt ? nt : 1) * 3 * sizeof *ntri);
     if (!map || !keys || !ntri)
@@ -425,12 +421,12 @@ static emm_status compact(const double *xy, size_t n, const int32_t *tri, size_t
     for (size_t i = 0; i < n; i++)
         if (map[i] == 0) {
             keys[nv].key = order == EMM_ORDER_HILBERT ? hilbert_key(xy[2 * i], xy[2 * i + 1])
-                           : order == EMM_ORDER_RANDOM ? random_key(seed, i)
+                           : order == EMM_ORDER_RANDOM ? emm_gen_random_key(seed, i)
                                                        : i;
             keys[nv].index = (uint32_t)i;
             nv++;
         }
-    qsort(keys, nv, sizeof *keys, keyed_cmp);
+    qsort(keys, nv, sizeof *keys, emm_gen_keyed_cmp);
     xyz = malloc((nv ? nv : 1) * 3 * sizeof *xyz);
     if (!xyz)
         goto nomem;
@@ -446,11 +442,11 @@ static emm_status compact(const double *xy, size_t n, const int32_t *tri, size_t
         double cx = (xy[2 * v[0]] + xy[2 * v[1]] + xy[2 * v[2]]) / 3.0;
         double cy = (xy[2 * v[0] + 1] + xy[2 * v[1] + 1] + xy[2 * v[2] + 1]) / 3.0;
         keys[t].key = order == EMM_ORDER_HILBERT  ? hilbert_key(cx, cy)
-                      : order == EMM_ORDER_RANDOM ? random_key(seed ^ 0x5bd1e995u, t)
+                      : order == EMM_ORDER_RANDOM ? emm_gen_random_key(seed ^ 0x5bd1e995u, t)
                                                   : t;
         keys[t].index = (uint32_t)t;
     }
-    qsort(keys, nt, sizeof *keys, keyed_cmp);
+    qsort(keys, nt, sizeof *keys, emm_gen_keyed_cmp);
     for (size_t t = 0; t < nt; t++) {
         const int32_t *v = tri + 3 * keys[t].index;
         int32_t a = map[v[0]], b = map[v[1]], c = map[v[2]];
@@ -602,6 +598,22 @@ emm_status emm_mesh_generate(const emm_gen_options *opt, emm_mesh **out, emm_err
     *out = NULL;
     emm_gen_arrays a;
     emm_status st = emm_gen_arrays_build(opt, &a, err);
+    if (st != EMM_OK)
+        return st;
+    st = emm_mesh_from_arrays(a.xyz, a.nv, a.tri, a.nt, "generated mesh", out, err);
+    emm_gen_arrays_free(&a);
+    return st;
+}
+
+emm_status emm_mesh_generate_surface(const emm_gen_options *opt, emm_surface surface,
+                                     emm_mesh **out, emm_error *err)
+{
+    assert(opt && out);
+    *out = NULL;
+    if (surface == EMM_SURFACE_PLANE)
+        return emm_mesh_generate(opt, out, err);
+    emm_gen_arrays a;
+    emm_status st = emm_gen_surface_build(opt, surface, &a, err);
     if (st != EMM_OK)
         return st;
     st = emm_mesh_from_arrays(a.xyz, a.nv, a.tri, a.nt, "generated mesh", out, err);

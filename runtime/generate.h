@@ -53,10 +53,30 @@ size_t emm_gen_hull_points(size_t faces);
 emm_status emm_gen_arrays_build(const emm_gen_options *opt, emm_gen_arrays *out, emm_error *err);
 void emm_gen_arrays_free(emm_gen_arrays *a);
 
+/* The `random` order's key of element i under `seed` (splitmix64), and the
+ * sort record both orders use: by key, ties keeping the lower index first. */
+uint64_t emm_gen_random_key(uint64_t seed, uint64_t i);
+typedef struct emm_gen_keyed {
+    uint64_t key;
+    uint32_t index;
+} emm_gen_keyed;
+int emm_gen_keyed_cmp(const void *a, const void *b);
+
+/* The 3D surfaces (sphere, torus, terrain; runtime/generate_surface.c):
+ * `out` as emm_gen_arrays_build fills it, with hull 0 and attempts 1
+ * (EMM_SURFACE_PLANE is emm_gen_arrays_build itself). Fails with EMM_ERR_RANGE naming the surface when
+ * `faces` is not a count it can make (odd or below the minimum for the
+ * closed ones). */
+emm_status emm_gen_surface_build(const emm_gen_options *opt, emm_surface surface,
+                                 emm_gen_arrays *out, emm_error *err);
+
 /* Largest face count the generator accepts (indices are int32_t and qhull
  * counts points in an int). */
 #define EMM_GEN_MAX_FACES 200000000u
 /* Smallest: the fixed hull plus a few interior points. */
 #define EMM_GEN_MIN_FACES 8u
+/* Smallest sphere or torus: each strip needs a few turns of at least four
+ * vertices around. */
+#define EMM_GEN_MIN_CLOSED_FACES 20u
 
 #endif

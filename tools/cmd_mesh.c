@@ -14,13 +14,15 @@
 static void usage_mesh(FILE *out)
 {
     fprintf(out,
-            "usage: emm mesh gen [--faces N] [--seed S] [--density clustered|uniform]\n"
-            "                   [--order made|random|hilbert] -o FILE\n"
+            "usage: emm mesh gen [--surface plane|sphere|torus|terrain] [--faces N] [--seed S]\n"
+            "                   [--density clustered|uniform] [--order made|random|hilbert]\n"
+            "                   -o FILE\n"
             "       emm mesh info [--json] FILE\n"
             "\n"
             "  gen   make a planar (z = 0) Delaunay triangulation of points in the unit\n"
-            "        square and write it as an OFF file; by default the thesis' mesh:\n"
-            "        %u faces, clustered (non-uniform) points, seed %u\n"
+            "        square, or a sphere, torus or terrain of exactly N faces, and write\n"
+            "        it as an OFF or OBJ file; by default the thesis' mesh: %u faces,\n"
+            "        planar, clustered (non-uniform) points, seed %u\n"
             "  info  print a mesh file's vertex, face and boundary-edge counts, its\n"
             "        bounding box, mean edge length and the bytes the thesis' structs take\n"
             "\n"
@@ -31,8 +33,9 @@ static void usage_mesh(FILE *out)
 static void usage_gen(FILE *out, const opts *o)
 {
     fprintf(out,
-            "usage: emm mesh gen [--faces N] [--seed S] [--density clustered|uniform]\n"
-            "                   [--order made|random|hilbert] -o FILE\n"
+            "usage: emm mesh gen [--surface plane|sphere|torus|terrain] [--faces N] [--seed S]\n"
+            "                   [--density clustered|uniform] [--order made|random|hilbert]\n"
+            "                   -o FILE\n"
             "\n"
             "Writes a planar (z = 0) Delaunay triangulation (libqhull) of points drawn in\n"
             "the unit square, as an ASCII OFF file, or OBJ when FILE ends in .obj. The face\n"
@@ -41,7 +44,22 @@ static void usage_gen(FILE *out, const opts *o)
             "it is strictly convex: as many boundary edges (200 for 20,000 faces), each\n"
             "about as long as the edges inside. The same options give the same file, byte\n"
             "for byte.\n"
-            "\n");
+            "\n"
+            "--surface makes a 3D surface instead, a grid of exactly N faces (any N that\n"
+            "the surface allows; another N is refused), vertices jittered from the seed,\n"
+            "triangles consistently oriented (normals outward, or up), none degenerate:\n"
+            "  sphere   radius 1, closed (every edge in two faces): N even, %u or more.\n"
+            "           One spiral strip wound from pole to pole, closed by a fan at\n"
+            "           each pole: a UV sphere without a seam, thin triangles at the poles.\n"
+            "  torus    radii 1 and 0.4, closed: N even, %u or more. One helical strip\n"
+            "           closed on itself, cells about square.\n"
+            "  terrain  open, a height field z = f(x, y) over the unit square with hills\n"
+            "           from the seed: any N from %u. A grid of quads split along their\n"
+            "           shorter diagonal; the last row may be partial.\n"
+            "Time and memory grow linearly with N (10 million faces: about 15 s and\n"
+            "2 GiB). --order hilbert numbers a surface along a 3D Hilbert curve.\n"
+            "\n",
+            EMM_GEN_MIN_CLOSED_FACES, EMM_GEN_MIN_CLOSED_FACES, EMM_GEN_MIN_FACES);
     opts_help(out, o);
 }
 
@@ -61,8 +79,10 @@ static void usage_info(FILE *out, const opts *o)
 /* "input" is the old name of "made". */
 static const char *const densities[] = {"clustered", "uniform", NULL};
 static const char *const orders[] = {"made", "random", "hilbert", "input", NULL};
+/* In emm_surface's order. */
+static const char *const surfaces[] = {"plane", "sphere", "torus", "terrain", NULL};
 
-static int gen(const emm_gen_options *opt, const char *output)
+static int gen(const emm_gen_options *opt, emm_surface surface, const char *output)
 {
     /* The format the name promises; no OFF text in a file called .obj. */
     const char *dot = strrchr(output, '.');
@@ -73,7 +93,7 @@ static int gen(const emm_gen_options *opt, const char *output)
 
     emm_error err;
     emm_mesh *m;
-    if (emm_mesh_generate(opt, &m, &err) != EMM_OK)
+    if (emm_mesh_generate_surface(opt, surface, &m, &err) != EMM_OK)
         return cli_fail(&err);
     emm_status st = obj ? emm_mesh_write_obj(m, output, &err) : emm_mesh_write_off(m, output, &err);
     if (st == EMM_OK)
@@ -86,23 +106,27 @@ static int gen(const emm_gen_options *opt, const char *output)
 static int cmd_gen(int argc, char **argv)
 {
     uint64_t faces = EMM_DEFAULT_FACES, seed = EMM_DEFAULT_SEED;
-    int density = EMM_DENSITY_CLUSTERED, order = EMM_ORDER_MADE;
+    int density = EMM_DENSITY_CLUSTERED, order = EMM_ORDER_MADE, surface = EMM_SURFACE_PLANE;
     const char *output = NULL;
     opts_row rows[] = {
+        {.name = "--surface", .metavar = "S", .kind = OPT_WORD, .dst = &surface, .words = surfaces,
+         .help = "plane: the planar Delaunay mesh (default); sphere, torus: closed surfaces, "
+                 "an even N of 20 or more; terrain: an open height field, any N of 8 or more"},
         {.name = "--faces", .metavar = "N", .kind = OPT_U64, .dst = &faces,
          .min = EMM_GEN_MIN_FACES, .max = EMM_GEN_MAX_FACES, .show_default = true,
-         .help = "triangles to make, 8 or more"},
+         .help = "triangles to make, 8 or more (exactly N for a --surface)"},
         {.name = "--seed", .metavar = "S", .kind = OPT_U64, .dst = &seed, .show_default = true,
-         .help = "seed of the point stream"},
+         .help = "seed of the point stream (of the jitter and hills for a --surface)"},
         {.name = "--density", .metavar = "D", .kind = OPT_WORD, .dst = &density, .words = densities,
          .help = "clustered: a few Gaussian clusters over a uniform background, their number, "
                  "places and widths drawn from the seed (default)\n"
-                 "uniform: points spread evenly"},
+                 "uniform: points spread evenly (planar meshes only)"},
         {.name = "--order", .metavar = "O", .kind = OPT_WORD, .dst = &order, .words = orders,
          .help = "made: vertices in the order the points were drawn, faces in qhull's order, "
                  "which is spatially coherent (default; 'input' is the same); random: both in a "
                  "random order from the seed, unorganised like the thesis' original mesh; "
-                 "hilbert: both numbered along a Hilbert curve, for locality"},
+                 "hilbert: both numbered along a Hilbert curve, for locality (3D for a "
+                 "--surface)"},
         {.name = "-o", .alias = "--output", .metavar = "FILE", .kind = OPT_TEXT, .dst = &output,
          .required = true,
          .help = "the file to write (required): .off for OFF, .obj for OBJ (another extension "
@@ -113,11 +137,15 @@ static int cmd_gen(int argc, char **argv)
     int rc;
     if (opts_parse(&o, argc, argv, &rc))
         return rc;
+    if (surface != EMM_SURFACE_PLANE && rows[3].seen)
+        return cli_usage_error("mesh gen", "--density applies to planar meshes only, not to "
+                                           "--surface %s",
+                               surfaces[surface]);
     emm_gen_options opt = {(size_t)faces, seed, (emm_density)density,
                            order == EMM_ORDER_RANDOM || order == EMM_ORDER_HILBERT
                                ? (emm_order)order
                                : EMM_ORDER_MADE};
-    return gen(&opt, output);
+    return gen(&opt, (emm_surface)surface, output);
 }
 
 static int cmd_info(int argc, char **argv)

@@ -115,6 +115,26 @@ typedef enum emm_order {
 /* The name used before `random` existed. */
 #define EMM_ORDER_INPUT EMM_ORDER_MADE
 
+/* The shape emm_mesh_generate_surface makes. `plane` is the planar
+ * Delaunay mesh of emm_mesh_generate. The others are 3D surfaces
+ * built as grids, exactly `faces` triangles, consistently oriented (normals
+ * outward, or up for the terrain), vertices jittered from the seed:
+ * `sphere` (radius 1; genus 0, faces even and >= 20) is one spiral strip of
+ * triangles wound from pole to pole and closed by a fan at each pole, a UV
+ * sphere without seams; `torus` (radii 1 and 0.4; faces even and >= 20) is
+ * one helical strip closed on itself; `terrain` (faces >= 8) is an open
+ * height field z = f(x, y) over the unit square, Gaussian hills from the
+ * seed, a grid of quads split along their shorter diagonal (the last row
+ * may be partial, and an odd count ends in one triangle). `density` applies
+ * to `plane` only. With EMM_ORDER_HILBERT a surface is numbered along a 3D
+ * Hilbert curve (vertices by position, triangles by centroid). */
+typedef enum emm_surface {
+    EMM_SURFACE_PLANE = 0,
+    EMM_SURFACE_SPHERE,
+    EMM_SURFACE_TORUS,
+    EMM_SURFACE_TERRAIN
+} emm_surface;
+
 typedef struct emm_gen_options {
     size_t faces;        /* wanted triangle count, >= 8 */
     uint64_t seed;
@@ -127,6 +147,12 @@ typedef struct emm_gen_options {
 #define EMM_DEFAULT_SEED 1u
 
 EMM_API emm_status emm_mesh_generate(const emm_gen_options *opt, emm_mesh **out, emm_error *err);
+
+/* The same for `surface` (see emm_surface; EMM_SURFACE_PLANE is
+ * emm_mesh_generate). Fails with EMM_ERR_RANGE, naming the surface, for a
+ * face count it cannot make exactly. */
+EMM_API emm_status emm_mesh_generate_surface(const emm_gen_options *opt, emm_surface surface,
+                                             emm_mesh **out, emm_error *err);
 
 #ifdef __cplusplus
 }
