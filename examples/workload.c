@@ -132,10 +132,9 @@ __attribute__((noinline)) bool read_mesh(const char *prog, const char *path, str
     mesh->verNr = nv;
     mesh->triNr = nt;
     mesh->mean_edge = emm_mesh_mean_edge_length(em);
-    mesh->lo[0] = lo[0];
-    mesh->lo[1] = lo[1];
-    mesh->hi[0] = hi[0];
-    mesh->hi[1] = hi[1];
+    memcpy(mesh->lo, lo, sizeof mesh->lo);
+    memcpy(mesh->hi, hi, sizeof mesh->hi);
+    mesh->flat = lo[2] == hi[2];
     emm_mesh_free(em);
     return true;
 
@@ -287,6 +286,48 @@ void field_init(struct field *f, enum field_kind kind, const struct Mesh *m)
     f->lo[0] = m->lo[0];
     f->lo[1] = m->lo[1];
     f->scale = side > 0 ? 1.0 / side : 1.0;
+    double side3 = 0;
+    for (int i = 0; i < 3; i++) {
+        f->mid[i] = (m->lo[i] + m->hi[i]) / 2;
+        if (m->hi[i] - m->lo[i] > side3)
+            side3 = m->hi[i] - m->lo[i];
+    }
+    f->scale3 = side3 > 0 ? 1.0 / side3 : 1.0;
+}
+
+/* In space: the same ramp, tilted up a little, and the bumps at mid-height,
+ * where a terrain lies and a sphere's or torus' surface passes near them. On
+ * a closed surface the projected field has zeros (a sphere's has at least
+ * two); a curve stops at one. */
+static const double field_g3[3] = {1.0, 0.35, 0.2};
+static const struct { double c[3], s, a; } field_bumps3[] = {
+    {{0.30, 0.35, 0.50}, 0.15, 0.062},
+    {{0.65, 0.70, 0.45}, 0.12, -0.050},
+    {{0.70, 0.25, 0.55}, 0.10, 0.041},
+};
+
+void field_at3(const struct field *f, const double p[3], double out[3])
+{
+    if (f->kind == FIELD_UNIFORM) {
+        out[0] = 1.0;
+        out[1] = out[2] = 0.0;
+        return;
+    }
+    double u[3];
+    for (int i = 0; i < 3; i++) {
+        u[i] = (p[i] - f->mid[i]) * f->scale3 + 0.5;
+        out[i] = field_g3[i];
+    }
+    for (size_t k = 0; k < sizeof field_bumps3 / sizeof field_bumps3[0]; k++) {
+        double d[3], r2 = 0, s2 = field_bumps3[k].s * field_bumps3[k].s;
+        for (int i = 0; i < 3; i++) {
+            d[i] = u[i] - field_bumps3[k].c[i];
+            r2 += d[i] * d[i];
+        }
+        double e = field_bumps3[k].a * exp(-r2 / (2.0 * s2)) / s2;
+        for (int i = 0; i < 3; i++)
+            out[i] -= e * d[i];
+    }
 }
 
 void field_at(const struct field *f, double x, double y, double out[2])

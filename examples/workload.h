@@ -43,7 +43,8 @@ struct Mesh {
     struct Triangle *triangles;
     size_t verNr, triNr;
     double mean_edge; /* mean edge length, each edge counted once */
-    double lo[2], hi[2]; /* bounding box in x and y */
+    double lo[3], hi[3]; /* bounding box */
+    bool flat;           /* every z the same: the workloads' planar code paths */
 };
 
 /* Reads `path` (NULL: generates the default mesh, 20,000 clustered faces,
@@ -97,10 +98,16 @@ struct field {
     enum field_kind kind;
     double lo[2];   /* the mesh's bounding box maps to [0,1]² by this offset */
     double scale;   /* and this factor (1 / the longer side) */
+    double mid[3];  /* in space: the bounding box's centre goes to (½, ½, ½) */
+    double scale3;  /* scaled by 1 / its longest side */
 };
 void field_init(struct field *f, enum field_kind kind, const struct Mesh *m);
 /* The field's vector at point (x, y) in mesh coordinates. */
 void field_at(const struct field *f, double x, double y, double out[2]);
+/* The field in space, for surfaces that are not flat: the gradient of a
+ * potential over the bounding box mapped into [0,1]³ (not yet projected
+ * onto any surface). */
+void field_at3(const struct field *f, const double p[3], double out[3]);
 bool field_parse(const char *name, enum field_kind *out);
 
 /* FNV-1a, 64 bits, over bytes: the checksums the programs print. */
