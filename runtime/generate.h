@@ -62,6 +62,11 @@ typedef struct emm_gen_keyed {
 } emm_gen_keyed;
 int emm_gen_keyed_cmp(const void *a, const void *b);
 
+/* The position of the point x (each of its three coordinates `bits` bits,
+ * 1 to 21) along a 3D Hilbert curve of that order; x is overwritten. The
+ * generator's 3D `hilbert` order and the 3D synthetic patterns use it. */
+uint64_t emm_hilbert3(uint32_t x[3], int bits);
+
 /* The 3D surfaces (sphere, torus, terrain; runtime/generate_surface.c):
  * `out` as emm_gen_arrays_build fills it, with hull 0 and attempts 1
  * (EMM_SURFACE_PLANE is emm_gen_arrays_build itself). Fails with EMM_ERR_RANGE naming the surface when

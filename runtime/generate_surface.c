@@ -240,8 +240,9 @@ static double signed_volume6(const struct built *b)
 
 /* Skilling's transform ("Programming the Hilbert curve", 2004): the axes'
  * bits turned into the transposed Hilbert index, then interleaved. */
-static uint64_t hilbert3(uint32_t x[3], int bits)
+uint64_t emm_hilbert3(uint32_t x[3], int bits)
 {
+    assert(bits >= 1 && bits <= 21);
     uint32_t m = 1u << (bits - 1);
     for (uint32_t qb = m; qb > 1; qb >>= 1) {
         uint32_t p = qb - 1;
@@ -282,7 +283,7 @@ static uint64_t hilbert_key3(const struct cube *c, const double p[3])
         double f = c->side > 0 ? (p[i] - c->lo[i]) / c->side : 0.0;
         x[i] = (uint32_t)fmin(top, fmax(0.0, f * top));
     }
-    return hilbert3(x, 21);
+    return emm_hilbert3(x, 21);
 }
 
 /* Numbers b's vertices and triangles in `order` into out (b's arrays are

@@ -2,7 +2,16 @@
  * random access, region growing, curves and scan lines — and the Z-order and
  * Gray-code curves of Figs. 5.2 and 5.3). Each pattern is an order of
  * triangle visits; a visit reads the triangle record and its three vertices,
- * as the thesis' workloads do. */
+ * as the thesis' workloads do.
+ *
+ * A mesh is seen in the plane of its bounding box's two largest extents
+ * (core/geom.h). A mesh with depth — no extent of its box is zero: a
+ * surface in space, not a flat mesh — is ordered in 3D instead: Z-order,
+ * Gray-code and Hilbert keys take all three coordinates of the centroids
+ * (21 bits each), and a curve walks straight across each triangle's own
+ * plane, its direction unfolded about every edge it crosses, ending at the
+ * boundary or after the length of the box's diagonal (a closed surface has
+ * no boundary). Scan lines, spirals and the corner stay in the plane. */
 #include "emm/synth.h"
 
 #include <math.h>
@@ -11,6 +20,7 @@
 
 #include "emm/trace.h"
 #include "error.h"
+#include "generate.h"
 #include "geom.h"
 #include "parse.h"
 #include "synth_internal.h"
@@ -88,6 +98,12 @@ struct synth {
     int ax, ay;          /* the two axes used */
     double lo[2], hi[2]; /* bounding box over them */
     double *cx, *cy;     /* triangle centroids */
+    /* With depth: the third axis, its range, the centroids along it, and
+     * the box's diagonal (a curve's longest walk). */
+    bool depth;
+    int az;
+    double zlo, zhi, diag;
+    double *cz;
 };
 
 static void synth_init_axes(struct synth *s)
@@ -102,6 +118,12 @@ static void synth_init_axes(struct synth *s)
     s->hi[0] = hi[s->ax];
     s->lo[1] = lo[s->ay];
     s->hi[1] = hi[s->ay];
+    s->az = 3 - s->ax - s->ay;
+    s->zlo = lo[s->az];
+    s->zhi = hi[s->az];
+    s->depth = s->zhi > s->zlo;
+    s->diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                   (hi[2] - lo[2]) * (hi[2] - lo[2]));
 }
 
 static void vertex_2d(const struct synth *s, int32_t v, double *x, double *y)
@@ -119,6 +141,35 @@ static void quantise(const struct synth *s, size_t t, uint32_t *qx, uint32_t *qy
     double fy = h > 0 ? (s->cy[t] - s->lo[1]) / h : 0.0;
     *qx = (uint32_t)fmin(65535.0, fmax(0.0, fx * 65536.0));
     *qy = (uint32_t)fmin(65535.0, fmax(0.0, fy * 65536.0));
+}
+
+/* With depth: the centroid's three coordinates to 21 bits each. */
+static void quantise3(const struct synth *s, size_t t, uint32_t q[3])
+{
+    const double top = (double)((1u << 21) - 1);
+    double c[3] = {s->cx[t], s->cy[t], s->cz[t]};
+    double lo[3] = {s->lo[0], s->lo[1], s->zlo}, hi[3] = {s->hi[0], s->hi[1], s->zhi};
+    for (int i = 0; i < 3; i++) {
+        double f = hi[i] > lo[i] ? (c[i] - lo[i]) / (hi[i] - lo[i]) : 0.0;
+        q[i] = (uint32_t)fmin(top, fmax(0.0, f * top));
+    }
+}
+
+/* 21 bits spread to every third bit. */
+static uint64_t spread3(uint32_t v)
+{
+    uint64_t x = v & 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffull;
+    x = (x | x << 16) & 0x1f0000ff0000ffull;
+    x = (x | x << 8) & 0x100f00f00f00f00full;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+}
+
+static uint64_t morton3(const uint32_t q[3])
+{
+    return spread3(q[0]) | spread3(q[1]) << 1 | spread3(q[2]) << 2;
 }
 
 static uint64_t spread_bits(uint32_t v)
@@ -186,7 +237,17 @@ static void order_by_key(const struct synth *s, emm_pattern p, double band, uint
         uint32_t qx, qy;
         quantise(s, t, &qx, &qy);
         uint64_t key = 0;
-        switch (p) {
+        uint32_t q[3];
+        emm_pattern plane = p; /* the pattern in the plane; COUNT: none */
+        if (s->depth && (p == EMM_PATTERN_ZORDER || p == EMM_PATTERN_GRAY ||
+                         p == EMM_PATTERN_HILBERT)) {
+            quantise3(s, t, q);
+            key = p == EMM_PATTERN_HILBERT ? emm_hilbert3(q, 21)
+                  : p == EMM_PATTERN_GRAY  ? gray_rank(morton3(q))
+                                           : morton3(q);
+            plane = EMM_PATTERN_COUNT;
+        }
+        switch (plane) {
         case EMM_PATTERN_ZORDER: key = morton(qx, qy); break;
         case EMM_PATTERN_GRAY: key = gray_rank(morton(qx, qy)); break;
         case EMM_PATTERN_HILBERT: key = hilbert(qx, qy); break;
@@ -283,6 +344,133 @@ static size_t walk(const struct synth *s, uint32_t t, double dx, double dy, size
     return n;
 }
 
+static void sub3(const double *a, const double *b, double *o)
+{
+    for (int i = 0; i < 3; i++)
+        o[i] = a[i] - b[i];
+}
+
+static double dot3(const double *a, const double *b)
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void cross3(const double *a, const double *b, double *o)
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static void unit3(double *a)
+{
+    double l = sqrt(dot3(a, a));
+    if (l > 0)
+        for (int i = 0; i < 3; i++)
+            a[i] /= l;
+}
+
+/* Triangle t's plane: corner 0, and two orthonormal axes in it. */
+static void plane_frame(const emm_mesh *m, const emm_triangle *tr, const double **o, double u[3],
+                        double w[3])
+{
+    const double *a = emm_mesh_vertex(m, (uint32_t)tr->v[0])->xyz;
+    const double *b = emm_mesh_vertex(m, (uint32_t)tr->v[1])->xyz;
+    const double *c = emm_mesh_vertex(m, (uint32_t)tr->v[2])->xyz;
+    double e2[3], n[3];
+    sub3(b, a, u);
+    sub3(c, a, e2);
+    cross3(u, e2, n);
+    cross3(n, u, w);
+    unit3(u);
+    unit3(w);
+    *o = a;
+}
+
+/* walk in space: the same rule in each triangle's plane (its own 2D frame);
+ * where the ray leaves across an edge, its direction is unfolded about the
+ * edge into the neighbour's plane (same component along the edge, the rest
+ * pointing into the neighbour). Ends at the boundary, after `max`
+ * triangles, or once it has gone `reach`. */
+static size_t walk3(const struct synth *s, uint32_t t, double angle, size_t max, double reach,
+                    uint32_t *out)
+{
+    const emm_triangle *tr = emm_mesh_triangle(s->m, t);
+    const double *o;
+    double u[3], w[3], p[3] = {0, 0, 0}, dir[3];
+    plane_frame(s->m, tr, &o, u, w);
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 3; i++)
+            p[i] += emm_mesh_vertex(s->m, (uint32_t)tr->v[k])->xyz[i] / 3;
+    for (int i = 0; i < 3; i++)
+        dir[i] = cos(angle) * u[i] + sin(angle) * w[i];
+    int32_t from = -1;
+    double gone = 0;
+    size_t n = 0;
+    while (n < max) {
+        out[n++] = t;
+        tr = emm_mesh_triangle(s->m, t);
+        plane_frame(s->m, tr, &o, u, w);
+        double rel[3];
+        sub3(p, o, rel);
+        double px = dot3(rel, u), py = dot3(rel, w), dx = dot3(dir, u), dy = dot3(dir, w);
+        double best = INFINITY;
+        int exit_edge = -1;
+        for (int i = 0; i < 3; i++) {
+            if (tr->n[i] == from && from >= 0)
+                continue;
+            double ra[3], rb[3];
+            sub3(emm_mesh_vertex(s->m, (uint32_t)tr->v[i])->xyz, o, ra);
+            sub3(emm_mesh_vertex(s->m, (uint32_t)tr->v[(i + 1) % 3])->xyz, o, rb);
+            double ax = dot3(ra, u), ay = dot3(ra, w), bx = dot3(rb, u), by = dot3(rb, w);
+            double ex = bx - ax, ey = by - ay;
+            double den = dx * ey - dy * ex;
+            if (fabs(den) < 1e-300)
+                continue;
+            double r = ((ax - px) * ey - (ay - py) * ex) / den;
+            double f = ((ax - px) * dy - (ay - py) * dx) / den;
+            if (r > 0 && f >= -1e-12 && f <= 1 + 1e-12 && r < best) {
+                best = r;
+                exit_edge = i;
+            }
+        }
+        if (exit_edge < 0 || tr->n[exit_edge] < 0)
+            break;
+        gone += best;
+        if (gone > reach)
+            break;
+        for (int i = 0; i < 3; i++)
+            p[i] += best * dir[i];
+        /* Unfold about the edge into the neighbour. */
+        const double *a = emm_mesh_vertex(s->m, (uint32_t)tr->v[exit_edge])->xyz;
+        const double *b = emm_mesh_vertex(s->m, (uint32_t)tr->v[(exit_edge + 1) % 3])->xyz;
+        const emm_triangle *nx = emm_mesh_triangle(s->m, (uint32_t)tr->n[exit_edge]);
+        const double *c = NULL;
+        for (int k = 0; k < 3; k++)
+            if (nx->v[k] != tr->v[exit_edge] && nx->v[k] != tr->v[(exit_edge + 1) % 3])
+                c = emm_mesh_vertex(s->m, (uint32_t)nx->v[k])->xyz;
+        double e[3], into[3];
+        sub3(b, a, e);
+        unit3(e);
+        double along = dot3(dir, e), across[3];
+        for (int i = 0; i < 3; i++)
+            across[i] = dir[i] - along * e[i];
+        double width = sqrt(dot3(across, across));
+        if (c) {
+            sub3(c, a, into);
+            double k = dot3(into, e);
+            for (int i = 0; i < 3; i++)
+                into[i] -= k * e[i];
+            unit3(into);
+            for (int i = 0; i < 3; i++)
+                dir[i] = along * e[i] + width * into[i];
+        }
+        from = (int32_t)t;
+        t = (uint32_t)tr->n[exit_edge];
+    }
+    return n;
+}
+
 static size_t order_curves(const struct synth *s, uint64_t *rng, uint64_t visits,
                            uint64_t length, uint32_t *order)
 {
@@ -292,7 +480,8 @@ static size_t order_curves(const struct synth *s, uint64_t *rng, uint64_t visits
         double a = rng_unit(rng) * 2 * M_PI;
         size_t room = (size_t)(visits - n);
         size_t max = length && length < room ? (size_t)length : room;
-        n += walk(s, t, cos(a), sin(a), max, order + n);
+        n += s->depth ? walk3(s, t, a, max, s->diag, order + n)
+                      : walk(s, t, cos(a), sin(a), max, order + n);
     }
     return n;
 }
@@ -323,8 +512,10 @@ static emm_status synth_order(const emm_mesh *m, const emm_synth_options *opt, c
     int32_t *tri = tri_out ? malloc(s.nt * 3 * sizeof *tri) : NULL;
     s.cx = malloc(s.nt * sizeof *s.cx);
     s.cy = malloc(s.nt * sizeof *s.cy);
+    s.cz = s.depth ? malloc(s.nt * sizeof *s.cz) : NULL;
     uint32_t *order = malloc(order_cap * sizeof *order);
-    if ((xyz_out && !xyz) || (tri_out && !tri) || !s.cx || !s.cy || !order) {
+    if ((xyz_out && !xyz) || (tri_out && !tri) || !s.cx || !s.cy || (s.depth && !s.cz) ||
+        !order) {
         st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for a %zu-triangle mesh", name, s.nt);
         goto done;
     }
@@ -343,6 +534,11 @@ static emm_status synth_order(const emm_mesh *m, const emm_synth_options *opt, c
         }
         s.cx[t] = sx / 3;
         s.cy[t] = sy / 3;
+        if (s.cz)
+            s.cz[t] = (emm_mesh_vertex(m, (uint32_t)tr->v[0])->xyz[s.az] +
+                       emm_mesh_vertex(m, (uint32_t)tr->v[1])->xyz[s.az] +
+                       emm_mesh_vertex(m, (uint32_t)tr->v[2])->xyz[s.az]) /
+                      3;
     }
 
     /* Scan-line rows and spiral rings are one mean edge length apart. */
@@ -398,6 +594,7 @@ done:
     free(tri);
     free(s.cx);
     free(s.cy);
+    free(s.cz);
     free(order);
     return st;
 }
