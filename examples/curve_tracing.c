@@ -27,6 +27,15 @@
  *   the two fields here), after 4 * (bounding-box diagonal) / lambda steps,
  *   or when one step crosses more than 10,000 edges (numerical trouble only).
  *
+ * On a surface in space (a mesh whose z are not all equal) the same walk
+ * goes over the surface (trace_curve3): the field is a spatial potential's
+ * gradient (field_at3) projected onto each triangle's plane, a step goes
+ * straight in that plane and is unfolded about each edge it crosses into
+ * the next triangle's plane, the step limit uses the 3D box's diagonal, and
+ * a curve also ends where the field turns against its last step: it passed
+ * a zero of the field, which a closed surface always has. Flat meshes take
+ * the planar code above, so their outputs are what they were.
+ *
  * Output: the number of curves of positive length and their total length
  * (in mesh units), "curves: N\nlength: X.XXXXXX\n". */
 #include <math.h>
@@ -46,13 +55,14 @@ static void usage(FILE *out)
     fprintf(out,
             "usage: " PROG " [--short|--long] [--curves N] [--field tension|uniform] [--times] [MESH]\n"
             "\n"
-            "Traces curves through a tension field over a planar triangle mesh (thesis\n"
-            "section 4.3.1) and prints their number and total length. MESH is an OFF,\n"
-            "OBJ, PLY or STL file; without it the default mesh (20,000 clustered faces,\n"
-            "seed 1) is generated in memory.\n"
+            "Traces curves through a tension field over a triangle mesh (thesis section\n"
+            "4.3.1) and prints their number and total length. MESH is an OFF, OBJ, PLY\n"
+            "or STL file; without it the default mesh (20,000 clustered faces, seed 1)\n"
+            "is generated in memory. On a mesh that is not flat (a sphere, a terrain)\n"
+            "the curves follow the surface and also end where the field vanishes.\n"
             "\n"
             "  --short          stop a curve where it meets an earlier one (default)\n"
-            "  --long           trace every curve to the boundary\n"
+            "  --long           trace every curve to the boundary (or a sink)\n"
             "  --curves N       number of seed vertices (default %d)\n"
             "  --field F        tension (default) or uniform (the constant field (1, 0))\n"
             "  --times          print load and traversal seconds on stderr\n",

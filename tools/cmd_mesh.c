@@ -56,8 +56,9 @@ static void usage_gen(FILE *out, const opts *o)
             "  terrain  open, a height field z = f(x, y) over the unit square with hills\n"
             "           from the seed: any N from %u. A grid of quads split along their\n"
             "           shorter diagonal; the last row may be partial.\n"
-            "Time and memory grow linearly with N (10 million faces: about 15 s and\n"
-            "2 GiB). --order hilbert numbers a surface along a 3D Hilbert curve.\n"
+            "Time and memory grow linearly with N (10 million faces: about 20 s and\n"
+            "1.1 GiB). --order made numbers a surface as it is built, hilbert along a\n"
+            "3D Hilbert curve (vertices by position, faces by centroid).\n"
             "\n",
             EMM_GEN_MIN_CLOSED_FACES, EMM_GEN_MIN_CLOSED_FACES, EMM_GEN_MIN_FACES);
     opts_help(out, o);

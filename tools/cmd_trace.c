@@ -400,7 +400,10 @@ static void synth_usage(FILE *out, const opts *o)
           "neighbours, 24 bytes) and then its three vertices' coordinates (24 bytes\n"
           "each), so a trace has 4 records per visit, over the thesis' record layout\n"
           "(80-byte vertices, 28-byte triangles) and the mesh's geometry. The same\n"
-          "options give the same file, byte for byte.\n"
+          "options give the same file, byte for byte. A mesh is seen in the plane of\n"
+          "its bounding box's two largest extents; one with depth (a surface in space,\n"
+          "no extent zero) has its zorder, gray and hilbert orders taken in 3D, and\n"
+          "its curves walk each triangle's plane, for at most the box's diagonal.\n"
           "\n",
           out);
     opts_help(out, o);

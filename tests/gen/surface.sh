@@ -24,8 +24,8 @@ check() { # FILE KIND FACES
 }
 
 for kind in sphere torus terrain; do
-    ns="20 22 24 26 30 38 50 98 100 102 1000 4094 20000"
-    [ $kind = terrain ] && ns="8 9 10 11 13 21 99 100 101 1001 4095 20000"
+    ns="20 22 24 26 30 38 50 98 100 1000 4094"
+    [ $kind = terrain ] && ns="8 9 10 11 13 21 99 100 101 1001 4095"
     for n in $ns; do
         f="$dir/$kind-$n.off"
         line=$("$emm" mesh gen --surface $kind --faces $n --seed $n -o "$f") || fail "gen $kind $n"
