@@ -228,19 +228,15 @@ size_t emm_strategy_sweep_describe(char *buf, size_t cap)
 {
     char cells[128] = "";
     size_t o = 0;
-    int planar = 0, space = 0;
-    for (int l = EMM_LAYOUT_ORIGINAL + 1; l < EMM_LAYOUT_COUNT; l++) {
+    int planar = 0;
+    for (int l = EMM_LAYOUT_ORIGINAL + 1; l < EMM_LAYOUT_COUNT; l++)
         planar += layout_dims[l] == 2;
-        space += layout_dims[l] == 3;
-    }
     for (size_t c = 0; c < sizeof sweep_cells / sizeof *sweep_cells && o < sizeof cells; c++)
         o += (size_t)snprintf(cells + o, sizeof cells - o, "%s%u", c ? ", " : "", sweep_cells[c]);
     int n = snprintf(buf, cap,
                      "%d layouts x %d fetch schemes x cells %s, then direct, cache and cache@ "
-                     "each layout: %zu strategies; a mesh with depth adds %d layouts in space: "
-                     "%zu",
-                     planar, EMM_FETCH_COUNT - 1, cells, emm_strategy_sweep(NULL, 0), space,
-                     emm_strategy_sweep_for(1, NULL, 0));
+                     "each layout: %zu strategies",
+                     planar, EMM_FETCH_COUNT - 1, cells, emm_strategy_sweep(NULL, 0));
     return n < 0 ? 0 : (size_t)n;
 }
 

@@ -32,16 +32,17 @@ static void usage(FILE *out, const opts *o)
             "fetches) or the DMA counts.\n"
             "\n"
             "With --all, simulates the standard sweep,\n"
-            "  %s\n"
-            "(a mesh has depth when the smallest extent of its bounding box is at least\n"
-            "%g of the largest; docs/layouts.md),\n"
+            "  %s,\n"
+            "and for a mesh with depth (the smallest extent of its bounding box at least\n"
+            "%g of the largest) the layouts in space too (grid3d, tiles3d, octree;\n"
+            "docs/layouts.md), %zu strategies in all,\n"
             "and prints one line per strategy, fastest first: total cycles, seconds,\n"
             "speed-up over direct and over cache, and the largest buckets. A\n"
             "strategy that cannot run on this trace (a cell larger than the local store, a\n"
             "trace without geometry) is listed as skipped with the reason, and the sweep\n"
             "goes on.\n"
             "\n",
-            sweep, EMM_DEPTH_RATIO);
+            sweep, EMM_DEPTH_RATIO, emm_strategy_sweep_for(1, NULL, 0));
     opts_help(out, o);
     fprintf(out,
             "\n"

@@ -117,9 +117,10 @@ EMM_API uint32_t emm_layout_kind_dims(emm_layout_kind k);
  * share the cells of a projection, has. Indices must be in range. */
 #define EMM_DEPTH_RATIO 0.1
 EMM_API int emm_geometry_has_depth(const double *xyz, size_t nv, const int32_t *tri, size_t nt);
-/* The sweep in words, for help texts: "3 layouts x 3 fetch schemes x cells
- * 16, ..., then direct, cache and cache@ each layout: 50 strategies; a mesh
- * with depth adds ...". Returns the length needed, as snprintf does. */
+/* The standard sweep in words, for help texts: "3 layouts x 3 fetch schemes
+ * x cells 16, ..., then direct, cache and cache@ each layout: 50
+ * strategies" (the layouts in the plane). Returns the length needed, as
+ * snprintf does. */
 EMM_API size_t emm_strategy_sweep_describe(char *buf, size_t cap);
 /* The sweep's cell sizes, ascending; returns their count. */
 EMM_API size_t emm_strategy_sweep_cells(const uint32_t **cells);

@@ -110,13 +110,11 @@ int main(void)
     free(flat);
     free(sweep);
     CHECK(emm == L * F * 7 && cache == L + 1 && direct == 1);
-    char text[512], expect[128];
+    char text[256], expect[128];
     emm_strategy_sweep_describe(text, sizeof text);
     snprintf(expect, sizeof expect, "%zu layouts x %zu fetch schemes x cells 4, 8, 16, 32, 64, 128, 256", L, F);
     CHECKF(strstr(text, expect), "%s", text);
     snprintf(expect, sizeof expect, "%zu strategies", want);
-    CHECKF(strstr(text, expect), "%s", text);
-    snprintf(expect, sizeof expect, "a mesh with depth adds %zu layouts in space: %zu", L3, want3);
     CHECKF(strstr(text, expect), "%s", text);
     return check_done();
 }
