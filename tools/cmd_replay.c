@@ -366,10 +366,12 @@ int emm_cmd_replay(int argc, char **argv)
          .repeat = true, .dst = &a.strategies,
          .help = "direct (word-by-word remote reads), cache (the hardware cache on the original "
                  "addresses), cache@LAYOUT (the cache on the addresses of a reordered layout: "
-                 "grid, tiles, quadtree) or LAYOUT+FETCH[@CELL] (an EMM strategy); may be "
+                 "grid, tiles, quadtree, grid3d, tiles3d, octree) or LAYOUT+FETCH[@CELL] (an "
+                 "EMM strategy); may be "
                  "repeated; default: direct and cache"},
         {.name = "--all", .kind = OPT_FLAG, .dst = &a.all,
-         .help = "the standard sweep (not with --strategy)"},
+         .help = "the standard sweep, with the layouts in space for a mesh with depth (not "
+                 "with --strategy)"},
         {.name = "--jobs", .alias = "-j", .metavar = "N", .kind = OPT_U64, .dst = &a.jobs,
          .min = 1, .max = MAX_JOBS,
          .help = "threads simulating strategies (default: the online CPUs, at most one per "
