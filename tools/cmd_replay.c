@@ -35,7 +35,7 @@ static void usage(FILE *out, const opts *o)
             "  %s,\n"
             "and for a mesh with depth (the smallest extent of its bounding box at least\n"
             "%g of the largest) the layouts in space too (grid3d, tiles3d, octree;\n"
-            "docs/layouts.md), %zu strategies in all,\n"
+            "docs/layouts.md), a sweep of %zu,\n"
             "and prints one line per strategy, fastest first: total cycles, seconds,\n"
             "speed-up over direct and over cache, and the largest buckets. A\n"
             "strategy that cannot run on this trace (a cell larger than the local store, a\n"
