@@ -132,7 +132,10 @@ static void size_boxes(const emm_layout *l, struct boxes *b, double want)
     }
     double s = live ? pow(want / prod, 1.0 / live) : 0;
     for (int a = 0; a < 3; a++) {
+        /* At most `want` boxes along an axis: a very thin extent beside a
+         * long one must not multiply the boxes along the long one. */
         double v = e[a] > 0 ? e[a] * s : 1;
+        v = v > want ? want : v;
         b->n[a] = v < 1 ? 1 : v > (double)MAX_BOXES ? MAX_BOXES : (uint32_t)llround(v);
         if (b->n[a] < 1)
             b->n[a] = 1;

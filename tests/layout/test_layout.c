@@ -885,6 +885,22 @@ int main(void)
     mesh_free(&flat);
     check_all3d(&(mesh){(double[]){0, 0, 0, 1, 0, 0, 0, 1, 1}, 3, (int32_t[]){0, 1, 2}, 1},
                 "one", 1);
+    /* A needle, 1e-9 thick: the boxes stay about as many as the cells
+     * wanted, all along its length. */
+    mesh needle = grid_mesh(60, 2, 1.0);
+    for (size_t v = 0; v < needle.nv; v++) {
+        needle.xyz[3 * v + 1] *= 1e-9;
+        needle.xyz[3 * v + 2] = 1e-9 * needle.xyz[3 * v];
+    }
+    check_all3d(&needle, "needle", 8);
+    for (int k = 0; k < 2; k++) {
+        emm_layout *l = build(&needle, k ? EMM_LAYOUT_TILES3D : EMM_LAYOUT_GRID3D, 8);
+        REQUIRE(l);
+        CHECKF(emm_layout_cell_count(l) <= 4 * (needle.nt / 8 + 1), "needle: %u boxes for %zu triangles",
+               emm_layout_cell_count(l), needle.nt);
+        emm_layout_free(l);
+    }
+    mesh_free(&needle);
     test_depth();
 
     test_cell_counts();
