@@ -179,7 +179,9 @@ static const result *at_cell(const report *rep, emm_layout_kind l, emm_fetch_kin
 /* ---- figures ------------------------------------------------------------ */
 
 /* The sweep's layouts, fetch schemes and cell sizes (emm/strategy.h), so a
- * figure lists whatever the standard sweep holds. */
+ * figure lists whatever the standard sweep holds: the layouts in the plane
+ * (the thesis' meshes are planar; those in space join only the sweep of a
+ * mesh with depth). */
 static emm_layout_kind layouts[EMM_LAYOUT_COUNT];
 static emm_fetch_kind fetches[EMM_FETCH_COUNT];
 static const uint32_t *cells;
@@ -188,7 +190,8 @@ static size_t nlayouts, nfetches, ncells;
 static void sweep_parts(void)
 {
     for (int l = EMM_LAYOUT_ORIGINAL + 1; l < EMM_LAYOUT_COUNT; l++)
-        layouts[nlayouts++] = (emm_layout_kind)l;
+        if (emm_layout_kind_dims((emm_layout_kind)l) == 2)
+            layouts[nlayouts++] = (emm_layout_kind)l;
     for (int f = EMM_FETCH_NONE + 1; f < EMM_FETCH_COUNT; f++)
         fetches[nfetches++] = (emm_fetch_kind)f;
     ncells = emm_strategy_sweep_cells(&cells);

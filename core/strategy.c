@@ -3,6 +3,7 @@
  * environment, the command line, the tables and the reports. */
 #include "emm/strategy.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -10,17 +11,25 @@
 #include "parse.h"
 
 #define NAME_(e, n, w) #n,
-static const char *const layout_names[EMM_LAYOUT_COUNT] = {"original", EMM_LAYOUT_LIST(NAME_)};
+#define LNAME_(e, n, d, w) #n,
+static const char *const layout_names[EMM_LAYOUT_COUNT] = {"original", EMM_LAYOUT_LIST(LNAME_)};
 static const char *const fetch_names[EMM_FETCH_COUNT] = {"none", EMM_FETCH_LIST(NAME_)};
 #undef NAME_
+#undef LNAME_
+#define DIMS_(e, n, d, w) d,
+static const uint32_t layout_dims[EMM_LAYOUT_COUNT] = {0, EMM_LAYOUT_LIST(DIMS_)};
+#undef DIMS_
 #define WORDS_(e, n, w) w,
+#define LWORDS_(e, n, d, w) w,
 static const char *const layout_words[EMM_LAYOUT_COUNT] = {"the program's own layout",
-                                                          EMM_LAYOUT_LIST(WORDS_)};
+                                                          EMM_LAYOUT_LIST(LWORDS_)};
 static const char *const fetch_words[EMM_FETCH_COUNT] = {"", EMM_FETCH_LIST(WORDS_)};
 #undef WORDS_
-/* "grid, tiles, quadtree" */
+#undef LWORDS_
+/* "grid, tiles, quadtree, ..." */
 #define LIST_(e, n, w) ", " #n
-#define LAYOUTS (&(EMM_LAYOUT_LIST(LIST_))[2])
+#define LLIST_(e, n, d, w) ", " #n
+#define LAYOUTS (&(EMM_LAYOUT_LIST(LLIST_))[2])
 #define FETCHES (&(EMM_FETCH_LIST(LIST_))[2])
 
 #define ACCEPTED "direct, cache, cache@LAYOUT or LAYOUT+FETCH[@CELL]"
@@ -38,7 +47,7 @@ const char *emm_fetch_name(emm_fetch_kind k)
     return (unsigned)k < sizeof fetch_names / sizeof *fetch_names ? fetch_names[k] : "?";
 }
 
-/* Matches [s, s+n) against the three EMM layouts. */
+/* Matches [s, s+n) against the EMM layouts. */
 static int match_layout(const char *s, size_t n, emm_layout_kind *out)
 {
     for (int k = EMM_LAYOUT_ORIGINAL + 1; k < EMM_LAYOUT_COUNT; k++)
@@ -159,7 +168,31 @@ size_t emm_strategy_sweep_cells(const uint32_t **cells)
     return sizeof sweep_cells / sizeof *sweep_cells;
 }
 
-size_t emm_strategy_sweep(emm_strategy *out, size_t cap)
+uint32_t emm_layout_kind_dims(emm_layout_kind k)
+{
+    return (unsigned)k < EMM_LAYOUT_COUNT ? layout_dims[k] : 0;
+}
+
+int emm_geometry_has_depth(const double *xyz, size_t nv, const int32_t *tri, size_t nt)
+{
+    (void)nv;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < 3 * nt; i++)
+        for (int a = 0; a < 3; a++) {
+            double v = xyz[3 * (size_t)tri[i] + a];
+            lo[a] = v < lo[a] ? v : lo[a];
+            hi[a] = v > hi[a] ? v : hi[a];
+        }
+    double small = INFINITY, big = 0;
+    for (int a = 0; a < 3 && nt > 0; a++) {
+        double e = hi[a] - lo[a];
+        small = e < small ? e : small;
+        big = e > big ? e : big;
+    }
+    return nt > 0 && isfinite(big) && big > 0 && small >= EMM_DEPTH_RATIO * big;
+}
+
+size_t emm_strategy_sweep_for(int depth, emm_strategy *out, size_t cap)
 {
     size_t n = 0;
 #define PUT(...)                                                                               \
@@ -168,29 +201,42 @@ size_t emm_strategy_sweep(emm_strategy *out, size_t cap)
             out[n] = (emm_strategy){__VA_ARGS__};                                              \
         n++;                                                                                   \
     } while (0)
-    for (int l = EMM_LAYOUT_ORIGINAL + 1; l < EMM_LAYOUT_COUNT; l++)
-        for (int f = EMM_FETCH_NONE + 1; f < EMM_FETCH_COUNT; f++)
-            for (size_t c = 0; c < sizeof sweep_cells / sizeof *sweep_cells; c++)
-                PUT(EMM_STRATEGY_EMM, (emm_layout_kind)l, (emm_fetch_kind)f, sweep_cells[c]);
+    /* The layouts in the plane, then (with depth) those in space. */
+    for (uint32_t d = 2; d <= (depth ? 3u : 2u); d++)
+        for (int l = EMM_LAYOUT_ORIGINAL + 1; l < EMM_LAYOUT_COUNT; l++)
+            if (layout_dims[l] == d)
+                for (int f = EMM_FETCH_NONE + 1; f < EMM_FETCH_COUNT; f++)
+                    for (size_t c = 0; c < sizeof sweep_cells / sizeof *sweep_cells; c++)
+                        PUT(EMM_STRATEGY_EMM, (emm_layout_kind)l, (emm_fetch_kind)f,
+                            sweep_cells[c]);
     PUT(EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0);
     PUT(EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0);
-    for (int l = EMM_LAYOUT_ORIGINAL + 1; l < EMM_LAYOUT_COUNT; l++)
-        PUT(EMM_STRATEGY_CACHE, (emm_layout_kind)l, EMM_FETCH_NONE, EMM_DEFAULT_CELL);
+    for (uint32_t d = 2; d <= (depth ? 3u : 2u); d++)
+        for (int l = EMM_LAYOUT_ORIGINAL + 1; l < EMM_LAYOUT_COUNT; l++)
+            if (layout_dims[l] == d)
+                PUT(EMM_STRATEGY_CACHE, (emm_layout_kind)l, EMM_FETCH_NONE, EMM_DEFAULT_CELL);
 #undef PUT
     return n;
+}
+
+size_t emm_strategy_sweep(emm_strategy *out, size_t cap)
+{
+    return emm_strategy_sweep_for(0, out, cap);
 }
 
 size_t emm_strategy_sweep_describe(char *buf, size_t cap)
 {
     char cells[128] = "";
     size_t o = 0;
+    int planar = 0;
+    for (int l = EMM_LAYOUT_ORIGINAL + 1; l < EMM_LAYOUT_COUNT; l++)
+        planar += layout_dims[l] == 2;
     for (size_t c = 0; c < sizeof sweep_cells / sizeof *sweep_cells && o < sizeof cells; c++)
         o += (size_t)snprintf(cells + o, sizeof cells - o, "%s%u", c ? ", " : "", sweep_cells[c]);
     int n = snprintf(buf, cap,
                      "%d layouts x %d fetch schemes x cells %s, then direct, cache and cache@ "
                      "each layout: %zu strategies",
-                     EMM_LAYOUT_COUNT - 1, EMM_FETCH_COUNT - 1, cells,
-                     emm_strategy_sweep(NULL, 0));
+                     planar, EMM_FETCH_COUNT - 1, cells, emm_strategy_sweep(NULL, 0));
     return n < 0 ? 0 : (size_t)n;
 }
 

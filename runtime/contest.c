@@ -254,13 +254,23 @@ emm_status emm_contest_trace(const char *path, const emm_machine *m, const emm_s
     emm_runner *run = NULL;
     contest *c = NULL;
     emm_trace_record *buf = NULL;
-    size_t count = emm_strategy_sweep(NULL, 0), n = 0;
-    emm_strategy *list = calloc(count + 1, sizeof *list);
-    emm_error *errs = calloc(count + 1, sizeof *errs);
-    size_t *idx = calloc(count + 1, sizeof *idx);
-    bool *pinned = calloc(count + 1, sizeof *pinned);
-    emm_strategy *sweep = calloc(count, sizeof *sweep);
+    size_t count = 0, n = 0;
+    emm_strategy *list = NULL, *sweep = NULL;
+    emm_error *errs = NULL;
+    size_t *idx = NULL;
+    bool *pinned = NULL;
     emm_status st;
+    if ((st = emm_trace_reader_open(path, &r, err)) != EMM_OK)
+        goto out;
+    /* A mesh with depth brings the layouts in space into the sweep. */
+    const emm_trace_geometry *g = &emm_trace_reader_info(r)->geometry;
+    int depth = emm_geometry_has_depth(g->xyz, g->nv, g->tri, g->nt);
+    count = emm_strategy_sweep_for(depth, NULL, 0);
+    list = calloc(count + 1, sizeof *list);
+    errs = calloc(count + 1, sizeof *errs);
+    idx = calloc(count + 1, sizeof *idx);
+    pinned = calloc(count + 1, sizeof *pinned);
+    sweep = calloc(count, sizeof *sweep);
     if (!list || !errs || !idx || !pinned || !sweep) {
         st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the contest", path);
         goto out;
@@ -268,7 +278,7 @@ emm_status emm_contest_trace(const char *path, const emm_machine *m, const emm_s
     /* The prediction first (kept running to the end, to set against the
      * answer), then every other candidate of the sweep the machine offers. */
     list[n++] = *predicted;
-    emm_strategy_sweep(sweep, count);
+    emm_strategy_sweep_for(depth, sweep, count);
     for (size_t i = 0; i < count; i++)
         if (emm_machine_offers(m, &sweep[i]) && memcmp(&sweep[i], predicted, sizeof *predicted))
             list[n++] = sweep[i];
@@ -276,8 +286,7 @@ emm_status emm_contest_trace(const char *path, const emm_machine *m, const emm_s
         idx[i] = i;
         pinned[i] = i == 0 || contest_pins(&list[i]);
     }
-    if ((st = emm_trace_reader_open(path, &r, err)) != EMM_OK ||
-        (st = emm_runner_new(threads, &run, err)) != EMM_OK ||
+    if ((st = emm_runner_new(threads, &run, err)) != EMM_OK ||
         (st = emm_runner_add(run, m, list, n, emm_trace_reader_info(r), errs, err)) != EMM_OK ||
         (st = contest_new(run, idx, pinned, n, lead, unit, finalists, &c, err)) != EMM_OK)
         goto out;

@@ -680,7 +680,10 @@ static bool wants_window_check(const session *s)
 static emm_status build_models(session *s, emm_error *err)
 {
     bool racing = wants_contest(s), checking = wants_window_check(s);
-    size_t sweep = emm_strategy_sweep(NULL, 0);
+    /* A mesh with depth brings the layouts in space into the sweep. */
+    const emm_trace_geometry *g = &s->info.geometry;
+    int depth = emm_geometry_has_depth(g->xyz, g->nv, g->tri, g->nt);
+    size_t sweep = emm_strategy_sweep_for(depth, NULL, 0);
     size_t cap = 4 + (s->cfg.compare == EMM_COMPARE_ALL || racing || checking ? 2 * sweep : 0);
     emm_strategy *all = calloc(cap, sizeof *all), *list = calloc(cap, sizeof *list);
     emm_error *errs = calloc(cap, sizeof *errs);
@@ -704,10 +707,10 @@ static emm_status build_models(session *s, emm_error *err)
         all[n++] = (emm_strategy){EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
     }
     if (s->cfg.compare == EMM_COMPARE_ALL)
-        n += emm_strategy_sweep(all + n, cap - n);
+        n += emm_strategy_sweep_for(depth, all + n, cap - n);
     shown = n;
     if (racing || checking)
-        n += emm_strategy_sweep(all + n, cap - n);
+        n += emm_strategy_sweep_for(depth, all + n, cap - n);
     for (size_t i = 0; i < n; i++) {
         /* The contest's sweep brings only what the machine offers: a
          * strategy it does not offer (cache@LAYOUT without a cache) is no

@@ -553,7 +553,10 @@ static emm_status sweep_run(const emm_machine *m, const emm_trace_info *info,
                             emm_sweep **out, emm_error *err)
 {
     *out = NULL;
-    size_t count = emm_strategy_sweep(NULL, 0);
+    /* A mesh with depth brings the layouts in space into the sweep. */
+    int depth = emm_geometry_has_depth(info->geometry.xyz, info->geometry.nv, info->geometry.tri,
+                                       info->geometry.nt);
+    size_t count = emm_strategy_sweep_for(depth, NULL, 0);
     emm_sweep *sw = calloc(1, sizeof *sw);
     emm_strategy *s = calloc(count, sizeof *s), *ran = calloc(count, sizeof *ran);
     emm_error *skipped = calloc(count, sizeof *skipped);
@@ -570,7 +573,7 @@ static emm_status sweep_run(const emm_machine *m, const emm_trace_info *info,
         st = emm_fail(err, EMM_ERR_NOMEM, "strategy sweep: out of memory");
         goto out;
     }
-    emm_strategy_sweep(s, count);
+    emm_strategy_sweep_for(depth, s, count);
     sw->count = count;
     /* Strategies the machine does not offer are not simulated when only the
      * offered ones are asked for (they stay ran = 0). */

@@ -22,7 +22,7 @@
 #define MAX_TRIANGLES (UINT32_MAX / 3u - 1u)
 
 /* The kinds, from EMM_LAYOUT_LIST. */
-#define OPS_(e, n, w) [EMM_LAYOUT_##e] = &emm_layout_##n##_ops,
+#define OPS_(e, n, d, w) [EMM_LAYOUT_##e] = &emm_layout_##n##_ops,
 static const struct emm_layout_ops *const kinds[EMM_LAYOUT_COUNT] = {EMM_LAYOUT_LIST(OPS_)};
 #undef OPS_
 

@@ -43,7 +43,7 @@ struct emm_layout_ops {
 };
 
 /* One table per kind, named from EMM_LAYOUT_LIST: emm_layout_grid_ops, ... */
-#define EMM_LAYOUT_OPS_DECL_(e, n, w) extern const struct emm_layout_ops emm_layout_##n##_ops;
+#define EMM_LAYOUT_OPS_DECL_(e, n, d, w) extern const struct emm_layout_ops emm_layout_##n##_ops;
 EMM_LAYOUT_LIST(EMM_LAYOUT_OPS_DECL_)
 #undef EMM_LAYOUT_OPS_DECL_
 
@@ -88,5 +88,14 @@ emm_status emm_rows_build(emm_layout *l, const double *const *c, int shift, cons
 unsigned emm_rows_move_side(const emm_layout *l, uint32_t from, uint32_t to);
 uint32_t emm_rows_cell_at(const emm_layout *l, const double *p, uint32_t *levels);
 uint32_t emm_rows_per_axis(const emm_layout *l, uint32_t n[EMM_MAX_DIMS]);
+
+/* Layers of rows of equal boxes in space (dims 3), shared by the 3D grid
+ * and the 3D interleaving tiles (layout_boxes.c): `shift` nonzero offsets
+ * odd rows and odd layers so a box has 14 neighbours instead of 26. */
+emm_status emm_boxes_build(emm_layout *l, const double *const *c, int shift, const char *name,
+                           emm_error *err);
+unsigned emm_boxes_move_side(const emm_layout *l, uint32_t from, uint32_t to);
+uint32_t emm_boxes_cell_at(const emm_layout *l, const double *p, uint32_t *levels);
+uint32_t emm_boxes_per_axis(const emm_layout *l, uint32_t n[EMM_MAX_DIMS]);
 
 #endif

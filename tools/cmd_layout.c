@@ -23,16 +23,20 @@ static void usage(FILE *out, const opts *o)
             "usage: emm layout MESH --strategy S [--svg FILE] [--stats] [--local BYTES]\n"
             "                  [--vertex-bytes N] [--triangle-bytes N]\n"
             "\n"
-            "Builds the layout of strategy S (grid, tiles or quadtree; thesis 4.1) over a\n"
-            "mesh file and draws or describes its cells. Each cell holds the triangles\n"
-            "whose centroids fall in it and a copy of each of their vertices.\n"
+            "Builds the layout of strategy S (grid, tiles or quadtree in the plane, thesis\n"
+            "4.1; grid3d, tiles3d or octree in space) over a mesh file and draws or\n"
+            "describes its cells. Each cell holds the triangles whose centroids fall in\n"
+            "it and a copy of each of their vertices.\n"
             "\n");
     opts_help(out, o);
     fprintf(out,
             "\n"
             "The default record sizes are the thesis' structs (Vertex %u B, Triangle %u B).\n"
-            "A 3D mesh is laid out over the two axes along which its bounding box is\n"
-            "largest. docs/layouts.md explains the layouts.\n",
+            "A layout in the plane lays a 3D mesh out over the two axes along which its\n"
+            "bounding box is largest; one in space over x, y and z. The SVG of a layout\n"
+            "in space is a projection onto its first two axes (the third is seen\n"
+            "end-on): triangles coloured by cell, the cells' boxes outlined, so boxes one\n"
+            "behind the other overlap. docs/layouts.md explains the layouts.\n",
             EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES);
 }
 
@@ -50,6 +54,11 @@ static void print_stats(const emm_layout *l, const char *path, const emm_strateg
         printf(" (%u columns x %u rows)", n[0], n[1]);
     else if (s->layout == EMM_LAYOUT_TILES)
         printf(" (%u rows of %u and %u tiles)", n[1], n[0], n[0] + 1);
+    else if (s->layout == EMM_LAYOUT_GRID3D)
+        printf(" (%u x %u x %u boxes)", n[0], n[1], n[2]);
+    else if (s->layout == EMM_LAYOUT_TILES3D)
+        printf(" (%u layers of %u and %u rows of %u and %u boxes)", n[2], n[1], n[1] + 1, n[0],
+               n[0] + 1);
     int axes[EMM_MAX_DIMS];
     uint32_t dims = emm_layout_axes(l, axes, NULL, NULL);
     printf(", over ");
@@ -67,9 +76,12 @@ static void print_stats(const emm_layout *l, const char *path, const emm_strateg
            emm_grouped(st.unused_vertices, c));
     printf("image bytes     %s\n", emm_grouped(st.image_bytes, a));
     printf("lookup bytes    %s\n", emm_grouped(st.lookup_bytes, a));
-    if (s->layout == EMM_LAYOUT_QUADTREE) {
-        printf("quadtree depth  min %u, max %u\n", st.depth_min, st.depth_max);
-        printf("quadtree nodes  %s (%s leaves over CELL at the deepest level)\n",
+    if (s->layout == EMM_LAYOUT_QUADTREE || s->layout == EMM_LAYOUT_OCTREE) {
+        int oct = s->layout == EMM_LAYOUT_OCTREE;
+        printf("%-16smin %u, max %u\n", oct ? "octree depth" : "quadtree depth", st.depth_min,
+               st.depth_max);
+        printf("%-16s%s (%s leaves over CELL at the deepest level)\n",
+               oct ? "octree nodes" : "quadtree nodes",
                emm_grouped(st.quadtree_nodes, a), emm_grouped(st.overfull_leaves, b));
     }
 }
@@ -297,10 +309,12 @@ int emm_cmd_layout(int argc, char **argv)
                  "triangles per cell (default " DEFAULT_CELL_TEXT ")"},
         {.name = "--svg", .metavar = "FILE", .kind = OPT_TEXT, .dst = &svg,
          .help = "draw the mesh, each cell's triangles in its own colour and the cell "
-                 "boundaries in bold (y up); written whole or not at all"},
+                 "boundaries in bold (y up; a layout in space projected along its third "
+                 "axis); written whole or not at all"},
         {.name = "--stats", .kind = OPT_FLAG, .dst = &stats,
          .help = "print cells, triangles and bytes per cell (min, median, max), duplicated "
-                 "vertices, look-up bytes, quadtree depths; the default when --svg is not given"},
+                 "vertices, look-up bytes, quadtree or octree depths; the default when --svg is "
+                 "not given"},
         {.name = "--local", .metavar = "BYTES", .kind = OPT_SIZE, .dst = &local,
          .help = "local store size (K, M, G allowed): a cell larger than it is an error for an "
                  "EMM strategy (default: the machine's, 256K; 0 = no check)"},

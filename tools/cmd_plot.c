@@ -676,7 +676,10 @@ static void label_bar(bar *b, const plot_result *r, const char *note)
 static emm_status fig_breakdown(plot_ctx *c, const plot_report *rep, int *made_compare,
                                 emm_error *err)
 {
-    bar bars[PLOT_MAX_BARS > 16 ? PLOT_MAX_BARS : 16];
+    /* Room for every layout x fetch scheme at one cell (the sweep of a mesh
+     * with depth), or for the baselines. */
+    enum { NBARS = (EMM_LAYOUT_COUNT - 1) * (EMM_FETCH_COUNT - 1) + 2 };
+    bar bars[PLOT_MAX_BARS > NBARS ? PLOT_MAX_BARS : NBARS];
     const plot_result *chosen = find(rep, rep->chosen), *best = best_emm(rep);
     char title[256];
     size_t n = 0;
@@ -742,7 +745,8 @@ static emm_status fig_transfer(plot_ctx *c, const plot_report *rep, int *made, e
 {
     /* A colour per layout, a point and dash type per fetch scheme (cycled
      * when the sweep has more of them than these). */
-    static const char *const lcolor[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd"};
+    static const char *const lcolor[] = {"#1f77b4", "#ff7f0e", "#2ca02c",
+                                         "#d62728", "#9467bd", "#8c564b"};
     static const int ptype[] = {7, 5, 9, 11, 13}, dtype[] = {1, 2, 4, 5, 3};
     enum { NL = EMM_LAYOUT_COUNT - 1, NF = EMM_FETCH_COUNT - 1 };
     const plot_result *cache = find(rep, "cache");
@@ -829,7 +833,7 @@ static emm_status fig_transfer(plot_ctx *c, const plot_report *rep, int *made, e
     for (int i = 0; i < index; i++) {
         fprintf(f, "%s'transfer.dat' index %d using 1:2 with linespoints lw 2 ps 1.3 lc rgb '%s' "
                    "pt %d dt %d title '%s'",
-                first ? "" : ", \\\n     ", i, lcolor[lk[i][0] % 5], ptype[lk[i][1] % 5],
+                first ? "" : ", \\\n     ", i, lcolor[lk[i][0] % (int)(sizeof lcolor / sizeof *lcolor)], ptype[lk[i][1] % 5],
                 dtype[lk[i][1] % 5],
                 titles[i]);
         first = 0;

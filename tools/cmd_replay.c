@@ -33,13 +33,16 @@ static void usage(FILE *out, const opts *o)
             "\n"
             "With --all, simulates the standard sweep,\n"
             "  %s,\n"
+            "and for a mesh with depth (the smallest extent of its bounding box at least\n"
+            "%g of the largest) the layouts in space too (grid3d, tiles3d, octree;\n"
+            "docs/layouts.md), a sweep of %zu,\n"
             "and prints one line per strategy, fastest first: total cycles, seconds,\n"
             "speed-up over direct and over cache, and the largest buckets. A\n"
             "strategy that cannot run on this trace (a cell larger than the local store, a\n"
             "trace without geometry) is listed as skipped with the reason, and the sweep\n"
             "goes on.\n"
             "\n",
-            sweep);
+            sweep, EMM_DEPTH_RATIO, emm_strategy_sweep_for(1, NULL, 0));
     opts_help(out, o);
     fprintf(out,
             "\n"
@@ -243,6 +246,19 @@ static void print_sweep(const char *trace, uint64_t accesses, const emm_machine 
     free(order);
 }
 
+/* Whether the trace's mesh has depth, for the sweep; a trace that cannot
+ * be opened has none here (the replay says why it cannot be read). */
+static int trace_depth(const char *path)
+{
+    emm_trace_reader *r;
+    if (emm_trace_reader_open(path, &r, NULL) != EMM_OK)
+        return 0;
+    const emm_trace_geometry *g = &emm_trace_reader_info(r)->geometry;
+    int depth = emm_geometry_has_depth(g->xyz, g->nv, g->tri, g->nt);
+    emm_trace_reader_close(r);
+    return depth;
+}
+
 /* emm replay with its arrays: strategies, results and skipped hold `cap`
  * entries (one per --strategy, or the sweep). */
 static int replay_main(struct replay_args *a, emm_strategy *strategies, emm_result *results,
@@ -259,7 +275,7 @@ static int replay_main(struct replay_args *a, emm_strategy *strategies, emm_resu
     if (all && a->strategies.n > 0)
         return cli_usage_error("replay", "--all and --strategy do not go together");
     if (all) {
-        nstrategies = emm_strategy_sweep(strategies, cap);
+        nstrategies = emm_strategy_sweep_for(trace_depth(trace), strategies, cap);
     } else if (a->strategies.n == 0) {
         emm_strategy_parse("direct", &strategies[nstrategies++], NULL);
         emm_strategy_parse("cache", &strategies[nstrategies++], NULL);
@@ -323,8 +339,9 @@ static int replay_main(struct replay_args *a, emm_strategy *strategies, emm_resu
 static int replay(void *p)
 {
     struct replay_args *a = p;
-    /* One strategy per --strategy, or the sweep. */
-    size_t cap = a->strategies.n + emm_strategy_sweep(NULL, 0);
+    /* One strategy per --strategy, or the sweep (with room for the layouts
+     * in space). */
+    size_t cap = a->strategies.n + emm_strategy_sweep_for(1, NULL, 0);
     emm_strategy *strategies = calloc(cap, sizeof *strategies);
     emm_result *results = calloc(cap, sizeof *results);
     emm_error *skipped = calloc(cap, sizeof *skipped);
@@ -349,10 +366,12 @@ int emm_cmd_replay(int argc, char **argv)
          .repeat = true, .dst = &a.strategies,
          .help = "direct (word-by-word remote reads), cache (the hardware cache on the original "
                  "addresses), cache@LAYOUT (the cache on the addresses of a reordered layout: "
-                 "grid, tiles, quadtree) or LAYOUT+FETCH[@CELL] (an EMM strategy); may be "
+                 "grid, tiles, quadtree, grid3d, tiles3d, octree) or LAYOUT+FETCH[@CELL] (an "
+                 "EMM strategy); may be "
                  "repeated; default: direct and cache"},
         {.name = "--all", .kind = OPT_FLAG, .dst = &a.all,
-         .help = "the standard sweep (not with --strategy)"},
+         .help = "the standard sweep, with the layouts in space for a mesh with depth (not "
+                 "with --strategy)"},
         {.name = "--jobs", .alias = "-j", .metavar = "N", .kind = OPT_U64, .dst = &a.jobs,
          .min = 1, .max = MAX_JOBS,
          .help = "threads simulating strategies (default: the online CPUs, at most one per "

@@ -15,10 +15,19 @@
  *   at most `cell` triangles per leaf, leaves that touch (by an edge or a
  *   corner) differ by at most 3 levels; cells in leaf (Morton) order.
  *
+ * and in space, for a mesh with depth (docs/layouts.md, "Layouts in space"):
+ *
+ * - 3D grid (grid3d): equal boxes over the bounding box, sized so the boxes
+ *   holding triangles hold CELL on average; up to 26 neighbours.
+ * - 3D interleaving tiles (tiles3d): layers of interleaving tiles, odd
+ *   layers offset by half a row and a quarter box; up to 14 neighbours.
+ * - Adaptive octree: cube leaves, at most `cell` triangles per leaf, leaves
+ *   that share a face differ by at most 1 level.
+ *
  * Geometry is in the layout's own space, whose dimension each kind of layout
- * declares: the three above lay a mesh out in the plane of the two axes
- * along which its bounding box is largest (x and y for a planar mesh); a
- * layout in space would use x, y and z. Every coordinate, side and path of
+ * declares: the three in the plane lay a mesh out over the two axes along
+ * which its bounding box is largest (x and y for a planar mesh); those in
+ * space use x, y and z. Every coordinate, side and path of
  * this interface is written for up to EMM_MAX_DIMS axes (emm_layout_axes
  * says how many a layout uses). The remote "image" packs the cells one
  * after the other in cell order; each cell is a 12-byte header (the thesis'
@@ -43,6 +52,11 @@ typedef struct emm_layout emm_layout;
 #define EMM_LAYOUT_MAX_DEPTH 24u
 /* Largest depth difference between quadtree leaves that touch (§4.1.3). */
 #define EMM_LAYOUT_MAX_LEVEL_GAP 3u
+/* Deepest octree level (3 bits a level of a 64-bit Morton code), and the
+ * largest depth difference between octree leaves that share a face (the
+ * 2:1 rule). */
+#define EMM_LAYOUT_OCTREE_MAX_DEPTH 21u
+#define EMM_LAYOUT_OCTREE_LEVEL_GAP 1u
 /* "No cell": a vertex that no triangle uses. */
 #define EMM_LAYOUT_NONE UINT32_MAX
 
@@ -66,9 +80,9 @@ enum {
 #define EMM_SIDE_PLUS(axis) ((axis) == 0 ? EMM_SIDE_RIGHT : (axis) == 1 ? EMM_SIDE_TOP : EMM_SIDE_FAR)
 
 typedef struct emm_layout_options {
-    emm_layout_kind kind;    /* GRID, TILES or QUADTREE (ORIGINAL is a misuse) */
+    emm_layout_kind kind;    /* an EMM layout (ORIGINAL is a misuse) */
     uint32_t cell;           /* triangles per cell: the mean for grid and tiles,
-                                the most per leaf for the quadtree; >= 1 */
+                                the most per leaf for the quadtree and octree; >= 1 */
     uint32_t vertex_bytes;   /* bytes of a vertex record; 0 = 80 (thesis) */
     uint32_t triangle_bytes; /* bytes of a triangle record; 0 = 28 (thesis) */
     uint64_t local_store;    /* bytes; a larger cell is an error; 0 = no check */
@@ -89,8 +103,8 @@ typedef struct emm_layout_cell {
     double hi[EMM_MAX_DIMS];      /* half a tile past the bounding box) */
     int32_t coord[EMM_MAX_DIMS];  /* grid and tiles: position in the cell array along
                                      each axis (column, row); -1 for a tree layout */
-    uint32_t depth;               /* quadtree: the leaf's depth (root 0); 0 otherwise */
-    uint64_t path;                /* quadtree: child indices from the root, `dims` bits
+    uint32_t depth;               /* quadtree, octree: the leaf's depth (root 0); 0 otherwise */
+    uint64_t path;                /* quadtree, octree: child indices from the root, `dims` bits
                                      per level, the root's child in the highest group
                                      used; bit a of a child index: the upper half along
                                      axis a (in the plane: 0 lower-left, 1 lower-right,
@@ -113,9 +127,10 @@ typedef struct emm_layout_stats {
     uint64_t unused_vertices;          /* vertices no triangle uses */
     uint64_t image_bytes;              /* emm_layout_image_bytes */
     uint64_t lookup_bytes;             /* emm_layout_lookup_bytes */
-    uint32_t depth_min, depth_max;     /* quadtree leaves; 0 otherwise */
-    uint32_t quadtree_nodes;           /* internal nodes + leaves; 0 otherwise */
-    uint32_t overfull_leaves;          /* quadtree leaves above `cell` (max depth only) */
+    uint32_t depth_min, depth_max;     /* quadtree or octree leaves; 0 otherwise */
+    uint32_t quadtree_nodes;           /* internal nodes + leaves of the quadtree or
+                                          octree; 0 otherwise */
+    uint32_t overfull_leaves;          /* tree leaves above `cell` (max depth only) */
 } emm_layout_stats;
 
 /* Builds a layout of the mesh given by `xyz` (3 doubles per vertex, nv
@@ -142,9 +157,9 @@ EMM_API size_t emm_layout_vertex_count(const emm_layout *l);
  * many axes (the layout's dims). Any pointer may be NULL. */
 EMM_API uint32_t emm_layout_axes(const emm_layout *l, int axes[EMM_MAX_DIMS],
                                  double lo[EMM_MAX_DIMS], double hi[EMM_MAX_DIMS]);
-/* Grid and tiles: the cell array's extent along each axis (columns — for
+/* Grids and tiles: the cell array's extent along each axis (columns — for
  * tiles, of the even rows; odd rows have one more — then rows); returns the
- * layout's dims. A tree layout (quadtree) has no array: returns 0. */
+ * layout's dims (3D: then layers). A tree layout has no array: returns 0. */
 EMM_API uint32_t emm_layout_cells_per_axis(const emm_layout *l, uint32_t n[EMM_MAX_DIMS]);
 
 /* Cell c (< emm_layout_cell_count). The pointer lives as long as l. */
@@ -200,7 +215,7 @@ EMM_API uint64_t emm_layout_vertex_address(const emm_layout *l, uint32_t v, uint
 
 /* Bytes the EMM runtime keeps in the local store to use the layout:
  * 4 per triangle and 4 per vertex (id → layout index tables), 8 per cell
- * (its remote address and length), and for the quadtree 16 per node. */
+ * (its remote address and length), and for the quadtree and octree 16 per node. */
 EMM_API uint64_t emm_layout_lookup_bytes(const emm_layout *l);
 
 EMM_API void emm_layout_get_stats(const emm_layout *l, emm_layout_stats *out);

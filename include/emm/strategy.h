@@ -4,7 +4,9 @@
  *   direct                      word-by-word remote reads
  *   cache[@LAYOUT]              the hardware cache, on the original or a reordered layout
  *   LAYOUT+FETCH[@CELL]         an EMM strategy, CELL = triangles per cell
- *   LAYOUT = grid | tiles | quadtree     FETCH = naive | convolution | extrapolated
+ *   LAYOUT = grid | tiles | quadtree            (in the plane)
+ *          | grid3d | tiles3d | octree          (in space, for a mesh with depth)
+ *   FETCH = naive | convolution | extrapolated
  */
 #ifndef EMM_STRATEGY_H
 #define EMM_STRATEGY_H
@@ -23,17 +25,23 @@ typedef enum emm_strategy_kind {
 
 /* The EMM layouts (thesis §4.1) and fetch schemes (§4.2), one entry each:
  * X(ENUM, name, words) gives the value EMM_LAYOUT_ENUM or EMM_FETCH_ENUM,
- * the name strategy strings use and what it does, in words for a summary.
- * Adding a layout or a fetch scheme is a line here, its ops file in
- * simulator/ (layout_NAME.c, fetch_NAME.c) and its documentation
- * (docs/architecture.md, "Adding a part"): the enums, the names, the
- * parser, the standard sweep and the simulator's tables of ops all follow
- * these lists. Each list ends in a comment line, so that a new last entry
- * is one added line, ending in a backslash like the others. */
+ * the name strategy strings use and what it does, in words for a summary;
+ * a layout's entry also gives, before its words, the axes of its space (2:
+ * the plane of the mesh's two largest extents; 3: space, tried only for a
+ * mesh with depth, emm_geometry_has_depth). Adding a layout or a fetch
+ * scheme is a line here, its ops file in simulator/ (layout_NAME.c,
+ * fetch_NAME.c) and its documentation (docs/architecture.md, "Adding a
+ * part"): the enums, the names, the parser, the standard sweep and the
+ * simulator's tables of ops all follow these lists. Each list ends in a
+ * comment line, so that a new last entry is one added line, ending in a
+ * backslash like the others. */
 #define EMM_LAYOUT_LIST(X)                                                                  \
-    X(GRID, grid, "a uniform grid of cells over the mesh's plane")                          \
-    X(TILES, tiles, "tiles: cells cut to hold about equal numbers of triangles")            \
-    X(QUADTREE, quadtree, "quadtree leaves: cells split where the mesh is dense")           \
+    X(GRID, grid, 2, "a uniform grid of cells over the mesh's plane")                       \
+    X(TILES, tiles, 2, "tiles: cells cut to hold about equal numbers of triangles")         \
+    X(QUADTREE, quadtree, 2, "quadtree leaves: cells split where the mesh is dense")        \
+    X(GRID3D, grid3d, 3, "a uniform 3D grid of boxes over the mesh's bounding box")         \
+    X(TILES3D, tiles3d, 3, "3D interleaving tiles: offset layers of boxes, 14 neighbours")  \
+    X(OCTREE, octree, 3, "octree leaves: boxes split where the mesh is dense")              \
     /* (the end of the layouts) */
 #define EMM_FETCH_LIST(X)                                                                   \
     X(NAIVE, naive, "fetch a cell when the program needs it, and wait")                     \
@@ -41,7 +49,7 @@ typedef enum emm_strategy_kind {
     X(EXTRAPOLATED, extrapolated, "prefetch the neighbour the recent moves point to")       \
     /* (the end of the fetch schemes) */
 
-#define EMM_LAYOUT_ENUM_(e, n, w) EMM_LAYOUT_##e,
+#define EMM_LAYOUT_ENUM_(e, n, d, w) EMM_LAYOUT_##e,
 #define EMM_FETCH_ENUM_(e, n, w) EMM_FETCH_##e,
 
 typedef enum emm_layout_kind {
@@ -89,14 +97,30 @@ EMM_API size_t emm_strategy_words(const emm_strategy *s, char *buf, size_t cap);
 EMM_API const char *emm_layout_name(emm_layout_kind k);
 EMM_API const char *emm_fetch_name(emm_fetch_kind k);
 
-/* The standard sweep: every layout × every fetch scheme × the sweep's cell
- * sizes (emm_strategy_sweep_cells), then direct, cache and cache@ each
- * layout. Fills up to cap entries (out may be NULL when cap is 0) and
- * returns the sweep's full length. */
+/* The standard sweep: every layout in the plane × every fetch scheme × the
+ * sweep's cell sizes (emm_strategy_sweep_cells), then direct, cache and
+ * cache@ each of those layouts. Fills up to cap entries (out may be NULL
+ * when cap is 0) and returns the sweep's full length. */
 EMM_API size_t emm_strategy_sweep(emm_strategy *out, size_t cap);
-/* The sweep in words, for help texts: "3 layouts x 3 fetch schemes x cells
- * 16, ..., then direct, cache and cache@ each layout: 50 strategies".
- * Returns the length needed, as snprintf does. */
+/* The sweep for a mesh: with `depth` zero the standard sweep, exactly;
+ * nonzero, the layouts in space join it (each after those in the plane, in
+ * both the EMM strategies and the cache@ ones). */
+EMM_API size_t emm_strategy_sweep_for(int depth, emm_strategy *out, size_t cap);
+/* The axes of a layout's space: 2 (in the plane) or 3 (in space); 0 for
+ * the original layout. */
+EMM_API uint32_t emm_layout_kind_dims(emm_layout_kind k);
+/* Whether a mesh has depth, so that layouts in space are worth trying
+ * (docs/layouts.md, "Layouts in space"): the smallest extent of the
+ * bounding box of the vertices its triangles use is at least
+ * EMM_DEPTH_RATIO times the largest. A planar mesh, or a height field
+ * barely off its plane, has none; a closed surface, whose front and back
+ * share the cells of a projection, has. Indices must be in range. */
+#define EMM_DEPTH_RATIO 0.1
+EMM_API int emm_geometry_has_depth(const double *xyz, size_t nv, const int32_t *tri, size_t nt);
+/* The standard sweep in words, for help texts: "3 layouts x 3 fetch schemes
+ * x cells 16, ..., then direct, cache and cache@ each layout: 50
+ * strategies" (the layouts in the plane). Returns the length needed, as
+ * snprintf does. */
 EMM_API size_t emm_strategy_sweep_describe(char *buf, size_t cap);
 /* The sweep's cell sizes, ascending; returns their count. */
 EMM_API size_t emm_strategy_sweep_cells(const uint32_t **cells);

@@ -119,7 +119,7 @@ EMM_API emm_status emm_table_decide(const emm_table *t, const double f[EMM_FEATU
 /* ---- simulating the candidates (thesis §5: a novel profile) -------------- */
 
 typedef struct emm_sweep {
-    size_t count;        /* strategies in the sweep (emm_strategy_sweep) */
+    size_t count;        /* strategies in the sweep (emm_strategy_sweep_for the mesh) */
     emm_result *result;  /* count results; meaningful where ran[i] */
     int *ran;            /* count flags; 0: this strategy cannot run on this trace */
     size_t simulated;    /* how many ran */
@@ -128,8 +128,9 @@ typedef struct emm_sweep {
     size_t cache;        /* index of plain `cache`, the reference */
 } emm_sweep;
 
-/* Simulates every strategy of the standard sweep on recs[0..n), records of
- * a trace described by `info`, on machine m (validated), with the threads
+/* Simulates every strategy of the sweep for the trace's mesh
+ * (emm_strategy_sweep_for: a mesh with depth adds the layouts in space) on
+ * recs[0..n), records of a trace described by `info`, on machine m (validated), with the threads
  * `threads` allows (NULL: the online CPUs); deterministic. Strategies whose
  * model cannot be built (a layout the mesh does not allow, an EMM strategy
  * on an address-only trace) are skipped. On success *out is a new sweep

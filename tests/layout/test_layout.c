@@ -1,7 +1,11 @@
 /* Layouts (thesis §4.1): the invariants every layout must keep, checked on
  * jittered-grid meshes (uniform and clustered), Delaunay meshes from the
- * generator, and hand-made tiny and degenerate ones, for all three kinds
- * and several cell sizes. */
+ * generator, and hand-made tiny and degenerate ones, for the three kinds in
+ * the plane and several cell sizes; and for the three in space (grid3d,
+ * tiles3d, octree) on closed surfaces (a sphere, a torus, a pinched
+ * sphere): every triangle in one cell, cell_at agreeing, symmetric
+ * neighbour lists equal to the touching boxes, 26 and 14 neighbours inside
+ * the grid and the tiles, the octree's cell limit and 2:1 face balance. */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -105,6 +109,10 @@ static unsigned mirror(unsigned s)
         m |= EMM_SIDE_BOTTOM;
     if (s & EMM_SIDE_BOTTOM)
         m |= EMM_SIDE_TOP;
+    if (s & EMM_SIDE_NEAR)
+        m |= EMM_SIDE_FAR;
+    if (s & EMM_SIDE_FAR)
+        m |= EMM_SIDE_NEAR;
     return m;
 }
 
@@ -118,10 +126,12 @@ static int cmp_span(const void *a, const void *b)
     return (x->start > y->start) - (x->start < y->start);
 }
 
-static int touches(const emm_layout_cell *a, const emm_layout_cell *b, double eps)
+static int touches(const emm_layout_cell *a, const emm_layout_cell *b, uint32_t dims, double eps)
 {
-    return a->lo[0] <= b->hi[0] + eps && b->lo[0] <= a->hi[0] + eps &&
-           a->lo[1] <= b->hi[1] + eps && b->lo[1] <= a->hi[1] + eps;
+    int t = 1;
+    for (uint32_t k = 0; k < dims; k++)
+        t = t && a->lo[k] <= b->hi[k] + eps && b->lo[k] <= a->hi[k] + eps;
+    return t;
 }
 
 /* Every invariant that holds for any layout. */
@@ -132,7 +142,11 @@ static void check_layout(const emm_layout *l, const mesh *g)
     REQUIRE(nc >= 1);
     int axes[EMM_MAX_DIMS];
     double blo[EMM_MAX_DIMS], bhi[EMM_MAX_DIMS];
-    CHECK(emm_layout_axes(l, axes, blo, bhi) == 2);
+    uint32_t dims = emm_layout_axes(l, axes, blo, bhi);
+    CHECK(dims == emm_layout_kind_dims(opt->kind));
+    double ext = 0;
+    for (uint32_t k = 0; k < dims; k++)
+        ext += fabs(bhi[k] - blo[k]);
 
     /* Every triangle in exactly one cell, and the index round trip. */
     uint32_t *seen = calloc(g->nt, sizeof *seen);
@@ -153,14 +167,14 @@ static void check_layout(const emm_layout *l, const mesh *g)
                 bad_trip++;
             if (p > 0 && tris[p - 1] >= t)
                 bad_trip++;
-            /* The centroid lies in the cell's rectangle and looks up to it. */
-            double cen[2];
-            for (int k = 0; k < 2; k++)
+            /* The centroid lies in the cell's box and looks up to it. */
+            double cen[EMM_MAX_DIMS];
+            for (uint32_t k = 0; k < dims; k++)
                 cen[k] = (g->xyz[3 * (size_t)g->tri[3 * t] + axes[k]] +
                           g->xyz[3 * (size_t)g->tri[3 * t + 1] + axes[k]] +
                           g->xyz[3 * (size_t)g->tri[3 * t + 2] + axes[k]]) / 3.0;
-            double eps = 1e-9 * (1 + fabs(bhi[0] - blo[0]) + fabs(bhi[1] - blo[1]));
-            for (int k = 0; k < 2; k++)
+            double eps = 1e-9 * (1 + ext);
+            for (uint32_t k = 0; k < dims; k++)
                 if (cen[k] < cell->lo[k] - eps || cen[k] > cell->hi[k] + eps)
                     bad_inside++;
             if (emm_layout_cell_at(l, cen, NULL) != c)
@@ -326,14 +340,13 @@ static void check_layout(const emm_layout *l, const mesh *g)
             const uint32_t *nb;
             uint32_t n = emm_layout_neighbors(l, a, &nb, NULL), k = 0;
             const emm_layout_cell *ca = emm_layout_cell_get(l, a);
-            /* Cells that do not touch are at least a finest quadtree
-             * square (2^-24 of the box) apart. */
-            double ext = bhi[0] - blo[0] + bhi[1] - blo[1];
+            /* Cells that do not touch are at least a finest tree square
+             * or cube (2^-24, 2^-21 of the box) apart. */
             double eps = 1e-12 * (ext > 1 ? ext : 1);
             for (uint32_t b = 0; b < nc; b++) {
                 if (b == a)
                     continue;
-                int t = touches(ca, emm_layout_cell_get(l, b), eps);
+                int t = touches(ca, emm_layout_cell_get(l, b), dims, eps);
                 int listed = k < n && nb[k] == b;
                 k += listed;
                 if (t != listed)
@@ -454,6 +467,210 @@ static void check_all(const mesh *g, const char *what, uint32_t cell)
                st.depth_min, st.depth_max);
         emm_layout_free(l);
     }
+}
+
+/* ---- layouts in space ------------------------------------------------ */
+
+/* A closed surface of revolution, (n lat) x (m lon) quads with jittered
+ * vertices: kind 0 a sphere of radius 1, 1 a torus (radii 1 and 0.35), 2 a
+ * sphere pinched towards one pole (dense triangles there). */
+static mesh surface_mesh(int n, int m, int kind)
+{
+    mesh g;
+    int torus = kind == 1;
+    int rows = torus ? n : n - 1; /* vertex rings; a sphere adds 2 poles */
+    g.nv = (size_t)rows * (size_t)m + (torus ? 0 : 2);
+    g.nt = 2 * (size_t)n * (size_t)m - (torus ? 0 : 2 * (size_t)m);
+    g.xyz = malloc(3 * g.nv * sizeof *g.xyz);
+    g.tri = malloc(3 * g.nt * sizeof *g.tri);
+    const double pi = 3.14159265358979323846;
+    for (int i = 0; i < rows; i++)
+        for (int j = 0; j < m; j++) {
+            double u = (i + (torus ? 0 : 1) + 0.2 * (rnd() - 0.5)) / n;
+            double v = (j + 0.2 * (rnd() - 0.5)) / m;
+            double *p = g.xyz + 3 * ((size_t)i * (size_t)m + (size_t)j);
+            if (torus) {
+                double r = 1 + 0.35 * cos(2 * pi * u);
+                p[0] = r * cos(2 * pi * v);
+                p[1] = r * sin(2 * pi * v);
+                p[2] = 0.35 * sin(2 * pi * u);
+            } else {
+                double th = pi * (kind == 2 ? pow(u, 2.5) : u);
+                p[0] = sin(th) * cos(2 * pi * v);
+                p[1] = sin(th) * sin(2 * pi * v);
+                p[2] = cos(th);
+            }
+        }
+    size_t t = 0;
+    int32_t north = (int32_t)(rows * m), south = north + 1;
+    if (!torus) {
+        double *p = g.xyz + 3 * (size_t)north;
+        p[0] = p[1] = 0, p[2] = 1;
+        p = g.xyz + 3 * (size_t)south;
+        p[0] = p[1] = 0, p[2] = -1;
+        for (int j = 0; j < m; j++) {
+            int32_t a = j, b = (j + 1) % m;
+            int32_t q[3] = {north, a, b};
+            memcpy(g.tri + 3 * t++, q, sizeof q);
+            int32_t c = (rows - 1) * m + j, d = (rows - 1) * m + (j + 1) % m;
+            int32_t r[3] = {south, d, c};
+            memcpy(g.tri + 3 * t++, r, sizeof r);
+        }
+    }
+    for (int i = 0; i < (torus ? n : rows - 1); i++)
+        for (int j = 0; j < m; j++) {
+            int32_t a = i * m + j, b = i * m + (j + 1) % m;
+            int32_t c = ((i + 1) % rows) * m + j, d = ((i + 1) % rows) * m + (j + 1) % m;
+            int32_t q[6] = {a, c, d, a, d, b};
+            memcpy(g.tri + 3 * t, q, sizeof q);
+            t += 2;
+        }
+    g.nt = t;
+    return g;
+}
+
+/* Interior boxes of the 3D grid have 26 neighbours, of the 3D tiles 14 (2
+ * in the row, 4 in the rows beside it, 4 in each layer beside it); sides
+ * over 3 axes. The boxes holding triangles hold CELL on average, at most. */
+static void check_boxes_shape(const emm_layout *l, const mesh *g, uint32_t cell_limit)
+{
+    uint32_t per[EMM_MAX_DIMS];
+    CHECK(emm_layout_cells_per_axis(l, per) == 3);
+    int tiles = emm_layout_get_options(l)->kind == EMM_LAYOUT_TILES3D;
+    int interior = 0, bad = 0;
+    uint32_t occupied = 0;
+    for (uint32_t c = 0; c < emm_layout_cell_count(l); c++) {
+        const emm_layout_cell *cell = emm_layout_cell_get(l, c);
+        occupied += cell->ntri > 0;
+        uint32_t i = (uint32_t)cell->coord[0], j = (uint32_t)cell->coord[1],
+                 k = (uint32_t)cell->coord[2];
+        uint32_t rows = per[1] + (tiles ? (k & 1u) : 0u);
+        uint32_t len = per[0] + (tiles ? ((j | k) & 1u) : 0u);
+        if (k == 0 || k + 1 >= per[2] || j <= 1 || j + 2 >= rows || i <= 1 || i + 2 >= len)
+            continue;
+        interior++;
+        const uint8_t *side;
+        uint32_t n = emm_layout_neighbors(l, c, NULL, &side);
+        int count[6] = {0};
+        for (uint32_t q = 0; q < n; q++)
+            for (int b = 0; b < 6; b++)
+                count[b] += (side[q] >> b) & 1;
+        if (!tiles) {
+            /* 9 boxes on each of the 6 sides. */
+            int ok = n == 26;
+            for (int b = 0; b < 6; b++)
+                ok = ok && count[b] == 9;
+            bad += !ok;
+        } else {
+            /* Near and far: the 4 of each layer. */
+            bad += n != 14 || count[4] != 4 || count[5] != 4;
+        }
+    }
+    CHECKF(bad == 0, "%d interior boxes with the wrong neighbours", bad);
+    if (per[0] >= 5 && per[1] >= 5 && per[2] >= 3)
+        CHECK(interior > 0);
+    REQUIRE(occupied > 0);
+    double mean = (double)g->nt / occupied;
+    CHECKF(mean <= cell_limit * 1.0001 && (g->nt < 4 * cell_limit || mean >= cell_limit / 3.0),
+           "boxes holding triangles hold %.1f on average, CELL %u", mean, cell_limit);
+}
+
+/* Octree: leaf limit (except at the maximum depth), leaves sharing a face
+ * at most 1 level apart, paths that spell each leaf's cube, leaves that
+ * fill the cube. */
+static void check_octree(const emm_layout *l, uint32_t cell_limit)
+{
+    int bad_limit = 0, bad_gap = 0, bad_path = 0;
+    double volume = 0;
+    double lo[EMM_MAX_DIMS], hi[EMM_MAX_DIMS];
+    emm_layout_axes(l, NULL, lo, hi);
+    double tol = 1e-12 * (1 + hi[0] - lo[0] + hi[1] - lo[1] + hi[2] - lo[2]);
+    for (uint32_t c = 0; c < emm_layout_cell_count(l); c++) {
+        const emm_layout_cell *cell = emm_layout_cell_get(l, c);
+        if (cell->ntri > cell_limit && cell->depth < EMM_LAYOUT_OCTREE_MAX_DEPTH)
+            bad_limit++;
+        volume += ldexp(1.0, -3 * (int)cell->depth);
+        const uint32_t *nb;
+        uint32_t n = emm_layout_neighbors(l, c, &nb, NULL);
+        for (uint32_t q = 0; q < n; q++) {
+            const emm_layout_cell *o = emm_layout_cell_get(l, nb[q]);
+            /* A shared face: the boxes meet along one axis and overlap with
+             * positive length along both others. */
+            int meet = 0, overlap = 0;
+            for (int a = 0; a < 3; a++) {
+                double in = fmin(cell->hi[a], o->hi[a]) - fmax(cell->lo[a], o->lo[a]);
+                meet += fabs(in) <= tol;
+                overlap += in > tol;
+            }
+            uint32_t gap = o->depth > cell->depth ? o->depth - cell->depth : cell->depth - o->depth;
+            if (meet == 1 && overlap == 2 && gap > EMM_LAYOUT_OCTREE_LEVEL_GAP)
+                bad_gap++;
+        }
+        uint32_t ix[3] = {0, 0, 0};
+        for (uint32_t d = 0; d < cell->depth; d++) {
+            uint64_t k = (cell->path >> (3 * (cell->depth - 1 - d))) & 7u;
+            for (int a = 0; a < 3; a++)
+                ix[a] = 2 * ix[a] + (uint32_t)((k >> a) & 1u);
+        }
+        double size = cell->hi[0] - cell->lo[0];
+        double mid[3];
+        for (int a = 0; a < 3; a++) {
+            mid[a] = (cell->lo[a] + cell->hi[a]) / 2;
+            if (fabs(cell->lo[a] - (lo[a] + ix[a] * size)) > tol ||
+                fabs(cell->hi[a] - cell->lo[a] - size) > tol)
+                bad_path++;
+        }
+        uint32_t levels;
+        if (emm_layout_cell_at(l, mid, &levels) != c || levels != cell->depth)
+            bad_path++;
+    }
+    CHECKF(bad_limit == 0, "%d leaves above the cell limit", bad_limit);
+    CHECKF(bad_gap == 0, "%d leaves sharing a face more than 1 level apart", bad_gap);
+    CHECKF(bad_path == 0, "%d leaves whose path or look-up disagrees", bad_path);
+    CHECKF(fabs(volume - 1.0) < 1e-12, "leaves fill %.15f of the cube", volume);
+}
+
+static void check_all3d(const mesh *g, const char *what, uint32_t cell)
+{
+    static const emm_layout_kind kinds[] = {EMM_LAYOUT_GRID3D, EMM_LAYOUT_TILES3D,
+                                            EMM_LAYOUT_OCTREE};
+    for (int k = 0; k < 3; k++) {
+        emm_layout *l = build(g, kinds[k], cell);
+        if (!l)
+            continue;
+        check_layout(l, g);
+        if (kinds[k] == EMM_LAYOUT_OCTREE)
+            check_octree(l, cell);
+        else
+            check_boxes_shape(l, g, cell);
+        emm_layout_stats st;
+        emm_layout_get_stats(l, &st);
+        printf("%-9s %-8s cell %-4u: %6u cells (%u empty), tri %u/%u/%u, dup %llu, depth %u..%u\n",
+               what, emm_layout_name(kinds[k]), cell, st.cells, st.empty_cells, st.tri_min,
+               st.tri_median, st.tri_max, (unsigned long long)st.duplicated_vertices,
+               st.depth_min, st.depth_max);
+        emm_layout_free(l);
+    }
+}
+
+/* A closed surface has depth; a planar mesh, or one barely off its plane,
+ * has none, and its sweep is the standard one. */
+static void test_depth(void)
+{
+    mesh s = surface_mesh(12, 16, 0), t = surface_mesh(12, 16, 1), p = grid_mesh(10, 10, 1.0);
+    CHECK(emm_geometry_has_depth(s.xyz, s.nv, s.tri, s.nt));
+    CHECK(emm_geometry_has_depth(t.xyz, t.nv, t.tri, t.nt));
+    CHECK(!emm_geometry_has_depth(p.xyz, p.nv, p.tri, p.nt));
+    for (size_t v = 0; v < p.nv; v++) /* a height field 5% of its width high */
+        p.xyz[3 * v + 2] = 0.05 * sin(7 * p.xyz[3 * v]);
+    CHECK(!emm_geometry_has_depth(p.xyz, p.nv, p.tri, p.nt));
+    for (size_t v = 0; v < p.nv; v++) /* ... and 30% */
+        p.xyz[3 * v + 2] *= 6;
+    CHECK(emm_geometry_has_depth(p.xyz, p.nv, p.tri, p.nt));
+    CHECK(!emm_geometry_has_depth(s.xyz, s.nv, s.tri, 0));
+    mesh_free(&s);
+    mesh_free(&t);
+    mesh_free(&p);
 }
 
 /* Grid and tiles choose about ceil(nt / cell) cells in square-ish cells. */
@@ -652,6 +869,39 @@ int main(void)
         check_all(&g, what, 64);
         mesh_free(&g);
     }
+
+    /* Layouts in space, on closed surfaces. */
+    for (int kind = 0; kind < 3; kind++) {
+        mesh g = surface_mesh(kind == 1 ? 24 : 30, 40, kind);
+        const char *what = kind == 0 ? "sphere" : kind == 1 ? "torus" : "pinched";
+        check_all3d(&g, what, 4);
+        check_all3d(&g, what, 16);
+        check_all3d(&g, what, 64);
+        mesh_free(&g);
+    }
+    /* A planar mesh laid out in space: one layer of boxes, flat leaves. */
+    mesh flat = grid_mesh(20, 20, 2.0);
+    check_all3d(&flat, "flat", 16);
+    mesh_free(&flat);
+    check_all3d(&(mesh){(double[]){0, 0, 0, 1, 0, 0, 0, 1, 1}, 3, (int32_t[]){0, 1, 2}, 1},
+                "one", 1);
+    /* A needle, 1e-9 thick: the boxes stay about as many as the cells
+     * wanted, all along its length. */
+    mesh needle = grid_mesh(60, 2, 1.0);
+    for (size_t v = 0; v < needle.nv; v++) {
+        needle.xyz[3 * v + 1] *= 1e-9;
+        needle.xyz[3 * v + 2] = 1e-9 * needle.xyz[3 * v];
+    }
+    check_all3d(&needle, "needle", 8);
+    for (int k = 0; k < 2; k++) {
+        emm_layout *l = build(&needle, k ? EMM_LAYOUT_TILES3D : EMM_LAYOUT_GRID3D, 8);
+        REQUIRE(l);
+        CHECKF(emm_layout_cell_count(l) <= 4 * (needle.nt / 8 + 1), "needle: %u boxes for %zu triangles",
+               emm_layout_cell_count(l), needle.nt);
+        emm_layout_free(l);
+    }
+    mesh_free(&needle);
+    test_depth();
 
     test_cell_counts();
     test_quadtree_adapts();

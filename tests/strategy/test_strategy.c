@@ -37,6 +37,15 @@ int main(void)
                EMM_FETCH_CONVOLUTION, 64, "tiles+convolution@64");
     round_trip("grid+naive@16", EMM_STRATEGY_EMM, EMM_LAYOUT_GRID, EMM_FETCH_NAIVE, 16,
                "grid+naive@16");
+    round_trip("octree+naive@64", EMM_STRATEGY_EMM, EMM_LAYOUT_OCTREE, EMM_FETCH_NAIVE, 64,
+               "octree+naive@64");
+    round_trip("grid3d+convolution@32", EMM_STRATEGY_EMM, EMM_LAYOUT_GRID3D,
+               EMM_FETCH_CONVOLUTION, 32, "grid3d+convolution@32");
+    round_trip("tiles3d+extrapolated@16", EMM_STRATEGY_EMM, EMM_LAYOUT_TILES3D,
+               EMM_FETCH_EXTRAPOLATED, 16, "tiles3d+extrapolated@16");
+    round_trip("cache@octree", EMM_STRATEGY_CACHE, EMM_LAYOUT_OCTREE, EMM_FETCH_NONE, 64,
+               "cache@octree");
+    refused("octree3d+naive", "accepted: grid, tiles, quadtree, grid3d, tiles3d, octree");
     round_trip("quadtree+extrapolated", EMM_STRATEGY_EMM, EMM_LAYOUT_QUADTREE,
                EMM_FETCH_EXTRAPOLATED, EMM_DEFAULT_CELL, "quadtree+extrapolated@64");
 
@@ -52,10 +61,18 @@ int main(void)
     refused("grid+naive@16x", "'16x'");
     refused("grid+naive@", "''");
 
-    /* The standard sweep: every layout x every fetch scheme x 7 cells (4 to
-     * 256) EMM strategies, direct, cache, cache@ each layout — counted from
-     * the lists' sentinels, so a new layout or scheme changes no test. */
-    const size_t L = EMM_LAYOUT_COUNT - 1, F = EMM_FETCH_COUNT - 1; /* less original, none */
+    /* The standard sweep: every layout in the plane x every fetch scheme x 7
+     * cells (4 to 256) EMM strategies, direct, cache, cache@ each of those
+     * layouts — counted from the lists, so a new layout or scheme changes no
+     * test. */
+    size_t L = 0, L3 = 0;
+    for (int k = EMM_LAYOUT_ORIGINAL + 1; k < EMM_LAYOUT_COUNT; k++) {
+        L += emm_layout_kind_dims((emm_layout_kind)k) == 2;
+        L3 += emm_layout_kind_dims((emm_layout_kind)k) == 3;
+    }
+    CHECK(L == 3 && L3 == 3 && L + L3 == EMM_LAYOUT_COUNT - 1);
+    CHECK(emm_layout_kind_dims(EMM_LAYOUT_OCTREE) == 3 && emm_layout_kind_dims(EMM_LAYOUT_TILES) == 2);
+    const size_t F = EMM_FETCH_COUNT - 1; /* less none */
     const size_t want = L * F * 7 + 1 + 1 + L;
     const uint32_t *cells;
     CHECK(emm_strategy_sweep_cells(&cells) == 7 && cells[0] == 4 && cells[1] == 8 &&
@@ -73,6 +90,24 @@ int main(void)
         for (size_t j = 0; j < i; j++)
             CHECK(memcmp(&sweep[i], &sweep[j], sizeof sweep[i]) != 0);
     }
+    /* For a mesh with depth: the same, then the layouts in space after
+     * those in the plane, both among the EMM strategies and the cache@. */
+    size_t want3 = (L + L3) * F * 7 + 1 + 1 + L + L3;
+    emm_strategy *deep = calloc(want3, sizeof *deep), *flat = calloc(want, sizeof *flat);
+    REQUIRE(deep && flat);
+    CHECK(emm_strategy_sweep_for(0, flat, want) == want);
+    CHECK(memcmp(flat, sweep, want * sizeof *flat) == 0);
+    CHECK(emm_strategy_sweep_for(1, deep, want3) == want3);
+    CHECK(memcmp(deep, sweep, L * F * 7 * sizeof *deep) == 0);
+    size_t in_space = 0;
+    for (size_t i = 0; i < want3; i++)
+        in_space += emm_layout_kind_dims(deep[i].layout) == 3;
+    CHECK(in_space == L3 * F * 7 + L3);
+    CHECK(emm_layout_kind_dims(deep[L * F * 7].layout) == 3);
+    CHECK(emm_layout_kind_dims(deep[want3 - 1].layout) == 3 &&
+          deep[want3 - 1].kind == EMM_STRATEGY_CACHE);
+    free(deep);
+    free(flat);
     free(sweep);
     CHECK(emm == L * F * 7 && cache == L + 1 && direct == 1);
     char text[256], expect[128];
