@@ -560,6 +560,8 @@ static void window_full_check(session *s)
                         : 1;
         return;
     }
+    if (s->waited && s->cfg.window_accesses && s->welements > s->cfg.window_accesses)
+        s->waited = s->welements - s->cfg.window_accesses;
     if (s->wend == WINDOW_OPEN || s->wend == WINDOW_FULL)
         s->wend = end;
     s->phase = PHASE_DECIDE;

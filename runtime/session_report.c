@@ -692,45 +692,50 @@ static void print_mesh_arrays(const session *s, FILE *out)
  * rules name that came too late. */
 static void print_window_lines(const session *s, FILE *out)
 {
-    char num[32], num2[32];
+    char num[32], num2[32], num3[32], bound[160];
     uint64_t size = s->cfg.window_accesses ? s->cfg.window_accesses : s->cfg.window_iterations;
     const char *unit = s->cfg.window_accesses ? "element reads" : "iterations";
     uint64_t got = s->cfg.window_accesses ? (uint64_t)s->nD : s->iterations;
     emm_grouped(got, num);
     emm_grouped(size, num2);
+    const char *ended = NULL;
     switch (s->wend) {
     case WINDOW_FINISH:
-        fprintf(out, "emm:   the run ended after %s of the window's %s %s: the answer rests on "
-                     "them\n", num, num2, unit);
+        ended = "the run ended";
         break;
     case WINDOW_FREED:
-        fprintf(out, "emm:   the last array of a kind was freed after %s of the window's %s %s: "
-                     "the answer rests on them\n", num, num2, unit);
+        ended = "the last array of a kind was freed";
         break;
     case WINDOW_WRITES:
-        fprintf(out, "emm:   the window ended at its bound of %u written records, after %s of its "
-                     "%s %s: the answer rests on them\n",
-                SESSION_WINDOW_WRITES, num, num2, unit);
+        snprintf(bound, sizeof bound,
+                 "the window reached its bound of %s written records",
+                 emm_grouped(SESSION_WINDOW_WRITES, num3));
+        ended = bound;
         break;
     case WINDOW_RECORDS:
-        fprintf(out, "emm:   the window ended at its bound of records (%s elements read many "
-                     "times), after %s of its %s %s: the answer rests on them\n",
-                emm_grouped(s->wreads, num2), num, emm_grouped(size, num2), unit);
+        ended = "the window reached its bound of records (few elements read many times)";
         break;
     case WINDOW_CAPTURE:
-        fprintf(out, "emm:   the window ended at the %s capture's bound of %u window lengths of "
-                     "element accesses of either kind, after %s of its %s %s: the answer rests "
-                     "on them\n",
-                emm_capture_name(s->capture), SESSION_CAPTURE_WINDOWS, num, num2, unit);
+        snprintf(bound, sizeof bound,
+                 "the window reached the %s capture's bound of %d window lengths of element "
+                 "accesses of either kind",
+                 emm_capture_name(s->capture), SESSION_CAPTURE_WINDOWS);
+        ended = bound;
         break;
     default:
         break;
     }
     if (s->sweep_profiled)
-        fprintf(out, "emm:   every one of the window's %s element reads was a leading index-order "
-                     "sweep (the program reads its mesh once, in order): that sweep is the "
-                     "traversal, and it was profiled\n",
-                emm_grouped(s->sweep.elements, num));
+        /* No read of the window proper: the sweep before it is the run. */
+        fprintf(out, "emm:   every one of the %s element reads seen was a leading index-order "
+                     "sweep (the program reads its mesh once, in order) and %s before the "
+                     "window's %s %s past such a sweep began: the sweep is the traversal, and "
+                     "it was profiled\n",
+                emm_grouped(s->sweep.elements, num3), ended ? ended : "the window filled", num2,
+                unit);
+    else if (ended)
+        fprintf(out, "emm:   %s after %s of the window's %s %s: the answer rests on them\n", ended,
+                num, num2, unit);
     if (s->waited)
         fprintf(out, "emm:   the window filled before an array of every kind the tag rules name "
                      "was tagged, and went on %s more element reads waiting for one\n",
