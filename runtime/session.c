@@ -413,7 +413,7 @@ static emm_session_state engine_untag(emm_session *h, uint64_t lo)
         drop_slot(s, i, last);
         if (last) {
             s->phase = PHASE_DECIDE;
-            s->wend = WINDOW_FREED;
+            s->wend = s->waited ? WINDOW_FULL : WINDOW_FREED; /* a full window that waited */
         }
     }
     return public_state(s);

@@ -55,14 +55,16 @@ static void start(void)
     free(strings);
     /* Every shorter payload is refused, never read past. */
     for (size_t k = 0; k < n; k++) {
-        emm_status st = wire_start_decode(b, k, &back, &strings, &cap, &only, &expect, &program, &pid, &err);
+        emm_status st = wire_start_decode(b, k, &back, &strings, &cap, &only, &expect,
+                                          &program, &pid, &err);
         CHECKF(st != EMM_OK || k == n, "a start cut at %zu of %zu accepted", k, n);
         emm_config_free(&back);
         free(strings);
     }
     /* Another build's start. */
     b[0] ^= 0x40;
-    CHECK(wire_start_decode(b, n, &back, &strings, &cap, &only, &expect, &program, &pid, &err) == EMM_ERR_FORMAT &&
+    CHECK(wire_start_decode(b, n, &back, &strings, &cap, &only, &expect, &program, &pid,
+                            &err) == EMM_ERR_FORMAT &&
           strstr(err.message, "different builds"));
     emm_config_free(&back);
     free(strings);
