@@ -48,8 +48,8 @@ enum session_phase {
 enum decision_source { FROM_NONE, FROM_CONFIG, FROM_TABLE, FROM_CHECKED, FROM_SIMULATION };
 
 /* Written records the window buffers at most: 2^20 records of 40 bytes,
- * 40 MiB, about what a leading sweep of EMM_PROFILE_SWEEP_MAX reads costs
- * the window too. Writes after the window opened are part of the simulated
+ * 40 MiB, half of what a leading sweep of EMM_PROFILE_SWEEP_MAX element
+ * reads (a record each at least) may buffer already. Writes after the window opened are part of the simulated
  * run (a smoother's results), so they are kept, but they do not fill the
  * window, whose length is in reads: a program that writes a million records
  * between its window's reads is bounded by memory here, and the window
