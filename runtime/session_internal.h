@@ -49,11 +49,12 @@ enum decision_source { FROM_NONE, FROM_CONFIG, FROM_TABLE, FROM_CHECKED, FROM_SI
 
 /* Written records the window buffers at most: 2^20 records of 40 bytes,
  * 40 MiB, half of what a leading sweep of EMM_PROFILE_SWEEP_MAX element
- * reads (a record each at least) may buffer already. Writes after the window opened are part of the simulated
- * run (a smoother's results), so they are kept, but they do not fill the
- * window, whose length is in reads: a program that writes a million records
- * between its window's reads is bounded by memory here, and the window
- * ends with the reads it has (window.ended_by "write_cap"). */
+ * reads (a record each at least) may buffer already. Writes after the
+ * window opened are part of the simulated run (a smoother's results), so
+ * they are kept, but they do not fill the window, whose length is in
+ * reads: a program that writes a million records between its window's
+ * reads is bounded by memory here, and the window ends with the reads it
+ * has (window.ended_by "write_cap"). */
 #define SESSION_WINDOW_WRITES (1u << 20)
 /* Under a capture that sees the window only (fault capture pays tens of
  * microseconds an access until the decision), the window also ends after
