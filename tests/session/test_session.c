@@ -600,6 +600,59 @@ static void test_few_reads(void)
     free(json);
 }
 
+/* Writes after the window opened are buffered and simulated, but bounded:
+ * at 2^20 written records the window ends with the reads it has, and the
+ * summary and the report say so. */
+static void test_write_cap(void)
+{
+    emm_error err;
+    emm_session *s;
+    write_table("table.txt", "direct", 0);
+    emm_session_config c = base_config();
+    strcpy(tcfg.report, "wcap.json");
+    remove("wcap.json");
+    /* The window's end is what is tested, not the decision: a configured
+     * strategy keeps the million records out of the decision's sweeps. */
+    set_strategy("direct");
+    tcfg.compare = EMM_COMPARE_NONE;
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    emm_raw_access raw[4096];
+    size_t n = 0;
+    for (size_t k = 0; k < 300; k++)
+        if (!recs[k].write)
+            raw[n++] = (emm_raw_access){addr_of(&recs[k]), recs[k].bytes, 0, 0};
+    CHECK(emm_session_access(s, raw, n) == EMM_SESSION_PROFILING);
+    emm_session_state st = EMM_SESSION_PROFILING;
+    uint64_t writes = 0;
+    while (st == EMM_SESSION_PROFILING && writes < 2u << 20) {
+        for (size_t k = 0; k < 4096; k++)
+            raw[k] = (emm_raw_access){vbase + ((writes + k) % nv) * VSTRIDE + 8,
+                                      8 | EMM_RAW_WRITE, 0, 0};
+        st = emm_session_access(s, raw, 4096);
+        writes += 4096;
+    }
+    CHECK(st == EMM_SESSION_DECIDE);
+    CHECK(writes >= 1u << 20 && writes < (1u << 20) + 4096);
+    CHECKF(emm_session_decide(s, &err) == EMM_OK, "%s", err.message);
+    FILE *sum = tmpfile();
+    REQUIRE(sum);
+    CHECKF(emm_session_finish(s, sum, &err) == EMM_OK, "%s", err.message);
+    rewind(sum);
+    char text[8192] = {0};
+    CHECK(fread(text, 1, sizeof text - 1, sum) > 0);
+    fclose(sum);
+    printf("%s", text);
+    emm_session_free(s);
+    CHECK(has(text, "emm:   the window reached its bound of 1,048,576 written records after "));
+    CHECK(has(text, " of the window's 1,000 element reads: the answer rests on them"));
+    char *json = slurp("wcap.json");
+    CHECK(has(json, "\"complete\": false"));
+    CHECK(has(json, "\"ended_by\": \"write_cap\""));
+    CHECK(has_u64(json, "writes", 1u << 20));
+    free(json);
+}
+
 /* A profile far from every sample: the candidates are simulated on the
  * window and the best is taken. */
 static void test_novel(void)
@@ -1257,6 +1310,7 @@ int main(void)
     test_window_not_filled();
     test_writes_do_not_end_window();
     test_few_reads();
+    test_write_cap();
     test_novel();
     test_contest();
     test_contest_all();
