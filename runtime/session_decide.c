@@ -852,6 +852,11 @@ emm_status session_decide_read(session *s, emm_error *err)
 {
     emm_status st;
     s->geometry_failed = false;
+    unsigned have = 0;
+    for (int i = 0; i < s->narrays; i++)
+        if (session_usable(&s->arrays[i]))
+            have |= 1u << s->arrays[i].kind;
+    s->missing = s->expect & ~have;
     if ((st = read_geometry(s, err)) != EMM_OK) {
         s->geometry_failed = true;
         return st;

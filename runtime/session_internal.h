@@ -207,6 +207,7 @@ typedef struct session {
     uint64_t wlast_element;
     enum window_end wend; /* why the window ended (WINDOW_OPEN until it did) */
     unsigned expect;     /* the kinds of array the tag rules name (1 << emm_array_kind) */
+    unsigned missing;    /* of them, those with no array at the decision */
     uint64_t waited;     /* element reads the window went on for, past its length, waiting
                             for an array of an expected kind to be tagged (0: none) */
     bool sweep_profiled; /* every read was a leading index-order sweep: it was profiled as

@@ -335,6 +335,13 @@ static void write_arrays(json_writer *w, const session *s)
     json_end_array(w);
     json_key(w, "late_arrays_total");
     json_u64(w, s->late_total);
+    json_key(w, "missing_kinds");
+    json_begin_array(w);
+    if (s->missing & 1u << EMM_ARRAY_VERTICES)
+        json_string(w, "vertices");
+    if (s->missing & 1u << EMM_ARRAY_TRIANGLES)
+        json_string(w, "triangles");
+    json_end_array(w);
 }
 
 static void report_extra(json_writer *w, void *ctx)
@@ -741,15 +748,11 @@ static void print_window_lines(const session *s, FILE *out)
                      "was tagged, and went on %s more element reads waiting for one\n",
                 emm_grouped(s->waited, num));
     static const emm_array_kind kinds[] = {EMM_ARRAY_VERTICES, EMM_ARRAY_TRIANGLES};
-    for (int k = 0; k < 2; k++) {
-        bool traced = false;
-        for (uint32_t a = 0; a < s->ntarrays; a++)
-            traced = traced || s->tarrays[a].kind == kinds[k];
-        if ((s->expect & 1u << kinds[k]) && !traced && !s->soup)
+    for (int k = 0; k < 2; k++)
+        if (s->missing & 1u << kinds[k])
             fprintf(out, "emm:   no %s array was tagged by the decision although a tag rule "
                          "names one: the mesh is simulated without it\n",
                     kinds[k] == EMM_ARRAY_VERTICES ? "vertex" : "triangle");
-    }
     for (int i = 0; i < s->nlate; i++) {
         const late_array *l = &s->late[i];
         fprintf(out, "emm:   %s tagged %s %s (%llu-byte records) after the decision: its "

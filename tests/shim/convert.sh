@@ -72,9 +72,10 @@ if case == 'late':
     need([(a['kind'], a['records']) for a in r['late_arrays']] == [('triangles', nf)],
          'the late triangle array is not reported')
     need('late_faces' in r['late_arrays'][0]['origin'], 'the late array has no origin')
+    need(r['missing_kinds'] == ['triangles'], 'the triangles are not said missing')
 else:
     need(arrays == {'vertices': nv, 'triangles': nf}, 'the simulated arrays are not the mesh')
-    need(r['late_arrays'] == [], 'late arrays reported')
+    need(r['late_arrays'] == [] and r['missing_kinds'] == [], 'late or missing arrays reported')
 if case == 'sweep':
     need(w['sweep_profiled'] and w['leading_sweep'] == nv + nf and
          w['element_accesses'] == nv + nf, 'the sweep was not profiled as the traversal')
@@ -89,7 +90,9 @@ case $CASE in
   sweep) grep -Eq '^emm:   every one of the [0-9,]+ element reads seen was a leading index-order sweep .*the sweep is the traversal, and it was profiled' "$err" ||
            { cat "$err" >&2; fail "the summary does not say the sweep was profiled"; } ;;
   late) grep -Eq '^emm:   EMM_TAG rule 2 \(triangles:site=late_faces[^)]*\) tagged [0-9,]+ triangles \(12-byte records\) after the decision: its accesses are not simulated' "$err" ||
-          { cat "$err" >&2; fail "the summary does not name the late triangle array"; } ;;
+          { cat "$err" >&2; fail "the summary does not name the late triangle array"; }
+        grep -q '^emm:   no triangle array was tagged by the decision although a tag rule names one' "$err" ||
+          { cat "$err" >&2; fail "the summary does not say the triangles were missing"; } ;;
   *) grep -Eq '^emm:   simulated arrays: [0-9,]+ (vertices|triangles) \(12-byte records\) and [0-9,]+ (vertices|triangles) \(12-byte records\)$' "$err" ||
        { cat "$err" >&2; fail "the summary does not list both arrays"; } ;;
 esac
