@@ -298,8 +298,12 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
         }
         a->min_block = LIST_MIN;
     } else {
+        /* The kinds the rules name: the window waits for them (bounded). */
+        unsigned expect = 0;
+        for (size_t i = 0; i < a->cfg.tags.n; i++)
+            expect |= 1u << a->cfg.tags.rule[i].kind;
         emm_session_config sc = {&a->cfg, a->capture, a->program, 0, c->threads, c->server,
-                                 NULL, 0};
+                                 NULL, 0, expect};
         st = emm_session_new(&sc, &a->session, err);
         if (st != EMM_OK && sc.server) {
             if (a->cfg.log >= 2 && !a->child)

@@ -711,6 +711,11 @@ static bool profiler_push(emm_profiler *p, const double *x)
     return true;
 }
 
+void profiler_keep_sweep(emm_profiler *p)
+{
+    p->sweep.over = true;
+}
+
 uint64_t emm_profiler_swept(const emm_profiler *p, size_t *records)
 {
     if (records)

@@ -36,20 +36,6 @@
  * and in all when the window counts iterations. */
 #define SESSION_RECORDS_PER_ELEMENT 32u
 #define SESSION_ITERATION_RECORDS (1u << 20)
-/* Element writes before the first read that are taken for the loader: at
- * least this many (a mesh of some 20,000 vertices and 40,000 triangles),
- * and as many as the arrays tagged so far have held records (a loader
- * writes each once, a growing vector's copies included); a longer stretch
- * of writes opens the window anyway. */
-#define SESSION_LOADER_ELEMENTS 65536u
-
-static uint64_t loader_allowance(const session *s)
-{
-    return s->tagged_records > SESSION_LOADER_ELEMENTS ? s->tagged_records
-                                                       : SESSION_LOADER_ELEMENTS;
-}
-/* Element writes in the window after which it ends, in windows. */
-#define SESSION_WRITE_WINDOWS 2
 
 static const struct session_transport engine_transport;
 
@@ -78,6 +64,7 @@ emm_status session_engine_new(const emm_session_config *sc, emm_session **out, e
     s->pid = sc->pid ? sc->pid : (long)getpid();
     s->program = strdup(sc->program ? sc->program : "program");
     s->capture = sc->capture;
+    s->expect = sc->expect & (1u << EMM_ARRAY_VERTICES | 1u << EMM_ARRAY_TRIANGLES);
     s->threads = sc->threads;
     s->chunk = malloc(SESSION_CHUNK * sizeof *s->chunk);
     if (!s->program || !s->chunk) {
@@ -356,7 +343,18 @@ static int engine_tag(emm_session *h, const emm_array_desc *d)
     a->rule = rule;
     a->top = 0;
     a->moves = 0;
-    s->tagged_records += count;
+    if (s->phase == PHASE_SIMULATING && tidx < 0) {
+        /* Tagged after the decision, and no trace array to feed: its
+         * accesses are not simulated, and the summary says so. */
+        if (s->nlate < SESSION_LATE_KEPT) {
+            late_array *l = &s->late[s->nlate++];
+            l->kind = kind;
+            l->count = count;
+            l->stride = stride;
+            session_origin(s, a, l->origin, sizeof l->origin);
+        }
+        s->late_total++;
+    }
     if (tidx >= 0 && a->count > s->tarrays[tidx].count) {
         a->count = s->tarrays[tidx].count; /* later elements are not in the trace */
         a->end = session_array_end(a);
@@ -381,8 +379,6 @@ static emm_session_state engine_move(emm_session *h, uint64_t from, uint64_t lo,
             break;
         }
         drop_overlaps(s, lo, lo + span, i);
-        if (count > a->count)
-            s->tagged_records += count - a->count;
         a->base = lo;
         a->count = count;
         if (a->plane)
@@ -415,8 +411,10 @@ static emm_session_state engine_untag(emm_session *h, uint64_t lo)
         for (int j = 0; j < s->narrays && last; j++)
             last = j == i || !s->arrays[j].live || s->arrays[j].kind != a->kind;
         drop_slot(s, i, last);
-        if (last)
+        if (last) {
             s->phase = PHASE_DECIDE;
+            s->wend = s->waited ? WINDOW_FULL : WINDOW_FREED; /* a full window that waited */
+        }
     }
     return public_state(s);
 }
@@ -521,21 +519,52 @@ static inline bool convert(session *s, const emm_raw_access *raw, emm_trace_reco
     return true;
 }
 
+/* Whether an array of a kind the rules name has yet to be tagged. */
+static bool expects_more(const session *s)
+{
+    unsigned have = 0;
+    for (int i = 0; i < s->narrays; i++)
+        if (session_usable(&s->arrays[i]))
+            have |= 1u << s->arrays[i].kind;
+    return (s->expect & ~have) != 0;
+}
+
+/* The window ends when its element reads (or iterations) are in; writes
+ * neither open, fill nor end it. It also ends, short, at the bounds that
+ * keep capture in memory and time: SESSION_WINDOW_WRITES written records,
+ * wlimit records in all (a program that reads few elements many times),
+ * and under a window-only capture SESSION_CAPTURE_WINDOWS windows of
+ * element accesses. A full window that waits for an array of a kind the
+ * rules name goes on up to SESSION_WAIT_WINDOWS windows of reads. */
 static void window_full_check(session *s)
 {
     if (s->phase != PHASE_PROFILING)
         return;
-    /* A window of mostly writes ends too, after SESSION_WRITE_WINDOWS
-     * windows of element writes; under fault capture, which pays tens of
-     * microseconds an access, after that many windows of element accesses
-     * of any kind (a leading sweep included): capture must stay bounded. */
     uint64_t w = s->cfg.window_accesses ? s->cfg.window_accesses : EMM_PROFILE_DEFAULT_WINDOW;
+    enum window_end end = WINDOW_OPEN;
     if ((s->cfg.window_accesses && s->welements >= s->cfg.window_accesses) ||
-        s->welement_writes >= SESSION_WRITE_WINDOWS * w ||
-        (session_window_only(s) && s->wactivity >= SESSION_WRITE_WINDOWS * w) ||
-        (s->cfg.window_iterations && s->iterations >= s->cfg.window_iterations) ||
-        s->wn >= s->wlimit)
-        s->phase = PHASE_DECIDE;
+        (s->cfg.window_iterations && s->iterations >= s->cfg.window_iterations))
+        end = WINDOW_FULL;
+    if (s->wwrites >= SESSION_WINDOW_WRITES)
+        end = WINDOW_WRITES;
+    else if (session_window_only(s) && s->wactivity >= SESSION_CAPTURE_WINDOWS * w)
+        end = WINDOW_CAPTURE;
+    else if (s->wn >= s->wlimit)
+        end = WINDOW_RECORDS;
+    if (end == WINDOW_OPEN)
+        return;
+    if (end == WINDOW_FULL && s->expect && s->welements < SESSION_WAIT_WINDOWS * w &&
+        expects_more(s)) {
+        s->waited = s->cfg.window_accesses && s->welements > s->cfg.window_accesses
+                        ? s->welements - s->cfg.window_accesses
+                        : 1;
+        return;
+    }
+    if (s->waited && s->cfg.window_accesses && s->welements > s->cfg.window_accesses)
+        s->waited = s->welements - s->cfg.window_accesses;
+    if (s->wend == WINDOW_OPEN || s->wend == WINDOW_FULL)
+        s->wend = end;
+    s->phase = PHASE_DECIDE;
 }
 
 static void window_add(session *s, const emm_raw_access *a, size_t n)
@@ -553,17 +582,12 @@ static void window_add(session *s, const emm_raw_access *a, size_t n)
          * std::vector copies its elements, an index-order sweep) opened the
          * window, but the traversal has not begun. */
         if (!s->wopen || (r.write && s->welements == 0)) {
-            /* A program that only writes, or a loader that writes more
-             * elements than the arrays hold (loader_allowance), opens the
-             * window anyway: capture must stay bounded (fault capture pays
-             * tens of microseconds an access until the decision). */
-            if (r.write && s->loader_elements < loader_allowance(s)) {
+            /* Writes never open the window, however many: a converter
+             * loads its whole mesh before it reads it once. Fault capture
+             * pays for them once a page while the program builds
+             * (emm_guard_build_open). */
+            if (r.write) {
                 s->loader_writes++;
-                if (!s->lany || g != s->llast_array || r.element != s->llast_element)
-                    s->loader_elements++;
-                s->lany = true;
-                s->llast_array = g;
-                s->llast_element = r.element;
                 continue;
             }
             s->wopen = true;
@@ -596,7 +620,6 @@ static void window_add(session *s, const emm_raw_access *a, size_t n)
         s->wactivity += next && s->welements > 0;
         if (r.write) {
             s->wwrites++;
-            s->welement_writes += next;
         } else {
             s->wreads++;
         }
@@ -619,8 +642,9 @@ static void window_add(session *s, const emm_raw_access *a, size_t n)
             if (!s->wfill && s->cfg.window_accesses && s->welements >= s->cfg.window_accesses)
                 s->wfill = s->wn;
         }
-        if (!r.write && !s->sweep.over)
-            s->wlimit++; /* the sweep's reads do not count against the window */
+        if (r.write || !s->sweep.over)
+            s->wlimit++; /* the sweep's reads and the writes (SESSION_WINDOW_WRITES bounds
+                            them) do not count against the window's records */
         window_full_check(s);
     }
 }
@@ -796,17 +820,33 @@ static emm_status engine_finish(emm_session *h, FILE *summary, const char *ended
         snprintf(s->ended, sizeof s->ended, "%s", ended);
     if (s->phase == PHASE_DEFERRED)
         s->phase = PHASE_DECIDE;
-    if (s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE)
+    if (s->phase == PHASE_PROFILING) {
+        /* The run ended before the window filled: the decision rests on
+         * the reads it had (a full window waiting for an array counts as
+         * full). */
+        s->phase = PHASE_DECIDE;
+        if (s->wend == WINDOW_OPEN)
+            s->wend = s->waited ? WINDOW_FULL : WINDOW_FINISH;
+    }
+    if (s->phase == PHASE_DECIDE)
         engine_decide(s, NULL);
     if (s->phase == PHASE_SIMULATING) {
         flush_chunk(s);
         /* Models with no record are no answer: the program ended before
          * reading its mesh, or the capture saw none of its reads. */
         if (s->accesses == 0) {
-            emm_fail(&s->failure, EMM_ERR_UNSUPPORTED,
-                     "%s: no access to the tagged arrays was seen (the program ended before "
-                     "reading them, or the %s capture saw none of their accesses)",
-                     s->program, emm_capture_name(s->capture));
+            if (s->loader_writes)
+                emm_fail(&s->failure, EMM_ERR_UNSUPPORTED,
+                         "%s: no read of the tagged arrays was seen, only %llu writes to them "
+                         "(the loader's: the window opens at the first read, and the program "
+                         "ended before one, or the %s capture saw none)",
+                         s->program, (unsigned long long)s->loader_writes,
+                         emm_capture_name(s->capture));
+            else
+                emm_fail(&s->failure, EMM_ERR_UNSUPPORTED,
+                         "%s: no access to the tagged arrays was seen (the program ended before "
+                         "reading them, or the %s capture saw none of their accesses)",
+                         s->program, emm_capture_name(s->capture));
             s->phase = PHASE_FAILED;
         }
     }

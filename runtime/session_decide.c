@@ -587,10 +587,21 @@ static emm_status freeze_arrays(session *s, emm_error *err)
 static emm_status profile_window(session *s, emm_error *err)
 {
     emm_profiler *p;
-    emm_status st = emm_profiler_new(&s->info, s->welements ? s->welements : 1, EMM_PROFILE_PLANE,
+    /* Every read of the window was a leading index-order sweep (a
+     * converter reads its mesh once, in order): that sweep is the
+     * traversal, profiled whole rather than left out. */
+    s->sweep_profiled = s->welements == 0 && s->sweep.elements > 0;
+    uint64_t window = s->sweep_profiled ? s->sweep.elements : s->welements;
+    /* A window that went on waiting for an array is profiled over its
+     * length: the reads after it are the run's. */
+    if (s->waited && s->cfg.window_accesses && window > s->cfg.window_accesses)
+        window = s->cfg.window_accesses;
+    emm_status st = emm_profiler_new(&s->info, window ? window : 1, EMM_PROFILE_PLANE,
                                      s->program, &p, err);
     if (st != EMM_OK)
         return st;
+    if (s->sweep_profiled)
+        profiler_keep_sweep(p);
     if ((st = emm_profiler_add(p, s->window, s->wn, err)) != EMM_OK) {
         emm_profiler_free(p);
         return st;
@@ -646,6 +657,26 @@ static emm_status choose(session *s, emm_error *err)
     s->source = wd.how == EMM_DECIDED_WINDOW    ? FROM_SIMULATION
                 : wd.how == EMM_DECIDED_CHECKED ? FROM_CHECKED
                                                 : FROM_TABLE;
+    return EMM_OK;
+}
+
+/* The decision without a profile: the standard sweep simulated over the
+ * window's records, the fewest cycles taken. */
+static emm_status choose_on_window(session *s, emm_error *err)
+{
+    emm_window_decision wd;
+    emm_decide_options opt = {0, 0, &s->threads};
+    double f[EMM_FEATURES] = {0};
+    emm_status st = decide_features_shared(NULL, s->machine, &s->info, s->window + s->wskip,
+                                           s->wn - s->wskip, f, s->nD, s->program, &opt,
+                                           s->layouts, s->decisions, &wd, err);
+    if (st != EMM_OK)
+        return st;
+    s->chosen = wd.strategy;
+    s->has_chosen = true;
+    s->wd = wd;
+    s->has_wd = true;
+    s->source = FROM_SIMULATION;
     return EMM_OK;
 }
 
@@ -824,6 +855,11 @@ emm_status session_decide_read(session *s, emm_error *err)
 {
     emm_status st;
     s->geometry_failed = false;
+    unsigned have = 0;
+    for (int i = 0; i < s->narrays; i++)
+        if (session_usable(&s->arrays[i]))
+            have |= 1u << s->arrays[i].kind;
+    s->missing = s->expect & ~have;
     if ((st = read_geometry(s, err)) != EMM_OK) {
         s->geometry_failed = true;
         return st;
@@ -850,6 +886,13 @@ emm_status session_decide_rest(session *s, emm_error *err)
         s->source = FROM_CONFIG;
     } else if (s->has_profile) {
         if ((st = choose(s, err)) != EMM_OK)
+            return st;
+    } else if (s->nD > 0 && s->table) {
+        /* Fewer element reads than a profile's features need (the run
+         * ended first): no pattern, but the reads there were still decide —
+         * the candidates simulated over them, the fewest cycles taken (the
+         * novel profile's rule). */
+        if ((st = choose_on_window(s, err)) != EMM_OK)
             return st;
     }
     if ((st = build_models(s, err)) != EMM_OK)

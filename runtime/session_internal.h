@@ -47,6 +47,51 @@ enum session_phase {
 
 enum decision_source { FROM_NONE, FROM_CONFIG, FROM_TABLE, FROM_CHECKED, FROM_SIMULATION };
 
+/* Written records the window buffers at most: 2^20 records of 40 bytes,
+ * 40 MiB, half of what a leading sweep of EMM_PROFILE_SWEEP_MAX element
+ * reads (a record each at least) may buffer already. Writes after the
+ * window opened are part of the simulated run (a smoother's results), so
+ * they are kept, but they do not fill the window, whose length is in
+ * reads: a program that writes a million records between its window's
+ * reads is bounded by memory here, and the window ends with the reads it
+ * has (window.ended_by "write_cap"). */
+#define SESSION_WINDOW_WRITES (1u << 20)
+/* Under a capture that sees the window only (fault capture pays tens of
+ * microseconds an access until the decision), the window also ends after
+ * this many window lengths of element accesses of either direction,
+ * counted from its first profiled read: the loader's writes before the
+ * window opened do not count (a loader faults once a page while it builds,
+ * emm_guard_build_open), nor does a leading sweep (bounded by
+ * EMM_PROFILE_SWEEP_MAX), so a converter's window is its reads. */
+#define SESSION_CAPTURE_WINDOWS 2
+/* A window that filled before an array of every kind the rules name was
+ * tagged goes on until one is, up to this many window lengths of element
+ * reads in all; the profile is still the first window's. */
+#define SESSION_WAIT_WINDOWS 4
+
+/* Why the profile window ended (docs/profile.md "The window"): WINDOW_FULL
+ * is the only complete one; the others leave the decision to the reads the
+ * window had (the summary and the report's window.complete say so). */
+enum window_end {
+    WINDOW_OPEN,     /* not ended yet */
+    WINDOW_FULL,     /* its element reads (or iterations) */
+    WINDOW_FINISH,   /* the run ended first */
+    WINDOW_FREED,    /* the last array of a kind was freed */
+    WINDOW_WRITES,   /* its written records reached SESSION_WINDOW_WRITES */
+    WINDOW_RECORDS,  /* its records reached the buffer's bound (few elements, many reads) */
+    WINDOW_CAPTURE   /* a window-only capture's bound on element accesses */
+};
+
+/* Arrays tagged after the decision that the run's trace has no place for
+ * (docs/profile.md "Arrays tagged late"): the summary and the report name
+ * the first SESSION_LATE_KEPT. */
+#define SESSION_LATE_KEPT 4
+typedef struct late_array {
+    emm_array_kind kind;
+    uint64_t count, stride;
+    char origin[200];
+} late_array;
+
 /* Phases (docs/profile.md "Phases"): after the window the session profiles
  * probes of the run as long as the window, one every SESSION_PROBE_GAP + 1
  * window lengths; two probes in a row whose pattern differs from the
@@ -150,7 +195,6 @@ typedef struct session {
     size_t wn, wcap, wlimit;
     uint64_t welements, iterations;
     uint64_t wreads, wwrites; /* the window's records by direction */
-    uint64_t welement_writes; /* its element writes (consecutive ones count once) */
     uint64_t wactivity;  /* its element accesses of either direction, counted alike, from
                             the first profiled read on */
     bool wwany;
@@ -158,14 +202,19 @@ typedef struct session {
     uint64_t wwlast_element;
     bool wopen;          /* the first read of the mesh came: the window is open */
     uint64_t loader_writes; /* writes before it: the loader's, not simulated */
-    uint64_t loader_elements; /* of them, element writes (consecutive ones count once) */
-    uint64_t tagged_records; /* records of every array tagged (or grown) so far */
-    bool lany;
-    uint32_t llast_array;
-    uint64_t llast_element;
     bool wany;
     uint32_t wlast_array;
     uint64_t wlast_element;
+    enum window_end wend; /* why the window ended (WINDOW_OPEN until it did) */
+    unsigned expect;     /* the kinds of array the tag rules name (1 << emm_array_kind) */
+    unsigned missing;    /* of them, those with no array at the decision */
+    uint64_t waited;     /* element reads the window went on for, past its length, waiting
+                            for an array of an expected kind to be tagged (0: none) */
+    bool sweep_profiled; /* every read was a leading index-order sweep: it was profiled as
+                            the traversal */
+    late_array late[SESSION_LATE_KEPT]; /* tagged after the decision, not simulated */
+    int nlate;           /* of them kept */
+    uint64_t late_total; /* and in all */
     lead_sweep sweep;    /* the leading index-order sweep */
     size_t wskip;        /* window records of that sweep (the profiler's count) */
     size_t wfill;        /* records when the window's element reads filled it (0: never) */

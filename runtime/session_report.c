@@ -282,6 +282,68 @@ static void write_window_check(json_writer *w, const report_ctx *c)
     json_end_object(w);
 }
 
+/* The report's window.ended_by. */
+static const char *window_end_name(enum window_end e)
+{
+    switch (e) {
+    case WINDOW_FULL:
+        return "full";
+    case WINDOW_FINISH:
+        return "run_end";
+    case WINDOW_FREED:
+        return "array_freed";
+    case WINDOW_WRITES:
+        return "write_cap";
+    case WINDOW_RECORDS:
+        return "record_cap";
+    case WINDOW_CAPTURE:
+        return "capture_bound";
+    default:
+        return "open";
+    }
+}
+
+/* The arrays simulated, and those tagged after the decision that were not
+ * (docs/report.md "arrays"). */
+static void write_arrays(json_writer *w, const session *s)
+{
+    json_key(w, "arrays");
+    json_begin_array(w);
+    for (uint32_t a = 0; a < s->ntarrays; a++) {
+        json_begin_object(w);
+        json_key(w, "kind");
+        json_string(w, s->tarrays[a].kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles");
+        json_key(w, "records");
+        json_u64(w, s->tarrays[a].count);
+        json_key(w, "record_bytes");
+        json_u64(w, s->tarrays[a].record_size);
+        json_end_object(w);
+    }
+    json_end_array(w);
+    json_key(w, "late_arrays");
+    json_begin_array(w);
+    for (int i = 0; i < s->nlate; i++) {
+        json_begin_object(w);
+        json_key(w, "kind");
+        json_string(w, s->late[i].kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles");
+        json_key(w, "records");
+        json_u64(w, s->late[i].count);
+        json_key(w, "origin");
+        json_string(w, s->late[i].origin);
+        json_end_object(w);
+    }
+    json_end_array(w);
+    json_key(w, "late_arrays_total");
+    json_u64(w, s->late_total);
+    json_key(w, "missing_kinds");
+    json_begin_array(w);
+    if (s->missing & 1u << EMM_ARRAY_VERTICES)
+        json_string(w, "vertices");
+    if (s->missing & 1u << EMM_ARRAY_TRIANGLES)
+        json_string(w, "triangles");
+    json_end_array(w);
+}
+
 static void report_extra(json_writer *w, void *ctx)
 {
     const report_ctx *c = ctx;
@@ -490,7 +552,16 @@ static void report_extra(json_writer *w, void *ctx)
     json_u64(w, s->iterations);
     json_key(w, "leading_sweep");
     json_u64(w, s->sweep.elements);
+    json_key(w, "complete");
+    json_bool(w, s->wend == WINDOW_FULL);
+    json_key(w, "ended_by");
+    json_string(w, window_end_name(s->wend));
+    json_key(w, "sweep_profiled");
+    json_bool(w, s->sweep_profiled);
+    json_key(w, "waited");
+    json_u64(w, s->waited);
     json_end_object(w);
+    write_arrays(w, s);
     write_profile(w, s);
     write_phases(w, s);
     session_write_stall_lines(w, s);
@@ -591,6 +662,110 @@ static const char *how_decided(const session *s, const emm_result *res, size_t n
     return buf;
 }
 
+/* Why no element read was profiled, for "0 element reads profiled (...)". */
+static const char *no_reads_why(const session *s, char *buf, size_t cap)
+{
+    char num[32];
+    if (s->wreads == 0 && s->loader_writes)
+        snprintf(buf, cap, "the program wrote its tagged arrays (%s writes, the loader's) but "
+                           "was not seen reading them: the window opens at the first read",
+                 emm_grouped(s->loader_writes, num));
+    else if (s->wreads == 0)
+        snprintf(buf, cap, "no read of the tagged arrays was seen");
+    else
+        snprintf(buf, cap, "the window's %s reads were of arrays outside the traced mesh",
+                 emm_grouped(s->wreads, num));
+    return buf;
+}
+
+/* "the mesh: 50,225 vertices (12-byte records) and 100,000 triangles
+ * (12-byte records)": the arrays simulated, by kind. */
+static void print_mesh_arrays(const session *s, FILE *out)
+{
+    char line[512] = "", num[32];
+    for (uint32_t a = 0; a < s->ntarrays; a++) {
+        const emm_trace_array *t = &s->tarrays[a];
+        size_t used = strlen(line);
+        snprintf(line + used, sizeof line - used, "%s%s %s (%u-byte records)",
+                 a == 0 ? "" : a + 1 == s->ntarrays ? " and " : ", ", emm_grouped(t->count, num),
+                 t->kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles", t->record_size);
+    }
+    if (s->ntarrays)
+        fprintf(out, "emm:   simulated arrays: %s\n", line);
+}
+
+/* What the window was: short of its length, waiting for an array, a
+ * leading sweep profiled as the traversal; and the arrays of a kind the
+ * rules name that came too late. */
+static void print_window_lines(const session *s, FILE *out)
+{
+    char num[32], num2[32], num3[32], bound[160];
+    uint64_t size = s->cfg.window_accesses ? s->cfg.window_accesses : s->cfg.window_iterations;
+    const char *unit = s->cfg.window_accesses ? "element reads" : "iterations";
+    uint64_t got = s->cfg.window_accesses ? (uint64_t)s->nD : s->iterations;
+    emm_grouped(got, num);
+    emm_grouped(size, num2);
+    const char *ended = NULL;
+    switch (s->wend) {
+    case WINDOW_FINISH:
+        ended = "the run ended";
+        break;
+    case WINDOW_FREED:
+        ended = "the last array of a kind was freed";
+        break;
+    case WINDOW_WRITES:
+        snprintf(bound, sizeof bound,
+                 "the window reached its bound of %s written records",
+                 emm_grouped(SESSION_WINDOW_WRITES, num3));
+        ended = bound;
+        break;
+    case WINDOW_RECORDS:
+        ended = "the window reached its bound of records (few elements read many times)";
+        break;
+    case WINDOW_CAPTURE:
+        snprintf(bound, sizeof bound,
+                 "the window reached the %s capture's bound of %d window lengths of element "
+                 "accesses of either kind",
+                 emm_capture_name(s->capture), SESSION_CAPTURE_WINDOWS);
+        ended = bound;
+        break;
+    default:
+        break;
+    }
+    if (s->sweep_profiled)
+        /* No read of the window proper: the sweep before it is the run. */
+        fprintf(out, "emm:   every one of the %s element reads seen was a leading index-order "
+                     "sweep (the program reads its mesh once, in order) and %s before the "
+                     "window's %s %s past such a sweep began: the sweep is the traversal, and "
+                     "it was profiled\n",
+                emm_grouped(s->sweep.elements, num3), ended ? ended : "the window filled", num2,
+                unit);
+    else if (ended)
+        fprintf(out, "emm:   %s after %s of the window's %s %s: the answer rests on them\n", ended,
+                num, num2, unit);
+    if (s->waited)
+        fprintf(out, "emm:   the window filled before an array of every kind the tag rules name "
+                     "was tagged, and went on %s more element reads waiting for one\n",
+                emm_grouped(s->waited, num));
+    static const emm_array_kind kinds[] = {EMM_ARRAY_VERTICES, EMM_ARRAY_TRIANGLES};
+    for (int k = 0; k < 2; k++)
+        if (s->missing & 1u << kinds[k])
+            fprintf(out, "emm:   no %s array was tagged by the decision although a tag rule "
+                         "names one: the mesh is simulated without it\n",
+                    kinds[k] == EMM_ARRAY_VERTICES ? "vertex" : "triangle");
+    for (int i = 0; i < s->nlate; i++) {
+        const late_array *l = &s->late[i];
+        fprintf(out, "emm:   %s tagged %s %s (%llu-byte records) after the decision: its "
+                     "accesses are not simulated (the run's arrays were fixed then)\n",
+                l->origin, emm_grouped(l->count, num),
+                l->kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles",
+                (unsigned long long)l->stride);
+    }
+    if (s->late_total > (uint64_t)s->nlate)
+        fprintf(out, "emm:   and %llu more arrays tagged after the decision, not simulated\n",
+                (unsigned long long)(s->late_total - (uint64_t)s->nlate));
+}
+
 /* The summary is the answer (docs/report.md "The summary"): the pattern, the
  * chosen strategy in words with its cycles against direct reads, the
  * runner-up, the reference cache, what was simulated, what was skipped,
@@ -620,14 +795,19 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
     else if (s->has_profile)
         fprintf(out, "emm: %s: pattern %s (nearest %s, distance %.2f)\n", s->program,
                 s->decision.pattern, s->decision.nearest, s->decision.distance);
-    else
+    else if (s->nD == 0) {
+        char why[256];
+        fprintf(out, "emm: %s: pattern unknown (0 element reads profiled: %s)\n", s->program,
+                no_reads_why(s, why, sizeof why));
+    } else
         fprintf(out, "emm: %s: pattern unknown (%zu element reads profiled; %s)\n", s->program,
-                s->nD, s->table ? "a profile needs at least 256" : "no strategy table");
-    if (s->wwrites > s->wreads)
-        fprintf(out, "emm:   the window saw mostly writes (%llu of %llu records): the program "
-                     "may still have been building its mesh; a later window (--profile) "
-                     "would see the traversal\n",
-                (unsigned long long)s->wwrites, (unsigned long long)(s->wwrites + s->wreads));
+                s->nD,
+                !s->table ? "no strategy table"
+                : s->has_chosen && s->source == FROM_SIMULATION
+                    ? "a pattern needs at least 256: the candidates were simulated over those "
+                      "reads instead"
+                    : "a profile needs at least 256");
+    print_window_lines(s, out);
 
     const emm_result *chosen = s->has_chosen && nres ? &res[0] : NULL;
     const emm_result *direct = find_result(res, nres, &direct_strategy);
@@ -750,6 +930,7 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
         fprintf(out, "emm:   %s\n", remote);
     if (s->pick_note[0])
         fprintf(out, "emm:   %s\n", s->pick_note);
+    print_mesh_arrays(s, out);
     if (s->vertex_only)
         fprintf(out, "emm:   the mesh: %s vertex positions and no triangle array: the layouts "
                      "cut cells of vertices, which every strategy can run on\n",

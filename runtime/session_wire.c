@@ -2,6 +2,7 @@
 #include "session_wire.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
@@ -160,6 +161,7 @@ bool wire_start_encode(const emm_session_config *sc, long pid, unsigned char **o
     put_u64(&b, WIRE_VERSION);
     put_u64(&b, (uint64_t)sc->capture);
     put_u64(&b, (uint64_t)sc->table_only);
+    put_u64(&b, (uint64_t)sc->expect);
     put_u64(&b, (uint64_t)pid);
     put_str(&b, sc->program ? sc->program : "program");
     char text[2 * EMM_CONFIG_PATH_MAX + 16];
@@ -185,21 +187,24 @@ bool wire_start_encode(const emm_session_config *sc, long pid, unsigned char **o
 
 emm_status wire_start_decode(const unsigned char *data, size_t len, emm_config *cfg,
                              char **strings, emm_capture *capture, int *table_only,
-                             const char **program, long *program_pid, emm_error *err)
+                             unsigned *expect, const char **program, long *program_pid,
+                             emm_error *err)
 {
     struct cursor c = {data, data ? data + len : data};
-    uint64_t version, cap, only, pid, count;
+    uint64_t version, cap, only, want, pid, count;
     emm_config_init(cfg);
     *strings = NULL;
     if (!get_u64(&c, &version) || version != WIRE_VERSION)
         return emm_fail(err, EMM_ERR_FORMAT,
                         "emm-session: the shim and the session server are of different builds");
-    if (!get_u64(&c, &cap) || !get_u64(&c, &only) || !get_u64(&c, &pid) ||
+    if (!get_u64(&c, &cap) || !get_u64(&c, &only) || !get_u64(&c, &want) || want > UINT_MAX ||
+        !get_u64(&c, &pid) ||
         !get_str(&c, program) || !get_u64(&c, &count) || cap >= EMM_CAPTURE_COUNT ||
         count > EMM_CONFIG_COUNT)
         return emm_fail(err, EMM_ERR_FORMAT, "emm-session: a malformed start");
     *capture = (emm_capture)cap;
     *table_only = only != 0;
+    *expect = (unsigned)want;
     *program_pid = (long)pid;
     /* The sources must outlive cfg: one copy of the rest of the payload. */
     size_t rest = (size_t)(c.end - c.p);

@@ -17,7 +17,7 @@
 
 #include "emm/session.h"
 
-#define WIRE_VERSION 3
+#define WIRE_VERSION 4
 /* The largest frame either side accepts: a mesh array's bytes. */
 #define WIRE_FRAME_MAX ((uint64_t)1 << 40)
 
@@ -66,7 +66,7 @@ bool wire_start_encode(const emm_session_config *sc, long pid, unsigned char **o
  * after the session is done with cfg; *program points into data. */
 emm_status wire_start_decode(const unsigned char *data, size_t len, emm_config *cfg,
                              char **strings, emm_capture *capture, int *table_only,
-                             const char **program, long *pid, emm_error *err);
+                             unsigned *expect, const char **program, long *pid, emm_error *err);
 
 /* A TAG's payload: the description, its origin as a string. */
 bool wire_tag_encode(const emm_array_desc *d, unsigned char **out, size_t *len);

@@ -19,6 +19,8 @@ packages=(
                                         # libraries build emm's tool; its launcher runs it
   libopenmesh-apps                      # OpenMesh's command-line apps: tests on programs
                                         # nobody here wrote
+  openctm-tools                         # ctmconv: a package converter under emm run
+                                        # (tests/shim/ctmconv.sh)
   python3                               # tests: reports and timelines read back with a strict JSON reader
   time                                  # tests: /usr/bin/time measures the bad-input reproducers
 )

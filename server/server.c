@@ -169,15 +169,16 @@ static emm_status serve_new(struct server *v, const struct message *m, emm_error
 {
     emm_capture capture;
     int table_only;
+    unsigned expect;
     const char *program;
     long pid;
     emm_status st = wire_start_decode(m->data, (size_t)m->f.len, &v->cfg, &v->strings, &capture,
-                                      &table_only, &program, &pid, err);
+                                      &table_only, &expect, &program, &pid, err);
     if (st != EMM_OK)
         return st;
     v->memory = (emm_session_memory){read_program, program_modules, v};
     emm_session_config sc = {&v->cfg, capture, program, table_only, {0, NULL, NULL}, NULL,
-                             &v->memory, pid};
+                             &v->memory, pid, expect};
     return emm_session_new(&sc, &v->s, err);
 }
 

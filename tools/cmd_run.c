@@ -538,7 +538,7 @@ int emm_cmd_run(int argc, char **argv)
      * samples), as the shim will start it. */
     if (emm_config_from_env(&cfg, get_env, (long)getpid(), ro.given, &err) != EMM_OK)
         return cli_bad_value("run", &err);
-    emm_session_config sc = {&cfg, cfg.capture, argv[i], 0, {1, NULL, NULL}, NULL, NULL, 0};
+    emm_session_config sc = {&cfg, cfg.capture, argv[i], 0, {1, NULL, NULL}, NULL, NULL, 0, 0};
     emm_session *probe;
     if (emm_session_new(&sc, &probe, &err) != EMM_OK)
         return cli_bad_value("run", &err);

@@ -72,6 +72,10 @@ typedef struct emm_session_config {
                                * else how to read the program's (copied) */
     long pid;                 /* the program's pid (0: this process's), for the name of a
                                * report another process of the run already wrote */
+    unsigned expect;          /* the kinds of array the tag rules name, a set of
+                               * 1u << emm_array_kind (0: none known): a window that filled
+                               * before an array of each was tagged goes on, for a bounded
+                               * while, until one is (docs/profile.md "Arrays tagged late") */
 } emm_session_config;
 
 /* One captured access, as the capture backends record it: the address, the

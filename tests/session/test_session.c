@@ -485,6 +485,9 @@ static void test_window_not_filled(void)
     char *json = slurp("short.json");
     CHECK(has(json, "\"strategy\": \"cache\""));
     CHECK(has(json, "\"source\": \"configured\""));
+    /* The last array left before the window filled: short, and said. */
+    CHECK(has(json, "\"complete\": false"));
+    CHECK(has(json, "\"ended_by\": \"array_freed\""));
     /* The table still names the nearest sample and its class: those of the
      * whole run's profile (the window never filled) among the shipped table
      * and this test's. */
@@ -514,6 +517,139 @@ static void test_window_not_filled(void)
     }
     CHECK(has_u64(json, "total", expect_cache.total));
     CHECK(!has_u64(json, "total", expect_direct.total)); /* compare none */
+    free(json);
+}
+
+/* The window is the traversal's reads (docs/profile.md "The window"): a
+ * loader that writes every record many times over (far more than two
+ * windows' worth) neither opens nor ends it, and after it the window fills
+ * with reads; the loader's writes are counted, not simulated. */
+static void test_writes_do_not_end_window(void)
+{
+    emm_error err;
+    emm_session *s;
+    write_table("table.txt", "direct", 0);
+    emm_session_config c = base_config();
+    strcpy(tcfg.report, "loader.json");
+    remove("loader.json");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    emm_raw_access w[256];
+    uint64_t writes = 0;
+    /* More element writes than any bound the window had on writes (65,536
+     * taken for the loader, then two windows' worth). */
+    while (writes < 70000)
+        for (size_t v = 0; v < nv; v += 256) {
+            size_t n = 0;
+            for (size_t k = v; k < nv && k < v + 256; k++)
+                w[n++] = (emm_raw_access){vbase + k * VSTRIDE + 8, 8 | EMM_RAW_WRITE, 0, 0};
+            CHECK(emm_session_access(s, w, n) == EMM_SESSION_PROFILING);
+            writes += n;
+        }
+    CHECK(feed(s, 512, 0) == 1);
+    CHECKF(emm_session_finish(s, NULL, &err) == EMM_OK, "%s", err.message);
+    emm_session_free(s);
+    char *json = slurp("loader.json");
+    CHECK(has_u64(json, "loader_writes", writes));
+    CHECK(has(json, "\"complete\": true"));
+    CHECK(has(json, "\"ended_by\": \"full\""));
+    CHECK(has_u64(json, "element_accesses", WINDOW));
+    CHECK(has(json, "\"strategy\": \"direct\""));
+    free(json);
+}
+
+/* The run ends after fewer element reads than a profile needs: the
+ * session decides on those reads (the candidates simulated over them) and
+ * the summary and the report say the window was short. */
+static void test_few_reads(void)
+{
+    emm_error err;
+    emm_session *s;
+    write_table("table.txt", "direct", 0);
+    emm_session_config c = base_config();
+    strcpy(tcfg.report, "few.json");
+    remove("few.json");
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    /* The first 120 records: fewer than 256 element reads. */
+    emm_raw_access raw[120];
+    size_t n = 0;
+    for (size_t k = 0; k < 120; k++)
+        if (!recs[k].write)
+            raw[n++] = (emm_raw_access){addr_of(&recs[k]), recs[k].bytes, 0, 0};
+    CHECK(emm_session_access(s, raw, n) == EMM_SESSION_PROFILING);
+    FILE *sum = tmpfile();
+    REQUIRE(sum);
+    CHECKF(emm_session_finish(s, sum, &err) == EMM_OK, "%s", err.message);
+    rewind(sum);
+    char text[8192] = {0};
+    CHECK(fread(text, 1, sizeof text - 1, sum) > 0);
+    fclose(sum);
+    printf("%s", text);
+    emm_session_free(s);
+    CHECK(has(text, "element reads profiled; a pattern needs at least 256: the candidates were "
+                    "simulated over those reads instead)"));
+    CHECK(has(text, "emm:   the run ended after "));
+    CHECK(has(text, " of the window's 1,000 element reads: the answer rests on them"));
+    CHECK(has(text, "emm: answer: "));
+    char *json = slurp("few.json");
+    CHECK(has(json, "\"complete\": false"));
+    CHECK(has(json, "\"ended_by\": \"run_end\""));
+    CHECK(has(json, "\"source\": \"simulated\""));
+    CHECK(!has(json, "\"strategy\": null"));
+    free(json);
+}
+
+/* Writes after the window opened are buffered and simulated, but bounded:
+ * at 2^20 written records the window ends with the reads it has, and the
+ * summary and the report say so. */
+static void test_write_cap(void)
+{
+    emm_error err;
+    emm_session *s;
+    write_table("table.txt", "direct", 0);
+    emm_session_config c = base_config();
+    strcpy(tcfg.report, "wcap.json");
+    remove("wcap.json");
+    /* The window's end is what is tested, not the decision: a configured
+     * strategy keeps the million records out of the decision's sweeps. */
+    set_strategy("direct");
+    tcfg.compare = EMM_COMPARE_NONE;
+    REQUIRE(emm_session_new(&c, &s, &err) == EMM_OK);
+    tag_all(s);
+    emm_raw_access raw[4096];
+    size_t n = 0;
+    for (size_t k = 0; k < 300; k++)
+        if (!recs[k].write)
+            raw[n++] = (emm_raw_access){addr_of(&recs[k]), recs[k].bytes, 0, 0};
+    CHECK(emm_session_access(s, raw, n) == EMM_SESSION_PROFILING);
+    emm_session_state st = EMM_SESSION_PROFILING;
+    uint64_t writes = 0;
+    while (st == EMM_SESSION_PROFILING && writes < 2u << 20) {
+        for (size_t k = 0; k < 4096; k++)
+            raw[k] = (emm_raw_access){vbase + ((writes + k) % nv) * VSTRIDE + 8,
+                                      8 | EMM_RAW_WRITE, 0, 0};
+        st = emm_session_access(s, raw, 4096);
+        writes += 4096;
+    }
+    CHECK(st == EMM_SESSION_DECIDE);
+    CHECK(writes >= 1u << 20 && writes < (1u << 20) + 4096);
+    CHECKF(emm_session_decide(s, &err) == EMM_OK, "%s", err.message);
+    FILE *sum = tmpfile();
+    REQUIRE(sum);
+    CHECKF(emm_session_finish(s, sum, &err) == EMM_OK, "%s", err.message);
+    rewind(sum);
+    char text[8192] = {0};
+    CHECK(fread(text, 1, sizeof text - 1, sum) > 0);
+    fclose(sum);
+    printf("%s", text);
+    emm_session_free(s);
+    CHECK(has(text, "emm:   the window reached its bound of 1,048,576 written records after "));
+    CHECK(has(text, " of the window's 1,000 element reads: the answer rests on them"));
+    char *json = slurp("wcap.json");
+    CHECK(has(json, "\"complete\": false"));
+    CHECK(has(json, "\"ended_by\": \"write_cap\""));
+    CHECK(has_u64(json, "writes", 1u << 20));
     free(json);
 }
 
@@ -1172,6 +1308,9 @@ int main(void)
     test_decide_from_table();
     test_decide_checked();
     test_window_not_filled();
+    test_writes_do_not_end_window();
+    test_few_reads();
+    test_write_cap();
     test_novel();
     test_contest();
     test_contest_all();

@@ -27,18 +27,22 @@ static void start(void)
     REQUIRE(emm_config_set(&c, EMM_CONFIG_TAG, "vertices:stride=24,xyz=0:f64", NULL, 7, &err) ==
             EMM_OK);
     CHECK(strcmp(c.report, "r-%-7.json") == 0);
-    emm_session_config sc = {&c, EMM_CAPTURE_VALGRIND, "prog", 1, {0, NULL, NULL}, NULL, NULL, 0};
+    emm_session_config sc = {&c, EMM_CAPTURE_VALGRIND, "prog", 1, {0, NULL, NULL}, NULL, NULL, 0,
+                             1u << EMM_ARRAY_TRIANGLES};
     unsigned char *b;
     size_t n;
     REQUIRE(wire_start_encode(&sc, 7, &b, &n));
     char *strings;
     emm_capture cap;
     int only;
+    unsigned expect;
     const char *program;
     long pid = 0;
-    CHECKF(wire_start_decode(b, n, &back, &strings, &cap, &only, &program, &pid, &err) == EMM_OK,
+    CHECKF(wire_start_decode(b, n, &back, &strings, &cap, &only, &expect, &program, &pid,
+                             &err) == EMM_OK,
            "%s", err.message);
-    CHECK(cap == EMM_CAPTURE_VALGRIND && only == 1 && strcmp(program, "prog") == 0 && pid == 7);
+    CHECK(cap == EMM_CAPTURE_VALGRIND && only == 1 && expect == 1u << EMM_ARRAY_TRIANGLES &&
+          strcmp(program, "prog") == 0 && pid == 7);
     CHECKF(strcmp(back.report, c.report) == 0, "%s", back.report);
     CHECK(back.window_accesses == 0 && back.window_iterations == 5);
     CHECK(back.has_strategy && memcmp(&back.strategy, &c.strategy, sizeof c.strategy) == 0);
@@ -51,14 +55,16 @@ static void start(void)
     free(strings);
     /* Every shorter payload is refused, never read past. */
     for (size_t k = 0; k < n; k++) {
-        emm_status st = wire_start_decode(b, k, &back, &strings, &cap, &only, &program, &pid, &err);
+        emm_status st = wire_start_decode(b, k, &back, &strings, &cap, &only, &expect,
+                                          &program, &pid, &err);
         CHECKF(st != EMM_OK || k == n, "a start cut at %zu of %zu accepted", k, n);
         emm_config_free(&back);
         free(strings);
     }
     /* Another build's start. */
     b[0] ^= 0x40;
-    CHECK(wire_start_decode(b, n, &back, &strings, &cap, &only, &program, &pid, &err) == EMM_ERR_FORMAT &&
+    CHECK(wire_start_decode(b, n, &back, &strings, &cap, &only, &expect, &program, &pid,
+                            &err) == EMM_ERR_FORMAT &&
           strstr(err.message, "different builds"));
     emm_config_free(&back);
     free(strings);
