@@ -7,8 +7,14 @@
  * libstdc++). libunwind is dlopen'ed RTLD_LOCAL rather than linked:
  * libunwind.so.8 also defines the _Unwind_* ABI, and a dependency of the
  * preloaded shim would put those ahead of libgcc_s's for the program's C++
- * exceptions. Names are cached by return address, so each frame is named
- * once.
+ * exceptions. A symbol names a frame only when it starts the function the
+ * pc lies in, as the unwind information (.eh_frame, present in stripped
+ * binaries too) bounds it; otherwise the nearest symbol is some other
+ * function's (a stripped binary's exported destructor 20 KB before the pc)
+ * and the frame is named MODULE+0xOFFSET instead: the object's file name
+ * and the function's start as an offset from the object's load base (the
+ * address objdump shows, the same under ASLR). Names are cached by return
+ * address, so each frame is named once.
  *
  * The stack is unwound from inside this library: its own frames come first
  * and are left out, then the shim's and the allocator's (library frames),
@@ -24,10 +30,12 @@
 #include "agent_rules.h"
 
 #include <dlfcn.h>
+#include <link.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "error.h"
 
@@ -41,6 +49,7 @@ struct unwinder {
     int (*step)(unw_cursor_t *);
     int (*get_reg)(unw_cursor_t *, int, unw_word_t *);
     int (*get_proc_name)(unw_cursor_t *, char *, size_t, unw_word_t *);
+    int (*get_proc_info)(unw_cursor_t *, unw_proc_info_t *);
     char *(*demangle)(const char *, char *, size_t *, int *);
 };
 
@@ -80,7 +89,9 @@ static emm_status open_unwinder(agent_rules *m, bool stacks, emm_error *err)
     *(void **)&u->step = dlsym(h, "_ULx86_64_step");
     *(void **)&u->get_reg = dlsym(h, "_ULx86_64_get_reg");
     *(void **)&u->get_proc_name = dlsym(h, "_ULx86_64_get_proc_name");
-    if (!u->getcontext || !u->init_local || !u->step || !u->get_reg || !u->get_proc_name)
+    *(void **)&u->get_proc_info = dlsym(h, "_ULx86_64_get_proc_info");
+    if (!u->getcontext || !u->init_local || !u->step || !u->get_reg || !u->get_proc_name ||
+        !u->get_proc_info)
         return emm_fail(err, EMM_ERR_IO,
                         "EMM_TAG: site= needs libunwind.so.8, which lacks the local unwinder");
     *(void **)&u->demangle = dlsym(RTLD_DEFAULT, "__cxa_demangle");
@@ -152,6 +163,30 @@ size_t agent_rules_min(const agent_rules *m)
     return least;
 }
 
+/* "MODULE+0xOFFSET" for code at `pc`: the object's file name and the
+ * pc's offset from its load base (the address objdump shows for it, the
+ * same under ASLR), or false when no object holds it. */
+static bool module_offset(uintptr_t pc, char *out, size_t cap)
+{
+    Dl_info info;
+    struct link_map *lm = NULL;
+    if (!dladdr1((void *)pc, &info, (void **)&lm, RTLD_DL_LINKMAP) || !lm)
+        return false;
+    char exe[512];
+    const char *path = lm->l_name && lm->l_name[0] ? lm->l_name : NULL;
+    if (!path) { /* the program itself */
+        ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+        if (n <= 0)
+            return false;
+        exe[n] = '\0';
+        path = exe;
+    }
+    const char *base = strrchr(path, '/');
+    snprintf(out, cap, "%.100s+0x%llx", base ? base + 1 : path,
+             (unsigned long long)(pc - (uintptr_t)lm->l_addr));
+    return true;
+}
+
 /* The names of the function at the cursor's frame ("name\0qualified\0"), or
  * NULL; *skip says whether the frame belongs to an allocator or a library. */
 static const char *frame_name(agent_rules *m, unw_cursor_t *cur, uintptr_t ip, bool *skip)
@@ -176,8 +211,22 @@ static const char *frame_name(agent_rules *m, unw_cursor_t *cur, uintptr_t ip, b
     unw_word_t off;
     Dl_info info;
     bool named = m->unw.get_proc_name(cur, raw, sizeof raw, &off) == 0;
+    /* The symbol names the frame only when it starts the function the pc
+     * lies in (its unwind information says where that starts): in a
+     * stripped binary the nearest exported symbol lies before it, a
+     * destructor of 0x44 bytes 20 KB short of the pc. */
+    unw_proc_info_t pi;
+    bool have_pi = m->unw.get_proc_info(cur, &pi) == 0 && pi.start_ip && pi.start_ip <= ip &&
+                   ip <= pi.end_ip;
+    if (named && have_pi && ip - off != pi.start_ip)
+        named = false;
     size_t need = 0;
-    if (named) {
+    if (!named && module_offset(have_pi ? pi.start_ip : ip, names, EMM_TAG_SITE_MAX)) {
+        /* Named by module and offset: "name\0name\0". */
+        size_t ln = strlen(names) + 1;
+        memcpy(names + ln, names, ln);
+        need = 2 * ln;
+    } else if (named) {
         int status = -1;
         char *dm = m->unw.demangle && raw[0] == '_' && raw[1] == 'Z'
                        ? m->unw.demangle(raw, NULL, NULL, &status)
@@ -196,7 +245,7 @@ static const char *frame_name(agent_rules *m, unw_cursor_t *cur, uintptr_t ip, b
     const char *result = NULL;
     pthread_mutex_lock(&m->lock);
     uint32_t at = UINT32_MAX;
-    if (named && m->used + need <= POOL_BYTES) {
+    if (need && m->used + need <= POOL_BYTES) {
         at = (uint32_t)m->used;
         memcpy(m->pool + at, names, need);
         m->used += need;
@@ -204,7 +253,7 @@ static const char *frame_name(agent_rules *m, unw_cursor_t *cur, uintptr_t ip, b
     }
     for (size_t i = 0; i < CACHE_SLOTS; i++) {
         size_t s = (h + i) % CACHE_SLOTS;
-        if (m->ip[s] == 0 && (at != UINT32_MAX || !named)) {
+        if (m->ip[s] == 0 && (at != UINT32_MAX || !need)) {
             m->ip[s] = ip;
             m->name[s] = at;
             m->skip[s] = *skip;
@@ -214,7 +263,7 @@ static const char *frame_name(agent_rules *m, unw_cursor_t *cur, uintptr_t ip, b
     }
     pthread_mutex_unlock(&m->lock);
     /* A full pool: compare against names that live on in no cache. */
-    if (named && !result) {
+    if (need && !result) {
         static __thread char spill[sizeof names];
         memcpy(spill, names, need);
         result = spill;
