@@ -102,6 +102,34 @@ static int axis_key(const char *p, size_t kl)
     return kl != 1 ? -1 : *p == 'x' ? 0 : *p == 'y' ? 1 : *p == 'z' ? 2 : -1;
 }
 
+/* A site= naming a function by MODULE+0xOFFSET (what --list-sites prints
+ * for a frame no symbol names) in the frames' spelling: lower-case hex, no
+ * leading zeros. False when the text after "+0x" is not hex; true, and the
+ * site untouched, for a function name. */
+static bool module_offset_site(char *site)
+{
+    char *plus = strstr(site, "+0x");
+    if (!plus)
+        plus = strstr(site, "+0X");
+    if (!plus)
+        return true;
+    char *hex = plus + 3;
+    if (!*hex)
+        return false;
+    for (char *c = hex; *c; c++) {
+        if (!((*c >= '0' && *c <= '9') || (*c >= 'a' && *c <= 'f') || (*c >= 'A' && *c <= 'F')))
+            return false;
+        if (*c >= 'A' && *c <= 'F')
+            *c = (char)(*c - 'A' + 'a');
+    }
+    plus[2] = 'x';
+    char *first = hex;
+    while (first[0] == '0' && first[1])
+        first++;
+    memmove(hex, first, strlen(first) + 1);
+    return plus != site;
+}
+
 /* One rule, text[0..len). */
 static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_error *err)
 {
@@ -158,6 +186,11 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
                                 emm_clip(p, plen, q), EMM_TAG_SITE_MAX - 1);
             memcpy(r->site, v, vl);
             r->site[vl] = '\0';
+            if (!module_offset_site(r->site))
+                return emm_fail(err, EMM_ERR_INVALID,
+                                "'%s': expected MODULE+0xHEX (a function in a stripped object, "
+                                "as --list-sites names it)",
+                                emm_clip(p, plen, q));
         } else if (is_key(p, kl, "min")) {
             if (!emm_parse_size(num, &x))
                 return emm_fail(err, EMM_ERR_INVALID,
@@ -283,6 +316,11 @@ void emm_tag_rules_free(emm_tag_rules *rs)
     free(rs->rule);
     rs->rule = NULL;
     rs->n = 0;
+}
+
+emm_status emm_tag_rule_parse(const char *text, emm_tag_rule *out, emm_error *err)
+{
+    return parse_rule(text, strlen(text), out, err);
 }
 
 emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *err)

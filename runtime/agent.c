@@ -39,8 +39,13 @@
 #include "emm/sites.h"
 #include "error.h"
 
-/* EMM_LIST_SITES: the smallest block listed. */
+/* EMM_LIST_SITES: the smallest block listed, and the smallest recorded
+ * for the replay of the suggested rules (the least a rule without min=
+ * selects). */
 #define LIST_MIN (64 * 1024)
+#define LIST_LOG_MIN 4096
+/* List mode: reallocs in flight, one per thread at most. */
+#define MOVES 16
 /* The quick test's filter: counts of tagged bases by hash. */
 #define FILTER_BITS 12
 
@@ -73,6 +78,11 @@ struct emm_agent {
     bool failed;           /* decide failed: stop feeding the session */
     bool child;            /* a process the program started (EMM_AGENT_ROOT_VAR) */
     uint64_t listed;       /* list mode: blocks noted */
+    struct move {
+        pthread_t thread;
+        int64_t from;      /* the recorded block a realloc of this thread moves */
+        bool used;
+    } moves[MOVES];        /* list mode, under lock */
     struct tag *tags;      /* ntags of them, ctags allocated */
     size_t ntags, ctags;
     uint64_t tagged_total; /* tag events, for the log */
@@ -292,11 +302,11 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
     }
     if (a->cfg.list_sites) {
         /* List mode: no session, no capture; every large block is noted. */
-        if (!(a->sites = emm_sites_new(LIST_MIN))) {
+        if (!(a->sites = emm_sites_new(LIST_MIN, LIST_LOG_MIN))) {
             agent_free(a);
             return emm_fail(err, EMM_ERR_NOMEM, "EMM_LIST_SITES: out of memory");
         }
-        a->min_block = LIST_MIN;
+        a->min_block = LIST_LOG_MIN;
     } else {
         emm_session_config sc = {&a->cfg, a->capture, a->program, 0, c->threads, c->server,
                                  NULL, 0};
@@ -646,6 +656,17 @@ int emm_agent_select(emm_agent *a, size_t size, const void *caller)
     return rule;
 }
 
+/* The block this thread's realloc moves (emm_agent_release), or -1. */
+static int64_t take_move(emm_agent *a)
+{
+    for (int i = 0; i < MOVES; i++)
+        if (a->moves[i].used && pthread_equal(a->moves[i].thread, pthread_self())) {
+            a->moves[i].used = false;
+            return a->moves[i].from;
+        }
+    return -1;
+}
+
 void emm_agent_allocated(emm_agent *a, int rule, void *p, size_t size, void *map,
                          size_t map_len, const void *caller)
 {
@@ -667,21 +688,37 @@ void emm_agent_allocated(emm_agent *a, int rule, void *p, size_t size, void *map
         for (int k = 0; k < n; k++)
             path = (path ^ ip[k]) * 1099511628211ull;
         pthread_mutex_lock(&a->lock);
+        int64_t from = take_move(a);
         if (a->active) {
-            emm_sites_add(a->sites, path, name, (size_t)n, p, size);
-            a->listed++;
+            emm_sites_add(a->sites, path, name, ip, (size_t)n, p, size, from);
+            a->listed += size >= LIST_MIN;
         }
+        pthread_mutex_unlock(&a->lock);
+    } else if (a->sites) {
+        pthread_mutex_lock(&a->lock);
+        take_move(a);
         pthread_mutex_unlock(&a->lock);
     }
 }
 
-void emm_agent_release(emm_agent *a, const void *p)
+void emm_agent_release(emm_agent *a, const void *p, size_t moving_to)
 {
     if (!a || !a->sites)
         return;
     pthread_mutex_lock(&a->lock);
-    if (a->active)
-        emm_sites_release(a->sites, p);
+    if (a->active) {
+        int64_t e = emm_sites_release(a->sites, p);
+        /* A realloc to a size the shim looks at allocates next on this
+         * thread (emm_agent_allocated): the block it moves is noted. */
+        if (moving_to >= a->min_block) {
+            take_move(a);
+            for (int i = 0; i < MOVES; i++)
+                if (!a->moves[i].used) {
+                    a->moves[i] = (struct move){pthread_self(), e, true};
+                    break;
+                }
+        }
+    }
     pthread_mutex_unlock(&a->lock);
 }
 

@@ -107,8 +107,8 @@ static emm_status open_unwinder(agent_rules *m, bool stacks, emm_error *err)
 #endif
 }
 
-emm_status agent_rules_new(const emm_tag_rules *rs, bool stacks, agent_rules **out,
-                           emm_error *err)
+static emm_status rules_new(const emm_tag_rules *rs, bool stacks, bool unwind, agent_rules **out,
+                            emm_error *err)
 {
     *out = NULL;
     agent_rules *m = calloc(1, sizeof *m);
@@ -131,13 +131,19 @@ emm_status agent_rules_new(const emm_tag_rules *rs, bool stacks, agent_rules **o
     bool need = stacks;
     for (size_t i = 0; i < rs->n; i++)
         need = need || rs->rule[i].site[0];
-    emm_status st = need ? open_unwinder(m, stacks, err) : EMM_OK;
+    emm_status st = need && unwind ? open_unwinder(m, stacks, err) : EMM_OK;
     if (st != EMM_OK) {
         agent_rules_free(m);
         return st;
     }
     *out = m;
     return EMM_OK;
+}
+
+emm_status agent_rules_new(const emm_tag_rules *rs, bool stacks, agent_rules **out,
+                           emm_error *err)
+{
+    return rules_new(rs, stacks, true, out, err);
 }
 
 void agent_rules_free(agent_rules *m)
@@ -363,15 +369,16 @@ static bool rule_selects(agent_rules *m, size_t i, size_t size, const char **nam
     return emm_tag_rule_fits(r, size);
 }
 
-int agent_rules_match(agent_rules *m, size_t size, const char **site)
+/* agent_rules_match on the stack name/ip of *nframes frames, unwound on
+ * the first rule with a site= when *nframes < 0. */
+static int match_on(agent_rules *m, size_t size, const char **name, uintptr_t *ip, int *nframes,
+                    const char **site)
 {
-    const char *name[AGENT_MAX_FRAMES];
-    uintptr_t ip[AGENT_MAX_FRAMES];
-    int nframes = -1, f = 0;
+    int f = 0;
     uint64_t path;
     *site = NULL;
     for (size_t i = 0; i < m->rs->n; i++) {
-        if (!rule_selects(m, i, size, name, ip, &nframes, &f, &path))
+        if (!rule_selects(m, i, size, name, ip, nframes, &f, &path))
             continue;
         if (path) {
             /* A rule follows the first call path it selects; the site's
@@ -393,7 +400,7 @@ int agent_rules_match(agent_rules *m, size_t size, const char **site)
             int fj = 0;
             uint64_t expect = 0, pj;
             if (__atomic_load_n(&m->selected[j], __ATOMIC_RELAXED) ||
-                !rule_selects(m, j, size, name, ip, &nframes, &fj, &pj))
+                !rule_selects(m, j, size, name, ip, nframes, &fj, &pj))
                 continue;
             __atomic_compare_exchange_n(&m->shadow_by[j], &expect, i + 1, false,
                                         __ATOMIC_RELAXED, __ATOMIC_RELAXED);
@@ -407,6 +414,38 @@ int agent_rules_match(agent_rules *m, size_t size, const char **site)
         return (int)i;
     }
     return -1;
+}
+
+int agent_rules_match(agent_rules *m, size_t size, const char **site)
+{
+    const char *name[AGENT_MAX_FRAMES];
+    uintptr_t ip[AGENT_MAX_FRAMES];
+    int nframes = -1;
+    return match_on(m, size, name, ip, &nframes, site);
+}
+
+uint64_t agent_rules_counted(const agent_rules *m, size_t i)
+{
+    return i < m->rs->n ? __atomic_load_n(&m->seen[i], __ATOMIC_RELAXED) : 0;
+}
+
+emm_status agent_rules_replayer(const emm_tag_rules *rs, agent_rules **out, emm_error *err)
+{
+    return rules_new(rs, false, false, out, err);
+}
+
+int agent_rules_replay(agent_rules *m, size_t size, const char *const *name, const uintptr_t *ip,
+                       int nframes, const char **site)
+{
+    const char *nm[AGENT_MAX_FRAMES];
+    uintptr_t at[AGENT_MAX_FRAMES];
+    if (nframes > AGENT_MAX_FRAMES)
+        nframes = AGENT_MAX_FRAMES;
+    if (nframes < 0)
+        nframes = 0;
+    memcpy(nm, name, (size_t)nframes * sizeof *nm);
+    memcpy(at, ip, (size_t)nframes * sizeof *at);
+    return match_on(m, size, nm, at, &nframes, site);
 }
 
 void agent_rules_report(agent_rules *m, void (*say)(void *ctx, const char *line), void *ctx)
