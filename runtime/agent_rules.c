@@ -62,6 +62,10 @@ struct agent_rules {
     /* Per rule: the blocks it would have taken that an earlier rule took
      * first — the first such rule (index + 1), how many, the largest. Atomic. */
     uint64_t *shadow_by, *shadow_n, *shadow_size;
+    /* Per rule: blocks of its min= or more, the largest, and those of them
+     * that are whole records; and the largest block looked at. Atomic. */
+    uint64_t *big_n, *big_size, *fit_n;
+    uint64_t largest;
     bool have_unwinder;
     struct unwinder unw;
     const void *own_base; /* this library's load address: its frames are left out */
@@ -120,9 +124,12 @@ static emm_status rules_new(const emm_tag_rules *rs, bool stacks, bool unwind, a
         m->shadow_by = calloc(n, sizeof *m->shadow_by);
         m->shadow_n = calloc(n, sizeof *m->shadow_n);
         m->shadow_size = calloc(n, sizeof *m->shadow_size);
+        m->big_n = calloc(n, sizeof *m->big_n);
+        m->big_size = calloc(n, sizeof *m->big_size);
+        m->fit_n = calloc(n, sizeof *m->fit_n);
     }
     if (!m || !m->seen || !m->bound || !m->selected || !m->shadow_by || !m->shadow_n ||
-        !m->shadow_size) {
+        !m->shadow_size || !m->big_n || !m->big_size || !m->fit_n) {
         agent_rules_free(m);
         return emm_fail(err, EMM_ERR_NOMEM, "libemmshim.so: out of memory for the rules");
     }
@@ -156,6 +163,9 @@ void agent_rules_free(agent_rules *m)
     free(m->shadow_by);
     free(m->shadow_n);
     free(m->shadow_size);
+    free(m->big_n);
+    free(m->big_size);
+    free(m->fit_n);
     free(m->sites);
     free(m);
 }
@@ -369,6 +379,14 @@ static bool rule_selects(agent_rules *m, size_t i, size_t size, const char **nam
     return emm_tag_rule_fits(r, size);
 }
 
+static void max_store(uint64_t *at, uint64_t v)
+{
+    uint64_t big = __atomic_load_n(at, __ATOMIC_RELAXED);
+    while (v > big &&
+           !__atomic_compare_exchange_n(at, &big, v, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+    }
+}
+
 /* agent_rules_match on the stack name/ip of *nframes frames, unwound on
  * the first rule with a site= when *nframes < 0. */
 static int match_on(agent_rules *m, size_t size, const char **name, uintptr_t *ip, int *nframes,
@@ -377,6 +395,16 @@ static int match_on(agent_rules *m, size_t size, const char **name, uintptr_t *i
     int f = 0;
     uint64_t path;
     *site = NULL;
+    max_store(&m->largest, size);
+    for (size_t i = 0; i < m->rs->n; i++) {
+        const emm_tag_rule *r = &m->rs->rule[i];
+        if (size < r->min)
+            continue;
+        __atomic_add_fetch(&m->big_n[i], 1, __ATOMIC_RELAXED);
+        max_store(&m->big_size[i], size);
+        if (emm_tag_rule_fits(r, size))
+            __atomic_add_fetch(&m->fit_n[i], 1, __ATOMIC_RELAXED);
+    }
     for (size_t i = 0; i < m->rs->n; i++) {
         if (!rule_selects(m, i, size, name, ip, nframes, &f, &path))
             continue;
@@ -405,11 +433,7 @@ static int match_on(agent_rules *m, size_t size, const char **name, uintptr_t *i
             __atomic_compare_exchange_n(&m->shadow_by[j], &expect, i + 1, false,
                                         __ATOMIC_RELAXED, __ATOMIC_RELAXED);
             __atomic_add_fetch(&m->shadow_n[j], 1, __ATOMIC_RELAXED);
-            uint64_t big = __atomic_load_n(&m->shadow_size[j], __ATOMIC_RELAXED);
-            while (size > big && !__atomic_compare_exchange_n(&m->shadow_size[j], &big, size,
-                                                              true, __ATOMIC_RELAXED,
-                                                              __ATOMIC_RELAXED)) {
-            }
+            max_store(&m->shadow_size[j], size);
         }
         return (int)i;
     }
@@ -448,6 +472,45 @@ int agent_rules_replay(agent_rules *m, size_t size, const char *const *name, con
     return match_on(m, size, nm, at, &nframes, site);
 }
 
+/* Why rule i, which has no site=, selected nothing: no block was as large
+ * as its min= (the largest looked at is named), none of those was whole
+ * records, or its nth= is beyond the blocks it selects. */
+static void unmatched_by_size(agent_rules *m, size_t i, char *line, size_t cap)
+{
+    const emm_tag_rule *r = &m->rs->rule[i];
+    char text[256];
+    emm_tag_rule_format(r, text, sizeof text);
+    unsigned long long big = __atomic_load_n(&m->big_n[i], __ATOMIC_RELAXED),
+                       fit = __atomic_load_n(&m->fit_n[i], __ATOMIC_RELAXED),
+                       upto = __atomic_load_n(&m->big_size[i], __ATOMIC_RELAXED),
+                       largest = __atomic_load_n(&m->largest, __ATOMIC_RELAXED);
+    int w = snprintf(line, cap, "EMM_TAG rule %zu (%s) matched no allocation; ", i + 1, text);
+    if (w < 0 || (size_t)w >= cap)
+        return;
+    line += w;
+    cap -= (size_t)w;
+    if (!big && largest)
+        snprintf(line, cap,
+                 "no block of %llu bytes or more was allocated (the largest block a rule "
+                 "looked at was %llu bytes)",
+                 (unsigned long long)r->min, largest);
+    else if (!big)
+        snprintf(line, cap, "no block of %llu bytes or more was allocated",
+                 (unsigned long long)r->min);
+    else if (!fit)
+        snprintf(line, cap,
+                 "the %llu block%s of %llu bytes or more (up to %llu bytes) %s not a whole "
+                 "number of %u-byte records",
+                 big, big == 1 ? "" : "s", (unsigned long long)r->min, upto,
+                 big == 1 ? "is" : "are", r->stride);
+    else
+        snprintf(line, cap,
+                 "%llu block%s of %llu bytes or more (up to %llu bytes) %s whole records, "
+                 "fewer than its nth=%llu",
+                 fit, fit == 1 ? "" : "s", (unsigned long long)r->min, upto,
+                 fit == 1 ? "is" : "are", (unsigned long long)r->nth);
+}
+
 void agent_rules_report(agent_rules *m, void (*say)(void *ctx, const char *line), void *ctx)
 {
     for (size_t i = 0; i < m->rs->n; i++) {
@@ -469,6 +532,8 @@ void agent_rules_report(agent_rules *m, void (*say)(void *ctx, const char *line)
                      (unsigned long long)by, theirs, n == 1 ? "it" : "them",
                      m->rs->rule[by - 1].kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles",
                      (unsigned long long)by, i + 1);
+        } else if (!m->rs->rule[i].site[0]) {
+            unmatched_by_size(m, i, line, sizeof line);
         } else {
             pthread_mutex_lock(&m->lock);
             emm_tag_unmatched_message(&m->rs->rule[i], i, m->sites, m->nsites, line,
