@@ -83,6 +83,7 @@ struct emm_agent {
         int64_t from;      /* the recorded block a realloc of this thread moves */
         bool used;
     } moves[MOVES];        /* list mode, under lock */
+    bool last_drain;       /* list mode: the accesses drained at the end are taken */
     struct tag *tags;      /* ntags of them, ctags allocated */
     size_t ntags, ctags;
     uint64_t tagged_total; /* tag events, for the log */
@@ -366,6 +367,9 @@ static bool live_locked(const emm_agent *a)
 
 size_t emm_agent_ranges_locked(emm_agent *a, uint64_t *lo, uint64_t *hi, size_t cap)
 {
+    /* List mode: the listed blocks, for their records' shape. */
+    if (a->sites)
+        return a->active ? emm_sites_ranges(a->sites, lo, hi, cap) : 0;
     return live_locked(a) ? emm_session_ranges(a->session, lo, hi, cap) : 0;
 }
 
@@ -445,7 +449,9 @@ static void answer_locked(emm_agent *a, emm_session_state st)
 
 void emm_agent_feed_locked(emm_agent *a, const emm_raw_access *r, size_t n)
 {
-    if (live_locked(a))
+    if (a->sites && (a->active || a->last_drain))
+        emm_sites_access(a->sites, r, n);
+    else if (live_locked(a))
         answer_locked(a, emm_session_access(a->session, r, n));
 }
 
@@ -692,6 +698,8 @@ void emm_agent_allocated(emm_agent *a, int rule, void *p, size_t size, void *map
         if (a->active) {
             emm_sites_add(a->sites, path, name, ip, (size_t)n, p, size, from);
             a->listed += size >= LIST_MIN;
+            if (size >= LIST_MIN && a->hooks.ranges)
+                ranges_changed_locked(a); /* a capture that sees accesses watches it */
         }
         pthread_mutex_unlock(&a->lock);
     } else if (a->sites) {
@@ -707,7 +715,18 @@ void emm_agent_release(emm_agent *a, const void *p, size_t moving_to)
         return;
     pthread_mutex_lock(&a->lock);
     if (a->active) {
+        /* The accesses so far are the block's; then the capture stops
+         * watching it before it is read here (not the program's reads). */
+        bool listed = emm_sites_listed(a->sites, p);
+        if (listed && a->hooks.drain)
+            a->hooks.drain(a);
+        if (listed && a->hooks.on_untag) {
+            emm_agent_block b = {(uintptr_t)p, 0, NULL, 0};
+            a->hooks.on_untag(&b);
+        }
         int64_t e = emm_sites_release(a->sites, p);
+        if (listed && a->hooks.ranges)
+            ranges_changed_locked(a);
         /* A realloc to a size the shim looks at allocates next on this
          * thread (emm_agent_allocated): the block it moves is noted. */
         if (moving_to >= a->min_block) {
@@ -858,6 +877,12 @@ static void agent_finish(emm_agent *a, const char *ended)
      * none of the answer: the program's own lines say what was found. */
     bool quiet = a->child && !a->tagged_total && !a->listed;
     if (a->sites) { /* list mode: the candidate arrays, nothing simulated */
+        a->last_drain = true;
+        if (a->hooks.drain)
+            a->hooks.drain(a);
+        a->last_drain = false;
+        if (a->hooks.before_decide) /* the blocks are read here: not the program's reads */
+            a->hooks.before_decide();
         FILE *f = quiet ? NULL : say_stream();
         if (f) {
             emm_sites_print(a->sites, a->program, f);

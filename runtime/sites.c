@@ -17,32 +17,29 @@
 #include <string.h>
 
 #include "agent_rules.h"
+#include "sites_shape.h"
 #include "emm/config.h"
 #include "parse.h"
 
 #define MAX_SITES 256
 #define MAX_STACK 12
-/* Records read per block at most. */
-#define SAMPLE 65536u
+/* The bytes of a site's largest block kept for typing its fields. */
+#define SAMPLE_BYTES (256u * 1024)
 /* The allocations recorded for the replay at most (24 bytes each). */
 #define MAX_LOG (1u << 20)
-
-struct guess {
-    emm_array_kind kind;
-    bool found;
-    bool axis; /* one coordinate per entry: a block of a structure of arrays */
-    unsigned stride;
-    emm_scalar type;
-    uint64_t records, in_use;
-};
 
 struct site {
     uint64_t path;
     char name[EMM_TAG_SITE_MAX]; /* the innermost frame's own name, for the rule */
     char stack[1024];            /* qualified names, innermost first */
     uint64_t count, largest, live;
-    struct guess g;
+    shape g;         /* from the bytes */
     uint64_t looked; /* the size of the block g comes from */
+    uint64_t used_bytes;      /* its bytes up to the last that is not zero */
+    unsigned char *sample;    /* its first bytes */
+    size_t sample_len;
+    shape_acc acc;            /* the program's accesses to the site's blocks */
+    shape sh;                 /* what is printed: from the accesses, else g */
     int order;       /* the site's place among the program's first allocations */
     int64_t target;  /* the log entry of its largest block (the first of that size) */
 };
@@ -71,8 +68,17 @@ struct block {
     int64_t entry;
 };
 
+/* A live listed block, for the accesses (by address). */
+struct span {
+    uint64_t lo, hi;
+    int64_t entry;
+};
+
 struct emm_sites {
     uint64_t min, log_min;
+    struct span *spans; /* sorted; rebuilt when dirty */
+    size_t nspans, cspans;
+    bool dirty;
     struct site site[MAX_SITES];
     int nsites;
     struct stack *stacks;
@@ -103,6 +109,9 @@ void emm_sites_free(emm_sites *t)
     free(t->stacks);
     free(t->log);
     free(t->live);
+    free(t->spans);
+    for (int i = 0; i < t->nsites; i++)
+        free(t->site[i].sample);
     free(t);
 }
 
@@ -254,116 +263,113 @@ listed:
         s->largest = size;
         s->target = e;
     }
-    if (e >= 0)
+    if (e >= 0) {
         t->log[e].site = i;
+        t->dirty = true;
+    }
     return e;
 }
 
-static bool plausible(double x, emm_scalar type)
+static int by_lo(const void *a, const void *b)
 {
-    double tiny = type == EMM_F32 ? 1.1754943508222875e-38 : 2.2250738585072014e-308;
-    return isfinite(x) && (x == 0 || fabs(x) >= tiny) && fabs(x) < 1e7;
+    const struct span *x = a, *y = b;
+    return x->lo < y->lo ? -1 : x->lo > y->lo;
 }
 
-/* Whether the block reads as records of `stride` bytes with `scalars` (3,
- * or 1 for one coordinate per entry) scalars of `type` at their start,
- * over its records in use. */
-static bool reads_as_n(const unsigned char *p, uint64_t size, unsigned stride, emm_scalar type,
-                       int scalars, struct guess *g)
+/* The live listed blocks by address. */
+static void refresh_spans(emm_sites *t)
 {
-    if (size % stride)
-        return false;
-    uint64_t n = size / stride, used = 0;
-    for (uint64_t i = n; i > 0 && !used; i--)
-        for (unsigned b = 0; b < stride; b++)
-            if (p[(i - 1) * stride + b]) {
-                used = i;
+    if (!t->dirty)
+        return;
+    t->nspans = 0;
+    for (size_t i = 0; i < t->clive; i++) {
+        const struct block *b = &t->live[i];
+        if (b->p <= 1 || t->log[b->entry].site < 0)
+            continue;
+        if (t->nspans == t->cspans) {
+            size_t cap = t->cspans ? 2 * t->cspans : 64;
+            struct span *grown = realloc(t->spans, cap * sizeof *grown);
+            if (!grown)
                 break;
-            }
-    if (used < 2)
-        return false;
-    uint64_t look = used < SAMPLE ? used : SAMPLE, good = 0;
-    for (uint64_t i = 0; i < look; i++) {
-        const unsigned char *r = p + i * stride;
-        bool ok = true;
-        if (type == EMM_U32) {
-            uint32_t v[3];
-            memcpy(v, r, sizeof v);
-            ok = v[0] < (1u << 26) && v[1] < (1u << 26) && v[2] < (1u << 26) &&
-                 (v[0] != v[1] || v[1] != v[2]);
-        } else {
-            for (int c = 0; c < scalars && ok; c++) {
-                double x;
-                if (type == EMM_F32) {
-                    float f;
-                    memcpy(&f, r + 4 * c, sizeof f);
-                    x = f;
-                } else {
-                    memcpy(&x, r + 8 * c, sizeof x);
-                }
-                ok = plausible(x, type);
-            }
+            t->spans = grown;
+            t->cspans = cap;
         }
-        good += ok;
+        t->spans[t->nspans++] = (struct span){b->p, b->p + t->log[b->entry].size, b->entry};
     }
-    if (good * 100 < look * 98)
-        return false;
-    *g = (struct guess){type == EMM_U32 ? EMM_ARRAY_TRIANGLES : EMM_ARRAY_VERTICES, true,
-                        scalars == 1, stride, type, n, used};
-    return true;
+    qsort(t->spans, t->nspans, sizeof *t->spans, by_lo);
+    t->dirty = false;
 }
 
-static bool reads_as(const unsigned char *p, uint64_t size, unsigned stride, emm_scalar type,
-                     struct guess *g)
+size_t emm_sites_ranges(emm_sites *t, uint64_t *lo, uint64_t *hi, size_t cap)
 {
-    return reads_as_n(p, size, stride, type, 3, g);
+    refresh_spans(t);
+    for (size_t i = 0; i < t->nspans && i < cap && lo && hi; i++) {
+        lo[i] = t->spans[i].lo;
+        hi[i] = t->spans[i].hi;
+    }
+    return t->nspans;
 }
 
-/* One coordinate per entry (a structure of arrays), f32 or f64. Small
- * coordinates read either way: f64 data read as f32 shows its low words
- * (zero for round values), f32 data read as f64 pairs of floats. f32 wins
- * unless nearly every other f32 entry is exactly zero. */
-static bool reads_as_axis(const unsigned char *p, uint64_t size, struct guess *g)
+int emm_sites_listed(const emm_sites *t, const void *block)
 {
-    struct guess g32, g64;
-    bool f32 = reads_as_n(p, size, 4, EMM_F32, 1, &g32);
-    bool f64 = reads_as_n(p, size, 8, EMM_F64, 1, &g64);
-    if (f32 && f64) {
-        uint64_t look = g64.in_use < SAMPLE ? g64.in_use : SAMPLE, zero = 0;
-        for (uint64_t i = 0; i < look; i++) {
-            uint32_t low;
-            memcpy(&low, p + 8 * i, sizeof low);
-            zero += low == 0;
+    size_t s = live_find(t, (uintptr_t)block);
+    return s != SIZE_MAX && t->log[t->live[s].entry].site >= 0;
+}
+
+void emm_sites_access(emm_sites *t, const emm_raw_access *r, size_t n)
+{
+    refresh_spans(t);
+    for (size_t i = 0; i < n && t->nspans; i++) {
+        uint64_t a = r[i].addr;
+        size_t lo = 0, hi = t->nspans;
+        while (hi - lo > 1) {
+            size_t mid = (lo + hi) / 2;
+            if (t->spans[mid].lo <= a)
+                lo = mid;
+            else
+                hi = mid;
         }
-        f32 = zero * 10 < look * 9;
+        const struct span *sp = &t->spans[lo];
+        if (a < sp->lo || a >= sp->hi)
+            continue;
+        struct site *s = &t->site[t->log[sp->entry].site];
+        shape_note(&s->acc, sp->entry, a - sp->lo, r[i].bytes_write & ~EMM_RAW_WRITE,
+                   (r[i].bytes_write & EMM_RAW_WRITE) != 0, r[i].pc);
     }
-    if (f32)
-        *g = g32;
-    else if (f64)
-        *g = g64;
-    return f32 || f64;
 }
 
-/* Reads the block at p, entry e of the log, for its site's guess. */
+/* Reads the block at p, entry e of the log, for its site's guess: the
+ * largest block that reads as records wins, one that does not counts only
+ * while none did. The winner's first bytes are kept for the accesses'
+ * fields, typed at the end. */
 static void look_at(emm_sites *t, const void *p, int64_t e)
 {
     struct entry *k = &t->log[e];
     if (k->site < 0)
         return;
     struct site *s = &t->site[k->site];
-    /* The largest block that reads as records wins; one that does not
-     * counts only while none did. */
-    if (k->size >= s->looked || !s->g.found) {
-        struct guess g = {0};
-        bool found = reads_as(p, k->size, 12, EMM_U32, &g) ||
-                     reads_as(p, k->size, 12, EMM_F32, &g) || reads_as(p, k->size, 24, EMM_F64, &g) ||
-                     reads_as_axis(p, k->size, &g);
-        if (found ? k->size >= s->looked || !s->g.found : !s->g.found && k->size >= s->looked) {
-            s->g = g;
-            s->looked = k->size;
+    s->live--;
+    if (k->size < s->looked && s->g.found)
+        return;
+    const unsigned char *b = p;
+    uint64_t used = k->size;
+    while (used > 0 && !b[used - 1])
+        used--;
+    shape g;
+    bool found = shape_from_bytes(b, (size_t)k->size, k->size, used, &g);
+    if (found ? k->size >= s->looked || !s->g.found : !s->g.found && k->size >= s->looked) {
+        s->g = g;
+        s->g.found = found;
+        s->looked = k->size;
+        s->used_bytes = used;
+        size_t keep = k->size < SAMPLE_BYTES ? (size_t)k->size : SAMPLE_BYTES;
+        unsigned char *copy = realloc(s->sample, keep);
+        if (copy) {
+            memcpy(copy, b, keep);
+            s->sample = copy;
+            s->sample_len = keep;
         }
     }
-    s->live--;
 }
 
 int64_t emm_sites_release(emm_sites *t, const void *block)
@@ -373,6 +379,7 @@ int64_t emm_sites_release(emm_sites *t, const void *block)
         return -1;
     int64_t e = t->live[s].entry;
     t->live[s].p = 1;
+    t->dirty |= t->log[e].site >= 0;
     t->nlive--;
     look_at(t, block, e);
     return e;
@@ -393,8 +400,8 @@ static char axis_of(const emm_sites *t, int i)
     int before = 0, same = 0;
     for (int j = 0; j < t->nsites; j++) {
         const struct site *o = &t->site[j];
-        if (!o->g.found || !o->g.axis || o->g.type != s->g.type ||
-            o->g.records != s->g.records)
+        if (!o->sh.found || o->sh.kind != SHAPE_AXIS || o->sh.type != s->sh.type ||
+            o->sh.records != s->sh.records)
             continue;
         same++;
         before += o->order < s->order;
@@ -577,8 +584,11 @@ static void rule_line(FILE *out, const emm_sites *t, const struct site *s, const
                       const char *body, int32_t *owner, const char *note)
 {
     char rule[512];
-    if (suggest(t, s, kind, body, owner, rule, sizeof rule))
-        fprintf(out, "emm:      rule: %s%s\n", rule, note);
+    if (suggest(t, s, kind, body, owner, rule, sizeof rule)) {
+        fprintf(out, "emm:      rule: %s\n", rule);
+        if (note[0])
+            fprintf(out, "emm:      note: %s\n", note);
+    }
     else
         fprintf(out, "emm:      rule: none works: %s\n",
                 t->log_full ? "the run made more allocations than were recorded"
@@ -615,6 +625,12 @@ void emm_sites_print(emm_sites *t, const char *program, FILE *out)
     for (int64_t e = 0; e < t->nlog; e++)
         if (t->log[e].site >= 0)
             t->log[e].site = order[t->log[e].site];
+    for (int i = 0; i < t->nsites; i++) {
+        struct site *s = &t->site[i];
+        if (!s->sample || !shape_from_accesses(&s->acc, s->sample, s->sample_len, s->looked,
+                                               s->used_bytes, &s->sh))
+            s->sh = s->g;
+    }
     int32_t *owner = malloc(((size_t)t->nlog + 1) * sizeof *owner);
     if (!owner)
         t->log_full = true;
@@ -628,37 +644,36 @@ void emm_sites_print(emm_sites *t, const char *program, FILE *out)
                 s->name, emm_grouped(s->count, b1), s->count == 1 ? "" : "s",
                 emm_grouped(s->largest, b2), emm_grouped(s->live, b3));
         fprintf(out, "emm:      stack: %s\n", s->stack);
-        if (s->g.found && s->g.axis) {
-            const char *type = s->g.type == EMM_F32 ? "f32" : "f64";
-            char rules[3 * (EMM_TAG_SITE_MAX + 48)], body[32];
-            fprintf(out, "emm:      records: one %s coordinate per %u bytes (a structure of "
-                         "arrays: a block per axis), %s in use of %s\n",
-                    type, s->g.stride, emm_grouped(s->g.in_use, b1), emm_grouped(s->g.records, b2));
-            char axis = axis_of(t, i);
-            if (s->count >= 2 && s->count <= 3 && !axis &&
-                loop_rules(t, s, type, owner, rules, sizeof rules)) {
-                /* One call made them all (a loop over the axes): the rules
-                 * take its blocks in turn, one each (nth=1). */
-                fprintf(out, "emm:      rule: %s\n", rules);
-            } else {
-                snprintf(body, sizeof body, "%c=0:%s", axis ? axis : 'x', type);
-                rule_line(out, t, s, "vertices", body, owner,
-                          axis ? "" : " (or y=, z=: the block's axis)");
-            }
-        } else if (s->g.found) {
-            bool v = s->g.kind == EMM_ARRAY_VERTICES;
-            const char *type = s->g.type == EMM_F32 ? "f32" : s->g.type == EMM_F64 ? "f64" : "u32";
-            char body[64];
-            fprintf(out, "emm:      records: 3 x %s in %u bytes (%s), %s in use of %s\n", type,
-                    s->g.stride, v ? "coordinates" : "vertex indices",
-                    emm_grouped(s->g.in_use, b1), emm_grouped(s->g.records, b2));
-            snprintf(body, sizeof body, "stride=%u,%s=0:%s", s->g.stride, v ? "xyz" : "vidx", type);
-            rule_line(out, t, s, v ? "vertices" : "triangles", body, owner, "");
-        } else {
-            fprintf(out, "emm:      records: not three floats or three indices in a row (a record "
-                         "of several fields: take stride and offsets from the program's type)\n");
+        char what[1024], body[64];
+        const char *kind;
+        if (!s->sh.found) {
+            fprintf(out, "emm:      records: not three coordinates or indices in a row, no "
+                         "accesses seen (a record of several fields: take stride and offsets "
+                         "from the program's type)\n");
             fprintf(out, "emm:      rule: none: the records are not known\n");
+            continue;
         }
+        shape_describe(&s->sh, what, sizeof what);
+        fprintf(out, "emm:      records: %s\n", what);
+        char axis = s->sh.kind == SHAPE_AXIS ? axis_of(t, i) : 0;
+        char rules[3 * (EMM_TAG_SITE_MAX + 48)];
+        const char *type = s->sh.type == EMM_F64 ? "f64" : "f32";
+        if (s->sh.kind == SHAPE_AXIS && s->count >= 2 && s->count <= 3 && !axis &&
+            loop_rules(t, s, type, owner, rules, sizeof rules))
+            /* One call made them all (a loop over the axes): the rules
+             * take its blocks in turn, one each (nth=1). */
+            fprintf(out, "emm:      rule: %s\n", rules);
+        else if (shape_rule(&s->sh, axis, &kind, body, sizeof body))
+            rule_line(out, t, s, kind, body, owner,
+                      s->sh.kind == SHAPE_AXIS && !axis
+                          ? "which axis the block holds is not known: x= is a placeholder for "
+                            "x=, y= or z="
+                          : "");
+        else
+            fprintf(out, "emm:      rule: none: %s\n",
+                    s->sh.kind == SHAPE_HALFEDGE
+                        ? "half-edge-like records are no vertices or triangles array"
+                        : "the fields fit no vertices:, triangles: or soup: rule");
     }
     free(owner);
     fflush(out);

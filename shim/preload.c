@@ -631,11 +631,12 @@ __attribute__((constructor(101))) static void shim_init(void)
     }
     /* The program dies of these as natively, after the report (a fault
      * capture's SIGSEGV handler, installed next, passes the program's own
-     * faults on to it). List mode captures nothing. */
+     * faults on to it). List mode captures only with program counters (the records' shape). */
     static const int fatal[] = {SIGTERM, SIGINT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
     for (size_t i = 0; i < sizeof fatal / sizeof *fatal && !shim.config.list_sites; i++)
         install_terminate(fatal[i]);
-    shim.capture = shim.config.list_sites ? EMM_CAPTURE_AUTO : pick_capture();
+    bool pcs = emm_capture_caps(shim.config.capture) & EMM_CAP_PCS;
+    shim.capture = shim.config.list_sites && !pcs ? EMM_CAPTURE_AUTO : pick_capture();
     if (shim.ops->init && !shim.ops->init(msg, sizeof msg)) {
         step_aside(msg);
         shim_leave();

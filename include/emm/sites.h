@@ -16,6 +16,7 @@
 #include <stdio.h>
 
 #include "emm/common.h"
+#include "emm/session.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -45,6 +46,16 @@ EMM_API int64_t emm_sites_add(emm_sites *t, uint64_t path, const char *const *na
  * now. Returns its place in the record (for emm_sites_add's `from` when a
  * realloc moves it), or -1 for a block the table does not know. */
 EMM_API int64_t emm_sites_release(emm_sites *t, const void *block);
+/* The live listed blocks as [lo, hi) pairs, up to cap of them (lo, hi
+ * NULL: none); returns how many there are. A capture that sees accesses
+ * watches them. */
+EMM_API size_t emm_sites_ranges(emm_sites *t, uint64_t *lo, uint64_t *hi, size_t cap);
+/* Whether the block at `block` is a live listed block. */
+EMM_API int emm_sites_listed(const emm_sites *t, const void *block);
+/* The program's accesses r[0..n) (emm_raw_access: address, size, write,
+ * program counter): those in listed blocks say how the program steps
+ * through their records. */
+EMM_API void emm_sites_access(emm_sites *t, const emm_raw_access *r, size_t n);
 /* Reads the blocks still live and prints the sites, largest first, with a
  * suggested rule each, on `out` (lines start "emm: "). */
 EMM_API void emm_sites_print(emm_sites *t, const char *program, FILE *out);
