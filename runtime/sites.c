@@ -564,13 +564,50 @@ static bool loop_rules(const emm_sites *t, const struct site *s, const char *typ
     size_t used = 0;
     buf[0] = 0;
     for (int k = 0; k < n && used < cap; k++) {
-        int w = snprintf(buf + used, cap - used, "%svertices:site=%s,nth=1,%c=0:%s", k ? ";" : "",
+        int w = snprintf(buf + used, cap - used, "%svertices:site=%s,%c=0:%s,nth=1", k ? ";" : "",
                          s->name, "xyz"[k], type);
         if (w < 0)
             return false;
         used += (size_t)w;
     }
     return n >= 2 && used < cap && works(t, buf, target, path, owner);
+}
+
+/* An axis rule is used with the rules of the mesh's other axis blocks (a
+ * rule set needs x and y): site i's part of the set "vertices:site=NAME,
+ * A=0:T" for each such block, when they work together, into out. */
+static bool axis_set_rule(const emm_sites *t, int i, int32_t *owner, char *out, size_t cap)
+{
+    const struct site *s = &t->site[i];
+    int member[3], n = 0;
+    for (int k = 0; k < 3; k++) /* x, y, z: in the order they were allocated */
+        for (int j = 0; j < t->nsites; j++) {
+            const struct site *o = &t->site[j];
+            if (o->sh.found && o->sh.kind == SHAPE_AXIS && o->sh.type == s->sh.type &&
+                o->sh.records == s->sh.records && axis_of(t, j) == "xyz"[k] && o->target >= 0)
+                member[n++] = j;
+        }
+    if (n < 2)
+        return false;
+    char text[3 * 256], mine[256] = "";
+    int64_t target[3];
+    uint64_t path[3];
+    size_t used = 0;
+    for (int k = 0; k < n; k++) {
+        const struct site *o = &t->site[member[k]];
+        char one[256];
+        snprintf(one, sizeof one, "vertices:site=%s,%c=0:%s", o->name, "xyz"[k],
+                 o->sh.type == EMM_F64 ? "f64" : "f32");
+        if (member[k] == i)
+            snprintf(mine, sizeof mine, "%s", one);
+        used += (size_t)snprintf(text + used, sizeof text - used, "%s%s", k ? ";" : "", one);
+        target[k] = o->target;
+        path[k] = o->path;
+    }
+    if (!mine[0] || used >= sizeof text || !works(t, text, target, path, owner))
+        return false;
+    snprintf(out, cap, "%s", mine);
+    return true;
 }
 
 static int by_entry(const void *a, const void *b)
@@ -662,6 +699,10 @@ void emm_sites_print(emm_sites *t, const char *program, FILE *out)
             loop_rules(t, s, type, owner, rules, sizeof rules))
             /* One call made them all (a loop over the axes): the rules
              * take its blocks in turn, one each (nth=1). */
+            fprintf(out, "emm:      rule: %s\n", rules);
+        else if (axis && axis_set_rule(t, i, owner, rules, sizeof rules))
+            /* Works with the rules of the mesh's other axis blocks, as
+             * it must be used (a rule set needs an x and a y rule). */
             fprintf(out, "emm:      rule: %s\n", rules);
         else if (shape_rule(&s->sh, axis, &kind, body, sizeof body))
             rule_line(out, t, s, kind, body, owner,
