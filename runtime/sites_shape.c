@@ -409,6 +409,26 @@ bool shape_from_bytes(const unsigned char *p, size_t len, uint64_t size, uint64_
         *out = f32 ? a32 : a64;
         return true;
     }
+    /* Records of several fields: the stride at which the bytes repeat
+     * most regularly (the smallest of those within 3% of the best). */
+    static const unsigned cand[] = {8, 12, 16, 20, 24, 28, 32, 40, 48, 56, 64};
+    uint64_t n = (used < len ? used : len) / 64;
+    if (n > 1024)
+        n = 1024;
+    if (n < 16)
+        return false;
+    double score[sizeof cand / sizeof *cand], best = irregularity(p, 4, n);
+    double base = best;
+    for (size_t i = 0; i < sizeof cand / sizeof *cand; i++) {
+        score[i] = size % cand[i] ? 1e9 : irregularity(p, cand[i], n);
+        if (score[i] < best)
+            best = score[i];
+    }
+    if (best > base * 0.85)
+        return false;
+    for (size_t i = 0; i < sizeof cand / sizeof *cand; i++)
+        if (score[i] <= best * 1.03 + 0.01)
+            return by_columns(p, len, size, used, cand[i], out);
     return false;
 }
 
@@ -504,12 +524,22 @@ bool shape_from_accesses(const shape_acc *a, const unsigned char *p, size_t len,
     }
     type_fields(&s, p, len);
     decide(&s);
-    /* A flat array read a scalar at a time: three in a row may still be a
-     * record (a triangle's vertex indices, a vertex's coordinates). */
+    /* Instructions that step a scalar at a time (a loop over a record's
+     * fields, over a flat array) say only that the record is a multiple of
+     * it: where the bytes repeat at a multiple, that is the record (a
+     * triangle's three vertex indices, a 16-byte neighbour record). */
     shape b;
-    if ((s.kind == SHAPE_NONE || s.kind == SHAPE_AXIS) && (stride == 4 || stride == 8) &&
-        shape_from_bytes(p, len, size, used, &b) && b.stride == 3 * stride &&
-        (b.kind == SHAPE_TRIANGLES || b.kind == SHAPE_VERTICES)) {
+    bool bytes = shape_from_bytes(p, len, size, used, &b);
+    if (bytes && b.stride > stride && b.stride % stride == 0 && s.kind != SHAPE_SOUP &&
+        s.kind != SHAPE_VERTICES && s.kind != SHAPE_TRIANGLES && b.kind != SHAPE_AXIS) {
+        b.from_accesses = true;
+        b.accesses = total;
+        b.instructions = instructions;
+        *out = b;
+        return true;
+    }
+    if ((s.kind == SHAPE_NONE || s.kind == SHAPE_AXIS) && (stride == 4 || stride == 8) && bytes &&
+        b.stride == 3 * stride && (b.kind == SHAPE_TRIANGLES || b.kind == SHAPE_VERTICES)) {
         bool ok = true;
         for (int i = 0; i < s.nf; i++)
             ok = ok && s.f[i].cls == b.f[0].cls;
