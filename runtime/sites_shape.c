@@ -97,7 +97,7 @@ static char type_field(const unsigned char *p, size_t len, unsigned stride, uint
         n = LOOK;
     if (n < 2)
         return '?';
-    uint64_t zero = 0, idx = 0, neg = 0, flt = 0;
+    uint64_t zero = 0, idx = 0, neg = 0, flt = 0, ptr = 0;
     for (uint64_t r = 0; r < n; r++) {
         const unsigned char *q = p + r * stride + off;
         if (size == 4) {
@@ -115,6 +115,8 @@ static char type_field(const unsigned char *p, size_t len, unsigned stride, uint
             memcpy(&v, q, 8);
             memcpy(&d, q, 8);
             zero += v == 0;
+            ptr += (v >= (1ull << 32) && v < (1ull << 48)) ||
+                   (v >= (1u << 20) && v < (1ull << 48) && v % 8 == 0);
             idx += v != 0 && v < (1ull << 40);
             neg += v == UINT64_MAX;
             flt += v != 0 && coordinate(d, EMM_F64);
@@ -130,6 +132,8 @@ static char type_field(const unsigned char *p, size_t len, unsigned stride, uint
         return '0';
     if (size != 4 && size != 8)
         return '?';
+    if (size == 8 && ptr * 100 >= nz * 90)
+        return 'p'; /* an address: 8-aligned, in the address space */
     if ((idx + neg) * 100 >= nz * 98 && idx) {
         *type = size == 4 ? EMM_U32 : EMM_I64;
         return neg ? 'h' : 'i';
@@ -152,7 +156,8 @@ static void type_fields(shape *s, const unsigned char *p, size_t len)
         if (n && f.off < out[n - 1].off + out[n - 1].size)
             continue;
         f.cls = type_field(p, len, s->stride, s->in_use, f.off, f.size, &f.type);
-        if (f.size == 8 && f.cls != 'f' && f.cls != '0' && f.cls != 'i' && n + 2 <= SHAPE_FIELDS) {
+        if (f.size == 8 && f.cls != 'f' && f.cls != '0' && f.cls != 'i' && f.cls != 'p' &&
+            n + 2 <= SHAPE_FIELDS) {
             for (unsigned h = 0; h < 2; h++) {
                 shape_field g = f;
                 g.off = f.off + 4 * h;
@@ -300,15 +305,17 @@ static bool by_columns(const unsigned char *p, size_t len, uint64_t size, uint64
         return false;
     all_columns(&s);
     type_fields(&s, p, len);
-    /* Two 4-byte halves that read as an f64 are one. */
+    /* Two 4-byte halves that read as an f64 or an address are one. */
     for (int i = 0; i + 1 < s.nf; i++) {
         emm_scalar t;
-        if (s.f[i].off % 8 == 0 && s.f[i].size == 4 && s.f[i + 1].size == 4 &&
-            s.f[i].cls != 'f' &&
-            type_field(p, len, stride, s.in_use, s.f[i].off, 8, &t) == 'f') {
+        char c8 = s.f[i].off % 8 == 0 && s.f[i].size == 4 && s.f[i + 1].size == 4 &&
+                          s.f[i].cls != 'f'
+                      ? type_field(p, len, stride, s.in_use, s.f[i].off, 8, &t)
+                      : 0;
+        if (c8 == 'f' || c8 == 'p') {
             s.f[i].size = 8;
-            s.f[i].cls = 'f';
-            s.f[i].type = EMM_F64;
+            s.f[i].cls = c8;
+            s.f[i].type = c8 == 'f' ? EMM_F64 : EMM_I64;
             memmove(&s.f[i + 1], &s.f[i + 2], (size_t)(s.nf - i - 2) * sizeof *s.f);
             s.nf--;
         }
@@ -578,6 +585,7 @@ static const char *class_words(char c)
            : c == 'i' ? "index-like"
            : c == 'h' ? "index-or--1 (handle-like)"
            : c == '0' ? "always zero"
+           : c == 'p' ? "an address (a pointer)"
                       : "not a coordinate or an index";
 }
 
@@ -615,6 +623,8 @@ void shape_describe(const shape *s, char *out, size_t cap)
         char what[96];
         if (f->cls == 'f' || f->cls == 'i' || f->cls == 'h')
             snprintf(what, sizeof what, "%s %s", type_name(f->type), class_words(f->cls));
+        else if (f->cls == 'p')
+            snprintf(what, sizeof what, "addresses (pointers)");
         else
             snprintf(what, sizeof what, "%u byte%s %s", f->size, f->size == 1 ? "" : "s",
                      class_words(f->cls));

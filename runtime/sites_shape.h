@@ -50,8 +50,8 @@ typedef enum shape_kind {
 
 typedef struct shape_field {
     uint32_t off, size;
-    char cls;        /* 'f' coordinate-like, 'i' index-like, 'h' index or -1 (a handle), '0' zero,
-                        '?' other */
+    char cls;        /* 'f' coordinate-like, 'i' index-like, 'h' index or -1 (a handle), 'p' an
+                        address, '0' zero, '?' other */
     emm_scalar type; /* for 'f' and 'i' */
     bool read, write;
 } shape_field;
