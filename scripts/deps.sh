@@ -20,6 +20,8 @@ packages=(
   libopenmesh-apps                      # OpenMesh's command-line apps: tests on programs
                                         # nobody here wrote
   python3                               # tests: reports and timelines read back with a strict JSON reader
+  openctm-tools admesh qhull-bin tetgen # tests/sites: --list-sites on mesh programs nobody here
+  python3-meshio python3-numpy          # wrote (ctmconv is a stripped binary), and on numpy's
   time                                  # tests: /usr/bin/time measures the bad-input reproducers
 )
 
