@@ -1,14 +1,17 @@
 /* The candidate arrays of a program (emm/sites.h; `emm run --list-sites`).
  *
- * Blocks are grouped by call path. A block's records are looked at once,
- * when it is freed or moved and at exit: the table tries three indices in
- * 12 bytes (i32/u32), then three coordinates in 12 bytes (f32) or 24 bytes
- * (f64), then one coordinate per entry (a block of a structure of arrays,
- * f32 or f64), over its records up to the last one that is not all zero
- * (the rest is spare capacity). Integers read as floats are subnormal,
- * floats read as indices are huge: the tests tell them apart. A site keeps
- * what its largest block looked like; two or three coordinate blocks of
- * one type and count are a mesh's x, y (and z), in allocation order. */
+ * Blocks of the listing's size are grouped by call path. A block's bytes
+ * are looked at once, when it is freed or moved and at exit; a site keeps
+ * what its largest block looked like and a copy of its first bytes, and
+ * the accesses the capture saw to its blocks (sites_shape.c makes the
+ * records' shape of them). Two or three coordinate blocks of one type and
+ * count are a mesh's x, y (and z), in allocation order.
+ *
+ * Every allocation of log_min bytes or more is recorded with its stack,
+ * in order, with the block a realloc moved into it: the rule printed for
+ * a site is the first candidate that, replayed through the rule matcher
+ * (agent_rules_replay), tags the site's largest block and nothing of
+ * another call path. */
 #include "emm/sites.h"
 
 #include <math.h>

@@ -2,11 +2,11 @@
  * EMM_LIST_SITES; docs/design.md "The shim and the session", Tagging).
  *
  * libemmshim.so, in list mode, hands every large block the program
- * allocates to a site table with its call stack; when a block is freed,
- * and at exit for those still live, the table reads the block once to see
- * what its records look like (three floats, three indices, or one float
- * per entry: a block of a structure of arrays); at exit it
- * prints the sites, largest block first, each with its stack and an
+ * allocates to a site table with its call stack, and the accesses to them
+ * a capture with program counters sees; when a block is freed, and at
+ * exit for those still live, the table reads the block once; at exit it
+ * prints the sites, largest block first, each with its stack, what its
+ * records look like (from the accesses, else a guess from the bytes) and an
  * EMM_TAG rule that selects that block, checked by replaying the run's
  * allocations through the rule matcher, or says that none does. Not
  * thread-safe: the shim serialises calls. */
