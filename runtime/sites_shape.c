@@ -308,11 +308,10 @@ static bool by_columns(const unsigned char *p, size_t len, uint64_t size, uint64
     /* Two 4-byte halves that read as an f64 or an address are one. */
     for (int i = 0; i + 1 < s.nf; i++) {
         emm_scalar t;
-        char c8 = s.f[i].off % 8 == 0 && s.f[i].size == 4 && s.f[i + 1].size == 4 &&
-                          s.f[i].cls != 'f'
+        char c8 = s.f[i].off % 8 == 0 && s.f[i].size == 4 && s.f[i + 1].size == 4
                       ? type_field(p, len, stride, s.in_use, s.f[i].off, 8, &t)
                       : 0;
-        if (c8 == 'f' || c8 == 'p') {
+        if ((c8 == 'f' && s.f[i].cls != 'f') || c8 == 'p') {
             s.f[i].size = 8;
             s.f[i].cls = c8;
             s.f[i].type = c8 == 'f' ? EMM_F64 : EMM_I64;
