@@ -98,6 +98,8 @@ static char type_field(const unsigned char *p, size_t len, unsigned stride, uint
     if (n < 2)
         return '?';
     uint64_t zero = 0, idx = 0, neg = 0, flt = 0, ptr = 0;
+    uint32_t his[4];
+    int nhi = 0; /* the distinct high words of addresses; 5: more */
     for (uint64_t r = 0; r < n; r++) {
         const unsigned char *q = p + r * stride + off;
         if (size == 4) {
@@ -115,8 +117,24 @@ static char type_field(const unsigned char *p, size_t len, unsigned stride, uint
             memcpy(&v, q, 8);
             memcpy(&d, q, 8);
             zero += v == 0;
-            ptr += (v >= (1ull << 32) && v < (1ull << 48)) ||
-                   (v >= (1u << 20) && v < (1ull << 48) && v % 8 == 0);
+            /* An address: in the upper part of the address space (the heap
+             * and the libraries, in one or a few regions: few high words;
+             * two indices side by side have as many as indices), or
+             * under Valgrind's low heap 8-aligned. */
+            uint32_t hi = (uint32_t)(v >> 32);
+            if (v >= (1ull << 40) && v < (1ull << 48)) {
+                int k = 0;
+                while (k < nhi && k < 4 && his[k] != hi)
+                    k++;
+                if (k == nhi && nhi < 5) {
+                    if (nhi < 4)
+                        his[nhi] = hi;
+                    nhi++;
+                }
+                ptr++;
+            } else {
+                ptr += v >= (1u << 20) && v < (1ull << 32) && v % 8 == 0;
+            }
             idx += v != 0 && v < (1ull << 40);
             neg += v == UINT64_MAX;
             flt += v != 0 && coordinate(d, EMM_F64);
@@ -132,7 +150,7 @@ static char type_field(const unsigned char *p, size_t len, unsigned stride, uint
         return '0';
     if (size != 4 && size != 8)
         return '?';
-    if (size == 8 && ptr * 100 >= nz * 90)
+    if (size == 8 && ptr * 100 >= nz * 90 && nhi <= 4)
         return 'p'; /* an address: 8-aligned, in the address space */
     if ((idx + neg) * 100 >= nz * 98 && idx) {
         *type = size == 4 ? EMM_U32 : EMM_I64;
