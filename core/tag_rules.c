@@ -102,6 +102,34 @@ static int axis_key(const char *p, size_t kl)
     return kl != 1 ? -1 : *p == 'x' ? 0 : *p == 'y' ? 1 : *p == 'z' ? 2 : -1;
 }
 
+/* A site= naming a function by MODULE+0xOFFSET (what --list-sites prints
+ * for a frame no symbol names) in the frames' spelling: lower-case hex, no
+ * leading zeros. False when the text after "+0x" is not hex; true, and the
+ * site untouched, for a function name. */
+static bool module_offset_site(char *site)
+{
+    char *plus = strstr(site, "+0x");
+    if (!plus)
+        plus = strstr(site, "+0X");
+    if (!plus)
+        return true;
+    char *hex = plus + 3;
+    if (!*hex)
+        return false;
+    for (char *c = hex; *c; c++) {
+        if (!((*c >= '0' && *c <= '9') || (*c >= 'a' && *c <= 'f') || (*c >= 'A' && *c <= 'F')))
+            return false;
+        if (*c >= 'A' && *c <= 'F')
+            *c = (char)(*c - 'A' + 'a');
+    }
+    plus[2] = 'x';
+    char *first = hex;
+    while (first[0] == '0' && first[1])
+        first++;
+    memmove(hex, first, strlen(first) + 1);
+    return plus != site;
+}
+
 /* One rule, text[0..len). */
 static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_error *err)
 {
@@ -158,6 +186,11 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
                                 emm_clip(p, plen, q), EMM_TAG_SITE_MAX - 1);
             memcpy(r->site, v, vl);
             r->site[vl] = '\0';
+            if (!module_offset_site(r->site))
+                return emm_fail(err, EMM_ERR_INVALID,
+                                "'%s': expected MODULE+0xHEX (a function in a stripped object, "
+                                "as --list-sites names it)",
+                                emm_clip(p, plen, q));
         } else if (is_key(p, kl, "min")) {
             if (!emm_parse_size(num, &x))
                 return emm_fail(err, EMM_ERR_INVALID,
@@ -285,6 +318,11 @@ void emm_tag_rules_free(emm_tag_rules *rs)
     rs->n = 0;
 }
 
+emm_status emm_tag_rule_parse(const char *text, emm_tag_rule *out, emm_error *err)
+{
+    return parse_rule(text, strlen(text), out, err);
+}
+
 emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *err)
 {
     emm_tag_rules rs = {0, NULL};
@@ -388,7 +426,9 @@ void emm_tag_rules_help(FILE *out)
             "EMM_TAG rules are split by ';', each KIND:key=value,... with KIND vertices,\n"
             "triangles or soup. Selectors: site=FUNCTION (the function that makes the\n"
             "allocation, looking past allocator and C++ standard-library frames such as\n"
-            "std::vector's), min=BYTES (K/M/G; default max(one record, 4K)), nth=N (the Nth\n"
+            "std::vector's; a function no symbol names, in a stripped binary, is\n"
+            "MODULE+0xOFFSET, as --list-sites prints it: the object's file name and the\n"
+            "function's offset from its load base), min=BYTES (K/M/G; default max(one record, 4K)), nth=N (the Nth\n"
             "block the other selectors select, from 1). Record: stride=BYTES (required;\n"
             "optional with order=columns or an axis key), xyz=OFFSET:f32|f64 (vertices),\n"
             "vidx=OFFSET:i32|u32|u16|i64 (triangles). Count = block size / stride; a block\n"

@@ -39,8 +39,13 @@
 #include "emm/sites.h"
 #include "error.h"
 
-/* EMM_LIST_SITES: the smallest block listed. */
+/* EMM_LIST_SITES: the smallest block listed, and the smallest recorded
+ * for the replay of the suggested rules (the least a rule without min=
+ * selects). */
 #define LIST_MIN (64 * 1024)
+#define LIST_LOG_MIN 4096
+/* List mode: reallocs in flight, one per thread at most. */
+#define MOVES 16
 /* The quick test's filter: counts of tagged bases by hash. */
 #define FILTER_BITS 12
 
@@ -73,6 +78,12 @@ struct emm_agent {
     bool failed;           /* decide failed: stop feeding the session */
     bool child;            /* a process the program started (EMM_AGENT_ROOT_VAR) */
     uint64_t listed;       /* list mode: blocks noted */
+    struct move {
+        pthread_t thread;
+        int64_t from;      /* the recorded block a realloc of this thread moves */
+        bool used;
+    } moves[MOVES];        /* list mode, under lock */
+    bool last_drain;       /* list mode: the accesses drained at the end are taken */
     struct tag *tags;      /* ntags of them, ctags allocated */
     size_t ntags, ctags;
     uint64_t tagged_total; /* tag events, for the log */
@@ -292,11 +303,11 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
     }
     if (a->cfg.list_sites) {
         /* List mode: no session, no capture; every large block is noted. */
-        if (!(a->sites = emm_sites_new(LIST_MIN))) {
+        if (!(a->sites = emm_sites_new(LIST_MIN, LIST_LOG_MIN))) {
             agent_free(a);
             return emm_fail(err, EMM_ERR_NOMEM, "EMM_LIST_SITES: out of memory");
         }
-        a->min_block = LIST_MIN;
+        a->min_block = LIST_LOG_MIN;
     } else {
         /* The kinds the rules name: the window waits for them (bounded). */
         unsigned expect = 0;
@@ -360,6 +371,9 @@ static bool live_locked(const emm_agent *a)
 
 size_t emm_agent_ranges_locked(emm_agent *a, uint64_t *lo, uint64_t *hi, size_t cap)
 {
+    /* List mode: the listed blocks, for their records' shape. */
+    if (a->sites)
+        return a->active ? emm_sites_ranges(a->sites, lo, hi, cap) : 0;
     return live_locked(a) ? emm_session_ranges(a->session, lo, hi, cap) : 0;
 }
 
@@ -439,7 +453,9 @@ static void answer_locked(emm_agent *a, emm_session_state st)
 
 void emm_agent_feed_locked(emm_agent *a, const emm_raw_access *r, size_t n)
 {
-    if (live_locked(a))
+    if (a->sites && (a->active || a->last_drain))
+        emm_sites_access(a->sites, r, n);
+    else if (live_locked(a))
         answer_locked(a, emm_session_access(a->session, r, n));
 }
 
@@ -650,6 +666,17 @@ int emm_agent_select(emm_agent *a, size_t size, const void *caller)
     return rule;
 }
 
+/* The block this thread's realloc moves (emm_agent_release), or -1. */
+static int64_t take_move(emm_agent *a)
+{
+    for (int i = 0; i < MOVES; i++)
+        if (a->moves[i].used && pthread_equal(a->moves[i].thread, pthread_self())) {
+            a->moves[i].used = false;
+            return a->moves[i].from;
+        }
+    return -1;
+}
+
 void emm_agent_allocated(emm_agent *a, int rule, void *p, size_t size, void *map,
                          size_t map_len, const void *caller)
 {
@@ -671,21 +698,50 @@ void emm_agent_allocated(emm_agent *a, int rule, void *p, size_t size, void *map
         for (int k = 0; k < n; k++)
             path = (path ^ ip[k]) * 1099511628211ull;
         pthread_mutex_lock(&a->lock);
+        int64_t from = take_move(a);
         if (a->active) {
-            emm_sites_add(a->sites, path, name, (size_t)n, p, size);
-            a->listed++;
+            emm_sites_add(a->sites, path, name, ip, (size_t)n, p, size, from);
+            a->listed += size >= LIST_MIN;
+            if (size >= LIST_MIN && a->hooks.ranges)
+                ranges_changed_locked(a); /* a capture that sees accesses watches it */
         }
+        pthread_mutex_unlock(&a->lock);
+    } else if (a->sites) {
+        pthread_mutex_lock(&a->lock);
+        take_move(a);
         pthread_mutex_unlock(&a->lock);
     }
 }
 
-void emm_agent_release(emm_agent *a, const void *p)
+void emm_agent_release(emm_agent *a, const void *p, size_t moving_to)
 {
     if (!a || !a->sites)
         return;
     pthread_mutex_lock(&a->lock);
-    if (a->active)
-        emm_sites_release(a->sites, p);
+    if (a->active) {
+        /* The accesses so far are the block's; then the capture stops
+         * watching it before it is read here (not the program's reads). */
+        bool listed = emm_sites_listed(a->sites, p);
+        if (listed && a->hooks.drain)
+            a->hooks.drain(a);
+        if (listed && a->hooks.on_untag) {
+            emm_agent_block b = {(uintptr_t)p, 0, NULL, 0};
+            a->hooks.on_untag(&b);
+        }
+        int64_t e = emm_sites_release(a->sites, p);
+        if (listed && a->hooks.ranges)
+            ranges_changed_locked(a);
+        /* A realloc to a size the shim looks at allocates next on this
+         * thread (emm_agent_allocated): the block it moves is noted. */
+        if (moving_to >= a->min_block) {
+            take_move(a);
+            for (int i = 0; i < MOVES; i++)
+                if (!a->moves[i].used) {
+                    a->moves[i] = (struct move){pthread_self(), e, true};
+                    break;
+                }
+        }
+    }
     pthread_mutex_unlock(&a->lock);
 }
 
@@ -825,6 +881,12 @@ static void agent_finish(emm_agent *a, const char *ended)
      * none of the answer: the program's own lines say what was found. */
     bool quiet = a->child && !a->tagged_total && !a->listed;
     if (a->sites) { /* list mode: the candidate arrays, nothing simulated */
+        a->last_drain = true;
+        if (a->hooks.drain)
+            a->hooks.drain(a);
+        a->last_drain = false;
+        if (a->hooks.before_decide) /* the blocks are read here: not the program's reads */
+            a->hooks.before_decide();
         FILE *f = quiet ? NULL : say_stream();
         if (f) {
             emm_sites_print(a->sites, a->program, f);

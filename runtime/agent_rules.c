@@ -7,8 +7,14 @@
  * libstdc++). libunwind is dlopen'ed RTLD_LOCAL rather than linked:
  * libunwind.so.8 also defines the _Unwind_* ABI, and a dependency of the
  * preloaded shim would put those ahead of libgcc_s's for the program's C++
- * exceptions. Names are cached by return address, so each frame is named
- * once.
+ * exceptions. A symbol names a frame only when it starts the function the
+ * pc lies in, as the unwind information (.eh_frame, present in stripped
+ * binaries too) bounds it; otherwise the nearest symbol is some other
+ * function's (a stripped binary's exported destructor 20 KB before the pc)
+ * and the frame is named MODULE+0xOFFSET instead: the object's file name
+ * and the function's start as an offset from the object's load base (the
+ * address objdump shows, the same under ASLR). Names are cached by return
+ * address, so each frame is named once.
  *
  * The stack is unwound from inside this library: its own frames come first
  * and are left out, then the shim's and the allocator's (library frames),
@@ -24,10 +30,12 @@
 #include "agent_rules.h"
 
 #include <dlfcn.h>
+#include <link.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "error.h"
 
@@ -41,6 +49,7 @@ struct unwinder {
     int (*step)(unw_cursor_t *);
     int (*get_reg)(unw_cursor_t *, int, unw_word_t *);
     int (*get_proc_name)(unw_cursor_t *, char *, size_t, unw_word_t *);
+    int (*get_proc_info)(unw_cursor_t *, unw_proc_info_t *);
     char *(*demangle)(const char *, char *, size_t *, int *);
 };
 
@@ -53,6 +62,10 @@ struct agent_rules {
     /* Per rule: the blocks it would have taken that an earlier rule took
      * first — the first such rule (index + 1), how many, the largest. Atomic. */
     uint64_t *shadow_by, *shadow_n, *shadow_size;
+    /* Per rule: blocks of its min= or more, the largest, and those of them
+     * that are whole records; and the largest block looked at. Atomic. */
+    uint64_t *big_n, *big_size, *fit_n;
+    uint64_t largest;
     bool have_unwinder;
     struct unwinder unw;
     const void *own_base; /* this library's load address: its frames are left out */
@@ -80,7 +93,9 @@ static emm_status open_unwinder(agent_rules *m, bool stacks, emm_error *err)
     *(void **)&u->step = dlsym(h, "_ULx86_64_step");
     *(void **)&u->get_reg = dlsym(h, "_ULx86_64_get_reg");
     *(void **)&u->get_proc_name = dlsym(h, "_ULx86_64_get_proc_name");
-    if (!u->getcontext || !u->init_local || !u->step || !u->get_reg || !u->get_proc_name)
+    *(void **)&u->get_proc_info = dlsym(h, "_ULx86_64_get_proc_info");
+    if (!u->getcontext || !u->init_local || !u->step || !u->get_reg || !u->get_proc_name ||
+        !u->get_proc_info)
         return emm_fail(err, EMM_ERR_IO,
                         "EMM_TAG: site= needs libunwind.so.8, which lacks the local unwinder");
     *(void **)&u->demangle = dlsym(RTLD_DEFAULT, "__cxa_demangle");
@@ -96,8 +111,8 @@ static emm_status open_unwinder(agent_rules *m, bool stacks, emm_error *err)
 #endif
 }
 
-emm_status agent_rules_new(const emm_tag_rules *rs, bool stacks, agent_rules **out,
-                           emm_error *err)
+static emm_status rules_new(const emm_tag_rules *rs, bool stacks, bool unwind, agent_rules **out,
+                            emm_error *err)
 {
     *out = NULL;
     agent_rules *m = calloc(1, sizeof *m);
@@ -109,9 +124,12 @@ emm_status agent_rules_new(const emm_tag_rules *rs, bool stacks, agent_rules **o
         m->shadow_by = calloc(n, sizeof *m->shadow_by);
         m->shadow_n = calloc(n, sizeof *m->shadow_n);
         m->shadow_size = calloc(n, sizeof *m->shadow_size);
+        m->big_n = calloc(n, sizeof *m->big_n);
+        m->big_size = calloc(n, sizeof *m->big_size);
+        m->fit_n = calloc(n, sizeof *m->fit_n);
     }
     if (!m || !m->seen || !m->bound || !m->selected || !m->shadow_by || !m->shadow_n ||
-        !m->shadow_size) {
+        !m->shadow_size || !m->big_n || !m->big_size || !m->fit_n) {
         agent_rules_free(m);
         return emm_fail(err, EMM_ERR_NOMEM, "libemmshim.so: out of memory for the rules");
     }
@@ -120,13 +138,19 @@ emm_status agent_rules_new(const emm_tag_rules *rs, bool stacks, agent_rules **o
     bool need = stacks;
     for (size_t i = 0; i < rs->n; i++)
         need = need || rs->rule[i].site[0];
-    emm_status st = need ? open_unwinder(m, stacks, err) : EMM_OK;
+    emm_status st = need && unwind ? open_unwinder(m, stacks, err) : EMM_OK;
     if (st != EMM_OK) {
         agent_rules_free(m);
         return st;
     }
     *out = m;
     return EMM_OK;
+}
+
+emm_status agent_rules_new(const emm_tag_rules *rs, bool stacks, agent_rules **out,
+                           emm_error *err)
+{
+    return rules_new(rs, stacks, true, out, err);
 }
 
 void agent_rules_free(agent_rules *m)
@@ -139,6 +163,9 @@ void agent_rules_free(agent_rules *m)
     free(m->shadow_by);
     free(m->shadow_n);
     free(m->shadow_size);
+    free(m->big_n);
+    free(m->big_size);
+    free(m->fit_n);
     free(m->sites);
     free(m);
 }
@@ -150,6 +177,30 @@ size_t agent_rules_min(const agent_rules *m)
         if (m->rs->rule[i].min < least)
             least = (size_t)m->rs->rule[i].min;
     return least;
+}
+
+/* "MODULE+0xOFFSET" for code at `pc`: the object's file name and the
+ * pc's offset from its load base (the address objdump shows for it, the
+ * same under ASLR), or false when no object holds it. */
+static bool module_offset(uintptr_t pc, char *out, size_t cap)
+{
+    Dl_info info;
+    struct link_map *lm = NULL;
+    if (!dladdr1((void *)pc, &info, (void **)&lm, RTLD_DL_LINKMAP) || !lm)
+        return false;
+    char exe[512];
+    const char *path = lm->l_name && lm->l_name[0] ? lm->l_name : NULL;
+    if (!path) { /* the program itself */
+        ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+        if (n <= 0)
+            return false;
+        exe[n] = '\0';
+        path = exe;
+    }
+    const char *base = strrchr(path, '/');
+    snprintf(out, cap, "%.100s+0x%llx", base ? base + 1 : path,
+             (unsigned long long)(pc - (uintptr_t)lm->l_addr));
+    return true;
 }
 
 /* The names of the function at the cursor's frame ("name\0qualified\0"), or
@@ -176,8 +227,22 @@ static const char *frame_name(agent_rules *m, unw_cursor_t *cur, uintptr_t ip, b
     unw_word_t off;
     Dl_info info;
     bool named = m->unw.get_proc_name(cur, raw, sizeof raw, &off) == 0;
+    /* The symbol names the frame only when it starts the function the pc
+     * lies in (its unwind information says where that starts): in a
+     * stripped binary the nearest exported symbol lies before it, a
+     * destructor of 0x44 bytes 20 KB short of the pc. */
+    unw_proc_info_t pi;
+    bool have_pi = m->unw.get_proc_info(cur, &pi) == 0 && pi.start_ip && pi.start_ip <= ip &&
+                   ip <= pi.end_ip;
+    if (named && have_pi && ip - off != pi.start_ip)
+        named = false;
     size_t need = 0;
-    if (named) {
+    if (!named && module_offset(have_pi ? pi.start_ip : ip, names, EMM_TAG_SITE_MAX)) {
+        /* Named by module and offset: "name\0name\0". */
+        size_t ln = strlen(names) + 1;
+        memcpy(names + ln, names, ln);
+        need = 2 * ln;
+    } else if (named) {
         int status = -1;
         char *dm = m->unw.demangle && raw[0] == '_' && raw[1] == 'Z'
                        ? m->unw.demangle(raw, NULL, NULL, &status)
@@ -196,7 +261,7 @@ static const char *frame_name(agent_rules *m, unw_cursor_t *cur, uintptr_t ip, b
     const char *result = NULL;
     pthread_mutex_lock(&m->lock);
     uint32_t at = UINT32_MAX;
-    if (named && m->used + need <= POOL_BYTES) {
+    if (need && m->used + need <= POOL_BYTES) {
         at = (uint32_t)m->used;
         memcpy(m->pool + at, names, need);
         m->used += need;
@@ -204,7 +269,7 @@ static const char *frame_name(agent_rules *m, unw_cursor_t *cur, uintptr_t ip, b
     }
     for (size_t i = 0; i < CACHE_SLOTS; i++) {
         size_t s = (h + i) % CACHE_SLOTS;
-        if (m->ip[s] == 0 && (at != UINT32_MAX || !named)) {
+        if (m->ip[s] == 0 && (at != UINT32_MAX || !need)) {
             m->ip[s] = ip;
             m->name[s] = at;
             m->skip[s] = *skip;
@@ -214,7 +279,7 @@ static const char *frame_name(agent_rules *m, unw_cursor_t *cur, uintptr_t ip, b
     }
     pthread_mutex_unlock(&m->lock);
     /* A full pool: compare against names that live on in no cache. */
-    if (named && !result) {
+    if (need && !result) {
         static __thread char spill[sizeof names];
         memcpy(spill, names, need);
         result = spill;
@@ -314,15 +379,34 @@ static bool rule_selects(agent_rules *m, size_t i, size_t size, const char **nam
     return emm_tag_rule_fits(r, size);
 }
 
-int agent_rules_match(agent_rules *m, size_t size, const char **site)
+static void max_store(uint64_t *at, uint64_t v)
 {
-    const char *name[AGENT_MAX_FRAMES];
-    uintptr_t ip[AGENT_MAX_FRAMES];
-    int nframes = -1, f = 0;
+    uint64_t big = __atomic_load_n(at, __ATOMIC_RELAXED);
+    while (v > big &&
+           !__atomic_compare_exchange_n(at, &big, v, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+    }
+}
+
+/* agent_rules_match on the stack name/ip of *nframes frames, unwound on
+ * the first rule with a site= when *nframes < 0. */
+static int match_on(agent_rules *m, size_t size, const char **name, uintptr_t *ip, int *nframes,
+                    const char **site)
+{
+    int f = 0;
     uint64_t path;
     *site = NULL;
+    max_store(&m->largest, size);
     for (size_t i = 0; i < m->rs->n; i++) {
-        if (!rule_selects(m, i, size, name, ip, &nframes, &f, &path))
+        const emm_tag_rule *r = &m->rs->rule[i];
+        if (size < r->min)
+            continue;
+        __atomic_add_fetch(&m->big_n[i], 1, __ATOMIC_RELAXED);
+        max_store(&m->big_size[i], size);
+        if (emm_tag_rule_fits(r, size))
+            __atomic_add_fetch(&m->fit_n[i], 1, __ATOMIC_RELAXED);
+    }
+    for (size_t i = 0; i < m->rs->n; i++) {
+        if (!rule_selects(m, i, size, name, ip, nframes, &f, &path))
             continue;
         if (path) {
             /* A rule follows the first call path it selects; the site's
@@ -344,20 +428,87 @@ int agent_rules_match(agent_rules *m, size_t size, const char **site)
             int fj = 0;
             uint64_t expect = 0, pj;
             if (__atomic_load_n(&m->selected[j], __ATOMIC_RELAXED) ||
-                !rule_selects(m, j, size, name, ip, &nframes, &fj, &pj))
+                !rule_selects(m, j, size, name, ip, nframes, &fj, &pj))
                 continue;
             __atomic_compare_exchange_n(&m->shadow_by[j], &expect, i + 1, false,
                                         __ATOMIC_RELAXED, __ATOMIC_RELAXED);
             __atomic_add_fetch(&m->shadow_n[j], 1, __ATOMIC_RELAXED);
-            uint64_t big = __atomic_load_n(&m->shadow_size[j], __ATOMIC_RELAXED);
-            while (size > big && !__atomic_compare_exchange_n(&m->shadow_size[j], &big, size,
-                                                              true, __ATOMIC_RELAXED,
-                                                              __ATOMIC_RELAXED)) {
-            }
+            max_store(&m->shadow_size[j], size);
         }
         return (int)i;
     }
     return -1;
+}
+
+int agent_rules_match(agent_rules *m, size_t size, const char **site)
+{
+    const char *name[AGENT_MAX_FRAMES];
+    uintptr_t ip[AGENT_MAX_FRAMES];
+    int nframes = -1;
+    return match_on(m, size, name, ip, &nframes, site);
+}
+
+uint64_t agent_rules_counted(const agent_rules *m, size_t i)
+{
+    return i < m->rs->n ? __atomic_load_n(&m->seen[i], __ATOMIC_RELAXED) : 0;
+}
+
+emm_status agent_rules_replayer(const emm_tag_rules *rs, agent_rules **out, emm_error *err)
+{
+    return rules_new(rs, false, false, out, err);
+}
+
+int agent_rules_replay(agent_rules *m, size_t size, const char *const *name, const uintptr_t *ip,
+                       int nframes, const char **site)
+{
+    const char *nm[AGENT_MAX_FRAMES];
+    uintptr_t at[AGENT_MAX_FRAMES];
+    if (nframes > AGENT_MAX_FRAMES)
+        nframes = AGENT_MAX_FRAMES;
+    if (nframes < 0)
+        nframes = 0;
+    memcpy(nm, name, (size_t)nframes * sizeof *nm);
+    memcpy(at, ip, (size_t)nframes * sizeof *at);
+    return match_on(m, size, nm, at, &nframes, site);
+}
+
+/* Why rule i, which has no site=, selected nothing: no block was as large
+ * as its min= (the largest looked at is named), none of those was whole
+ * records, or its nth= is beyond the blocks it selects. */
+static void unmatched_by_size(agent_rules *m, size_t i, char *line, size_t cap)
+{
+    const emm_tag_rule *r = &m->rs->rule[i];
+    char text[256];
+    emm_tag_rule_format(r, text, sizeof text);
+    unsigned long long big = __atomic_load_n(&m->big_n[i], __ATOMIC_RELAXED),
+                       fit = __atomic_load_n(&m->fit_n[i], __ATOMIC_RELAXED),
+                       upto = __atomic_load_n(&m->big_size[i], __ATOMIC_RELAXED),
+                       largest = __atomic_load_n(&m->largest, __ATOMIC_RELAXED);
+    int w = snprintf(line, cap, "EMM_TAG rule %zu (%s) matched no allocation; ", i + 1, text);
+    if (w < 0 || (size_t)w >= cap)
+        return;
+    line += w;
+    cap -= (size_t)w;
+    if (!big && largest)
+        snprintf(line, cap,
+                 "no block of %llu bytes or more was allocated (the largest block a rule "
+                 "looked at was %llu bytes)",
+                 (unsigned long long)r->min, largest);
+    else if (!big)
+        snprintf(line, cap, "no block of %llu bytes or more was allocated",
+                 (unsigned long long)r->min);
+    else if (!fit)
+        snprintf(line, cap,
+                 "the %llu block%s of %llu bytes or more (up to %llu bytes) %s not a whole "
+                 "number of %u-byte records",
+                 big, big == 1 ? "" : "s", (unsigned long long)r->min, upto,
+                 big == 1 ? "is" : "are", r->stride);
+    else
+        snprintf(line, cap,
+                 "%llu block%s of %llu bytes or more (up to %llu bytes) %s whole records, "
+                 "fewer than its nth=%llu",
+                 fit, fit == 1 ? "" : "s", (unsigned long long)r->min, upto,
+                 fit == 1 ? "is" : "are", (unsigned long long)r->nth);
 }
 
 void agent_rules_report(agent_rules *m, void (*say)(void *ctx, const char *line), void *ctx)
@@ -381,6 +532,8 @@ void agent_rules_report(agent_rules *m, void (*say)(void *ctx, const char *line)
                      (unsigned long long)by, theirs, n == 1 ? "it" : "them",
                      m->rs->rule[by - 1].kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles",
                      (unsigned long long)by, i + 1);
+        } else if (!m->rs->rule[i].site[0]) {
+            unmatched_by_size(m, i, line, sizeof line);
         } else {
             pthread_mutex_lock(&m->lock);
             emm_tag_unmatched_message(&m->rs->rule[i], i, m->sites, m->nsites, line,

@@ -31,6 +31,17 @@ size_t agent_rules_min(const agent_rules *m);
  * now, from this call stack, or -1; counts nth= selectors; *site gets the
  * name of the frame a site= rule matched (else NULL). Thread-safe. */
 int agent_rules_match(agent_rules *m, size_t size, const char **site);
+/* A matcher of the rules rs that unwinds nothing, for agent_rules_replay:
+ * list mode tries the rules it suggests on the run's recorded allocations. */
+emm_status agent_rules_replayer(const emm_tag_rules *rs, agent_rules **out, emm_error *err);
+/* agent_rules_match for an allocation of `size` bytes made from the
+ * recorded stack name/ip (nframes frames, as agent_rules_stack gave them):
+ * the same matching, selectors, call paths and nth= counts. */
+int agent_rules_replay(agent_rules *m, size_t size, const char *const *name, const uintptr_t *ip,
+                       int nframes, const char **site);
+/* The blocks rule i's nth= has counted so far (0 for a rule without nth=):
+ * with an nth= larger than any count, the rank each block would have. */
+uint64_t agent_rules_counted(const agent_rules *m, size_t i);
 /* The program's frames of this call stack (the agent's, the allocator's
  * and the standard library's left out), innermost first: each name
  * "name\0qualified\0" (or NULL) and return address; returns how many. */

@@ -22,6 +22,8 @@ packages=(
   openctm-tools                         # ctmconv: a package converter under emm run
                                         # (tests/shim/ctmconv.sh)
   python3                               # tests: reports and timelines read back with a strict JSON reader
+  openctm-tools admesh qhull-bin tetgen # tests/sites: --list-sites on mesh programs nobody here
+  python3-meshio python3-numpy          # wrote (ctmconv is a stripped binary), and on numpy's
   time                                  # tests: /usr/bin/time measures the bad-input reproducers
 )
 

@@ -191,11 +191,11 @@ static void *alloc_end(struct pending *pd, void *p, size_t size)
 }
 
 /* A block about to be freed or moved: list mode reads it first. */
-static void release_begin(const void *p)
+static void release_begin(const void *p, size_t moving_to)
 {
     if (shim.config.list_sites && !shim_busy && shim.enabled) {
         shim_busy++;
-        emm_agent_release(shim.agent, p);
+        emm_agent_release(shim.agent, p, moving_to);
         shim_leave();
     }
 }
@@ -265,7 +265,7 @@ void free(void *p)
     if (p && !in_arena(p)) {
         if (!real.malloc)
             resolve();
-        release_begin(p);
+        release_begin(p, 0);
         int handled = 0;
         if (maybe_tagged(p)) {
             shim_busy++;
@@ -306,7 +306,7 @@ static void *realloc_impl(void *p, size_t size)
         if (handled)
             return q;
     }
-    release_begin(p);
+    release_begin(p, size);
     struct pending pd;
     if (!alloc_begin(size, 16, &pd))
         return real.realloc(p, size);
@@ -631,11 +631,12 @@ __attribute__((constructor(101))) static void shim_init(void)
     }
     /* The program dies of these as natively, after the report (a fault
      * capture's SIGSEGV handler, installed next, passes the program's own
-     * faults on to it). List mode captures nothing. */
+     * faults on to it). List mode captures only with program counters (the records' shape). */
     static const int fatal[] = {SIGTERM, SIGINT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
     for (size_t i = 0; i < sizeof fatal / sizeof *fatal && !shim.config.list_sites; i++)
         install_terminate(fatal[i]);
-    shim.capture = shim.config.list_sites ? EMM_CAPTURE_AUTO : pick_capture();
+    bool pcs = emm_capture_caps(shim.config.capture) & EMM_CAP_PCS;
+    shim.capture = shim.config.list_sites && !pcs ? EMM_CAPTURE_AUTO : pick_capture();
     if (shim.ops->init && !shim.ops->init(msg, sizeof msg)) {
         step_aside(msg);
         shim_leave();

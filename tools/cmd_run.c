@@ -88,8 +88,12 @@ static void usage(FILE *out, const opts *o)
             "\n"
             "--list-sites runs PROGRAM once and lists, at exit, its candidate arrays: blocks\n"
             "of 64 KiB or more by call path, with the whole stack, what their records look\n"
-            "like and a suggested EMM_TAG rule each. A rule that matches nothing says so at\n"
-            "exit with the sites seen closest to it; --verbose names each tagged block's site.\n");
+            "like (from the program's accesses under --capture valgrind or sancov, else a\n"
+            "guess from the bytes) and an EMM_TAG rule each, checked by replaying the run's\n"
+            "allocations through the rule matcher: it selects that block used as printed (or\n"
+            "the line says none does). A frame no symbol names is MODULE+0xOFFSET. A rule\n"
+            "that matches nothing says so at exit with the sites seen closest to it, or which\n"
+            "rule took its blocks; --verbose names each tagged block's site.\n");
 }
 
 /* out = a + b + c; false when it does not fit. */

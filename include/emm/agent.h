@@ -146,9 +146,12 @@ EMM_API int emm_agent_on_free(emm_agent *a, void *p);
 EMM_API void *emm_agent_on_realloc(emm_agent *a, void *p, size_t size, int *handled);
 /* The bytes usable at p when it is a tagged block on its own pages, else 0. */
 EMM_API size_t emm_agent_usable_size(emm_agent *a, const void *p);
-/* List mode: the block at p is about to be freed or moved; its records are
- * read first. Nothing happens in other modes. */
-EMM_API void emm_agent_release(emm_agent *a, const void *p);
+/* List mode: the block at p is about to be freed (moving_to 0) or moved by
+ * realloc to a block of moving_to bytes; its records are read first, and
+ * the move is remembered for the next allocation of this thread (the
+ * replay of the suggested rules follows a tagged block's move). Nothing
+ * happens in other modes. */
+EMM_API void emm_agent_release(emm_agent *a, const void *p, size_t moving_to);
 
 /* ---- arrays the program or a backend describes --------------------------- */
 

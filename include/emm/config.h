@@ -137,6 +137,10 @@ typedef struct emm_tag_rules {
  * z=) come in sets: every axis rule needs an x rule and a y rule of its
  * stride and type (z is optional: the layouts work in the plane). */
 EMM_API emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *err);
+/* One rule (no ';'), as emm_tag_rules_parse reads each, without the check
+ * that an axis rule has its set (--list-sites tries the rules it suggests
+ * one by one). */
+EMM_API emm_status emm_tag_rule_parse(const char *text, emm_tag_rule *out, emm_error *err);
 /* Frees the rules emm_tag_rules_parse made; *rs is then empty. */
 EMM_API void emm_tag_rules_free(emm_tag_rules *rs);
 /* A rule as EMM_TAG spells it ("vertices:site=read_mesh,stride=24,xyz=0:f64"),

@@ -1,4 +1,7 @@
 /* EMM_TAG rules (core/tag_rules.c). */
+#include <stdlib.h>
+#include <string.h>
+
 #include "fuzz.h"
 #include "emm/config.h"
 
@@ -9,8 +12,23 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     emm_error err;
     emm_status st = emm_tag_rules_parse(s, &rules, &err);
     fuzz_check_error(st, &err);
-    if (st == EMM_OK)
+    if (st == EMM_OK) {
+        /* Each rule as EMM_TAG spells it reads back as the same rule (a
+         * site=MODULE+0xHEX already in its spelling: lower-case hex, no
+         * leading zeros). */
+        for (size_t i = 0; i < rules.n; i++) {
+            char text[1024];
+            emm_tag_rule again;
+            emm_tag_rule_format(&rules.rule[i], text, sizeof text);
+            if (strlen(text) + 1 < sizeof text &&
+                (emm_tag_rule_parse(text, &again, &err) != EMM_OK ||
+                 strcmp(again.site, rules.rule[i].site) != 0 || again.min != rules.rule[i].min ||
+                 again.nth != rules.rule[i].nth || again.stride != rules.rule[i].stride ||
+                 again.offset != rules.rule[i].offset))
+                abort();
+        }
         emm_tag_rules_free(&rules);
+    }
     free(s);
     return 0;
 }
