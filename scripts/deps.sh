@@ -19,11 +19,13 @@ packages=(
                                         # libraries build emm's tool; its launcher runs it
   libopenmesh-apps                      # OpenMesh's command-line apps: tests on programs
                                         # nobody here wrote
-  openctm-tools                         # ctmconv: a package converter under emm run
-                                        # (tests/shim/ctmconv.sh)
+  openctm-tools admesh                  # ctmconv (stripped) and admesh: mesh converters and a
+                                        # repair tool under emm run (tests/shim/ctmconv.sh,
+                                        # tests/sites)
+  qhull-bin tetgen                      # qdelaunay and tetgen: a Delaunay triangulator and a
+                                        # tetrahedral mesher (tests/sites, tests/thirdparty)
+  python3-meshio python3-numpy          # a Python mesh program on meshio and numpy (same)
   python3                               # tests: reports and timelines read back with a strict JSON reader
-  openctm-tools admesh qhull-bin tetgen # tests/sites: --list-sites on mesh programs nobody here
-  python3-meshio python3-numpy          # wrote (ctmconv is a stripped binary), and on numpy's
   time                                  # tests: /usr/bin/time measures the bad-input reproducers
 )
 
