@@ -19,6 +19,9 @@ packages=(
                                         # libraries build emm's tool; its launcher runs it
   libopenmesh-apps                      # OpenMesh's command-line apps: tests on programs
                                         # nobody here wrote
+  qhull-bin tetgen                      # tests/thirdparty: a Delaunay triangulator and a
+                                        # tetrahedral mesher nobody here wrote
+  python3-meshio python3-numpy          # tests/thirdparty: a Python mesh program
   python3                               # tests: reports and timelines read back with a strict JSON reader
   time                                  # tests: /usr/bin/time measures the bad-input reproducers
 )
