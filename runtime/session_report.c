@@ -752,8 +752,8 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
                 s->cfg.capture == EMM_CAPTURE_AUTO && (emm_capture_caps(s->capture) &
                                                        EMM_CAP_VALGRIND)
                     ? ", --capture auto's pick for a binary without coverage hooks or emm "
-                      "calls: it covers the whole run, and the fault capture, which covers the "
-                      "window only, costs tens of microseconds an access there"
+                      "calls: it covers the whole run, in about the time the fault capture, at "
+                      "tens of microseconds an access, takes for the window alone"
                     : "");
     }
     if (s->ended[0])

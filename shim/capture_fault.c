@@ -16,8 +16,8 @@
  *   (emm_guard_step) — and at its SIGTRAP protect the page again.
  * - Until the first read, writes open their page for the next ones
  *   (emm_guard_build_open): a loader faults once a page, not once a write.
- * - Costs tens of microseconds per access, so it covers the profiling window
- *   only: when the session wants to decide, every protection is lifted and
+ * - Costs tens of microseconds per access (bench/fault_overhead.sh), so it
+ *   covers the profiling window only: when the session wants to decide, every protection is lifted and
  *   capture stops (the report says capture "fault").
  * - Threads other than the faulting one may slip through a page while it is
  *   open: capture is exact single-threaded, approximate otherwise.

@@ -7,8 +7,12 @@
  * what that needs beside the signal plumbing: the protected regions (as
  * many as there are tagged blocks), which pages a fault belongs to, the
  * pages opened for good when the window closed, and the windows a system
- * call on protected memory opens. The calls marked signal-safe only read
- * atomics and call mprotect: a handler may make them. */
+ * call on protected memory opens, and how an access's step runs
+ * (emm_guard_step). Each protected range's pages are kept VMAs of their
+ * own (every other page flagged MADV_NOHUGEPAGE, up to 32,768 pages in
+ * all), so that opening and closing one page never splits and merges the
+ * mapping around it. The calls marked signal-safe only read atomics and
+ * call mprotect: a handler may make them. */
 #ifndef EMM_GUARD_H
 #define EMM_GUARD_H
 
