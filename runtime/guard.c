@@ -21,6 +21,13 @@
 #define CHUNK_REGIONS 64
 /* Ranges opened for good lately, kept for late handlers. */
 #define LIFTED 16
+/* The executable slots the steps run in (emm_guard_step): one per thread
+ * that faults, never given back; threads beyond them use the trap flag. */
+#define SLOT_BYTES 32
+#define SLOT_MAP (64 * 1024)
+/* Pages of a block's own mapping made VMAs of their own, for all blocks at
+ * once (a share of the kernel's default limit of 65,530 mappings a process). */
+#define SPLIT_BUDGET 32768
 
 struct emm_guard_region {
     uintptr_t plo, phi; /* protected pages; plo == phi: none */
@@ -28,6 +35,7 @@ struct emm_guard_region {
     uintptr_t base;     /* the block's key; 0: a free slot */
     int io;             /* system calls that have the pages open: changed under the lock,
                            read atomically by handlers */
+    size_t split;       /* pages made VMAs of their own (split_pages) */
 };
 
 struct chunk {
@@ -46,6 +54,9 @@ struct emm_guard {
     int building;       /* atomic: no read has faulted yet */
     uintptr_t kept[EMM_GUARD_BUILD_PAGES]; /* atomic: pages kept open while building, 0 free */
     unsigned nkept;     /* atomic: pages ever kept */
+    unsigned char *slots; /* SLOT_MAP bytes, read, write and execute; NULL: refused */
+    unsigned nslots;    /* atomic: slots claimed */
+    size_t split;       /* pages split (split_pages), under the lock */
     size_t page;
     emm_sigaction_fn real;             /* the C library's sigaction */
     struct sigaction saved_segv, saved_trap; /* the program's handlers */
@@ -60,6 +71,11 @@ emm_guard *emm_guard_new(void)
     g->page = (size_t)sysconf(_SC_PAGESIZE);
     g->watching = 1;
     g->building = 1;
+#if defined(__x86_64__)
+    void *m = mmap(NULL, SLOT_MAP, PROT_READ | PROT_WRITE | PROT_EXEC,
+                   MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    g->slots = m == MAP_FAILED ? NULL : m;
+#endif
     return g;
 }
 
@@ -111,6 +127,36 @@ static void open_region(emm_guard *g, struct emm_guard_region *r)
     __atomic_store_n(&r->phi, 0, __ATOMIC_RELEASE);
     __atomic_store_n(&r->plo, 0, __ATOMIC_RELAXED);
     __atomic_store_n(&r->io, 0, __ATOMIC_RELAXED);
+    g->split -= r->split;
+    r->split = 0;
+}
+
+/* Makes each page of [lo, hi) a VMA of its own: every other page gets a
+ * flag its neighbours lack (no transparent huge pages; on a block's own
+ * mapping, else no core dump), so the kernel never merges them. Protecting one
+ * page inside a large VMA splits it in three and opening it merges them
+ * back, which made up about half of an mprotect's cost; on pages split
+ * beforehand an mprotect changes one VMA. With the lock held; as many pages
+ * as SPLIT_BUDGET leaves (the rest of the blocks stay whole: slower, as
+ * exact). */
+static size_t split_pages(emm_guard *g, uintptr_t lo, uintptr_t hi, bool own)
+{
+    size_t n = (hi - lo) / g->page;
+    if (n < 2 || g->split + n > SPLIT_BUDGET)
+        return 0;
+    static const int advice[] = {MADV_NOHUGEPAGE, MADV_DONTDUMP};
+    for (size_t k = 0; k < (own ? 2u : 1u); k++) {
+        uintptr_t p = lo;
+        while (p < hi && madvise((void *)p, g->page, advice[k]) == 0)
+            p += 2 * g->page;
+        if (p >= hi) {
+            g->split += n;
+            return n;
+        }
+        if (p > lo) /* the mapping limit: what was split stays so */
+            return 0;
+    }
+    return 0;
 }
 
 void emm_guard_protect(emm_guard *g, uintptr_t base, size_t bytes, void *map, size_t map_len)
@@ -141,6 +187,7 @@ void emm_guard_protect(emm_guard *g, uintptr_t base, size_t bytes, void *map, si
         __atomic_store_n(&r->hi, base + bytes, __ATOMIC_RELAXED);
         __atomic_store_n(&r->plo, plo, __ATOMIC_RELAXED);
         __atomic_store_n(&r->phi, phi, __ATOMIC_RELEASE);
+        r->split = split_pages(g, plo, phi, map != NULL);
         mprotect((void *)plo, phi - plo, PROT_NONE);
     }
     pthread_mutex_unlock(&g->lock);
@@ -180,6 +227,8 @@ void emm_guard_free(emm_guard *g)
         next = c->next;
         free(c);
     }
+    if (g->slots)
+        munmap(g->slots, SLOT_MAP);
     pthread_mutex_destroy(&g->lock);
     free(g);
 }
@@ -222,6 +271,181 @@ void emm_guard_step_done(emm_guard *g, emm_guard_region *r, uintptr_t page)
      * pages stay open. */
     if (!__atomic_load_n(&g->watching, __ATOMIC_SEQ_CST) || emm_guard_find(g, page, &in) != r)
         mprotect((void *)page, g->page, PROT_READ | PROT_WRITE);
+}
+
+/* --- stepping in a slot ------------------------------------------------- */
+
+/* One-byte opcodes (x86-64) the guard runs in a slot: 1 + the bytes of
+ * their immediate (Z: 2 or 4 by the operand size), 0 for the others;
+ * groups are narrowed by their ModRM reg field below. */
+#define Z 9
+static const unsigned char map0[256] = {
+    [0x00] = 1, 1, 1, 1, [0x08] = 1, 1, 1, 1, [0x10] = 1, 1, 1, 1, [0x18] = 1, 1, 1, 1,
+    [0x20] = 1, 1, 1, 1, [0x28] = 1, 1, 1, 1, [0x30] = 1, 1, 1, 1, [0x38] = 1, 1, 1, 1,
+    [0x63] = 1, [0x69] = 1 + Z, [0x6b] = 2,
+    [0x80] = 2, [0x81] = 1 + Z, [0x83] = 2, [0x84] = 1, 1, 1, 1, 1, 1, 1, 1,
+    [0xc0] = 2, 2, [0xc6] = 2, 1 + Z, [0xd0] = 1, 1, 1, 1,
+    [0xd8] = 1, 1, 1, 1, 1, 1, 1, 1, [0xf6] = 2, 1 + Z, [0xfe] = 1, 1,
+};
+
+/* Two-byte opcodes (0F xx), as map0. */
+static unsigned map1(unsigned op, unsigned reg)
+{
+    /* System, branch, push and pop, bswap, fences and the undefined ones out. */
+    if (op <= 0x0c || op == 0x0e || op == 0x0f || (op >= 0x20 && op <= 0x27) ||
+        (op >= 0x30 && op <= 0x3f) || (op >= 0x77 && op <= 0x7b) || (op >= 0x80 && op <= 0x8f) ||
+        (op >= 0xa0 && op <= 0xa2) || (op >= 0xa6 && op <= 0xaa) || op == 0xae || op == 0xb9 ||
+        (op == 0xc7 && reg != 1) || (op >= 0xc8 && op <= 0xcf) || op == 0xff)
+        return 0;
+    return (op >= 0x70 && op <= 0x73) || op == 0xa4 || op == 0xac || op == 0xba || op == 0xc2 ||
+                   (op >= 0xc4 && op <= 0xc6)
+               ? 2
+               : 1;
+}
+
+size_t emm_guard_insn_len(const unsigned char *p)
+{
+#if defined(__x86_64__)
+    size_t i = 0;
+    int o16 = 0, legacy = 0, rexw = 0;
+    for (;; i++) {
+        unsigned b = p[i];
+        if (b == 0x66)
+            o16 = 1;
+        else if (!(b == 0x67 || b == 0xf0 || b == 0xf2 || b == 0xf3 || b == 0x2e ||
+                   b == 0x36 || b == 0x3e || b == 0x26 || b == 0x64 || b == 0x65))
+            break;
+        legacy = 1;
+        if (i == 14)
+            return 0;
+    }
+    int rex = (p[i] & 0xf0) == 0x40;
+    if (rex)
+        rexw = (p[i++] & 8) != 0;
+    unsigned op = p[i++], kind, reg;
+    if (op == 0xc4 || op == 0xc5) { /* VEX: maps 1 (0F), 2 (0F 38), 3 (0F 3A) */
+        if (rex || legacy)
+            return 0;
+        unsigned map = 1;
+        if (op == 0xc4)
+            map = p[i++] & 0x1f;
+        i++;
+        if (map < 1 || map > 3)
+            return 0;
+        op = p[i++];
+        if (map == 1 && (op == 0x77 || op == 0xae))
+            return 0;
+        kind = map == 3 || (map == 1 && ((op >= 0x70 && op <= 0x73) || op == 0xc2 ||
+                                          (op >= 0xc4 && op <= 0xc6))) ? 2 : 1;
+        reg = (p[i] >> 3) & 7;
+    } else if (op == 0x0f) {
+        op = p[i++];
+        if (op == 0x38 || op == 0x3a) {
+            kind = op == 0x3a ? 2 : 1;
+            i++;
+        } else {
+            kind = map1(op, (p[i] >> 3) & 7);
+        }
+        reg = (p[i] >> 3) & 7;
+    } else {
+        kind = map0[op];
+        if (!kind)
+            return 0;
+        reg = (p[i] >> 3) & 7;
+        /* mov imm only of C6/C7; test, not, neg, mul, imul of F6/F7 (no
+         * divide: its fault would name the slot); inc and dec of FE/FF. */
+        if (((op == 0xc6 || op == 0xc7) && reg != 0) || ((op == 0xf6 || op == 0xf7) && reg >= 6) ||
+            ((op == 0xfe || op == 0xff) && reg >= 2))
+            return 0;
+        if ((op == 0xf6 || op == 0xf7) && reg >= 2)
+            kind = 1;
+    }
+    if (!kind)
+        return 0;
+    unsigned imm = kind == 1 + Z ? (o16 && !rexw ? 2 : 4) : kind - 1;
+    unsigned m = p[i++], mod = m >> 6, rm = m & 7, disp = mod == 1 ? 1 : mod == 2 ? 4 : 0;
+    if (mod == 3)
+        return 0; /* a register operand: no access */
+    if (rm == 4) {
+        if (mod == 0 && (p[i] & 7) == 5)
+            disp = 4;
+        i++;
+    } else if (mod == 0 && rm == 5) {
+        return 0; /* RIP-relative: the copy would address elsewhere */
+    }
+    i += disp + imm;
+    return i <= 15 ? i : 0;
+#else
+    (void)p;
+    return 0;
+#endif
+}
+#undef Z
+
+/* The calling thread's slot, claimed at its first step; NULL when none is
+ * left. */
+static unsigned char *claim_slot(emm_guard *g, emm_guard_step *s)
+{
+    if (!s->slot && g->slots) {
+        unsigned k = __atomic_fetch_add(&g->nslots, 1, __ATOMIC_RELAXED);
+        if (k < SLOT_MAP / SLOT_BYTES)
+            s->slot = g->slots + (size_t)k * SLOT_BYTES;
+    }
+    return s->slot;
+}
+
+int emm_guard_step_begin(emm_guard *g, emm_guard_step *s, emm_guard_region *r, uintptr_t page,
+                         uintptr_t *pc)
+{
+    mprotect((void *)page, g->page, PROT_READ | PROT_WRITE);
+    if (s->n < 4) {
+        s->page[s->n] = page;
+        s->r[s->n++] = r;
+    }
+    /* In the copy: its second page. Elsewhere while a copy runs: a signal
+     * handler of the program's interrupted it, and the slot is taken. */
+    if (s->end)
+        return *pc >= (uintptr_t)s->slot && *pc < s->end ? 0 : 1;
+    const unsigned char *code = (const unsigned char *)*pc;
+    size_t len = emm_guard_insn_len(code);
+    unsigned char *slot = len ? claim_slot(g, s) : NULL;
+    if (!slot)
+        return 1;
+    memcpy(slot, code, len);
+    slot[len] = 0xcc; /* int3 */
+    s->resume = *pc + len;
+    s->end = (uintptr_t)slot + len + 1;
+    *pc = (uintptr_t)slot;
+    return 0;
+}
+
+static void step_close(emm_guard *g, emm_guard_step *s)
+{
+    for (int i = 0; i < s->n; i++)
+        emm_guard_step_done(g, s->r[i], s->page[i]);
+    s->n = 0;
+}
+
+int emm_guard_step_end(emm_guard *g, emm_guard_step *s, uintptr_t *pc, int trap)
+{
+    if (s->end && *pc == s->end) {
+        *pc = s->resume;
+        s->end = 0;
+    } else if (!trap || s->n == 0) {
+        return 0;
+    }
+    /* (A trap-flag step inside a copy's closes the copy's pages too: the
+     * copy faults on them again when it resumes.) */
+    step_close(g, s);
+    return 1;
+}
+
+void emm_guard_step_abandon(emm_guard *g, emm_guard_step *s, uintptr_t *pc)
+{
+    if (s->end && *pc >= (uintptr_t)s->slot && *pc < s->end)
+        *pc = s->resume - (s->end - 1 - (uintptr_t)s->slot);
+    s->end = 0;
+    step_close(g, s);
 }
 
 /* Protects a page kept open while building again, unless its region left

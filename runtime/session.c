@@ -686,6 +686,7 @@ static emm_session_state engine_access(emm_session *h, const emm_raw_access *a, 
 {
     session *s = (session *)h;
     if (s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE) {
+        session_window_clock(s, n);
         window_add(s, a, n);
         return public_state(s);
     }

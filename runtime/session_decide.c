@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "error.h"
 #include "parse.h"
@@ -851,9 +852,23 @@ void session_decide_answer(session *s)
         s->chosen = s->mstrat[s->answer_model];
 }
 
+void session_window_clock(session *s, size_t n)
+{
+    if (s->wraw == 0 && n)
+        clock_gettime(CLOCK_MONOTONIC, &s->wclock);
+    s->wraw += n;
+}
+
 emm_status session_decide_read(session *s, emm_error *err)
 {
     emm_status st;
+    s->wseconds = -1;
+    if (s->wraw) {
+        struct timespec now;
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        s->wseconds = (double)(now.tv_sec - s->wclock.tv_sec) +
+                      (double)(now.tv_nsec - s->wclock.tv_nsec) / 1e9;
+    }
     s->geometry_failed = false;
     unsigned have = 0;
     for (int i = 0; i < s->narrays; i++)

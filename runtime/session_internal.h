@@ -172,6 +172,9 @@ typedef struct session {
     emm_capture capture;
     struct timespec started; /* CLOCK_REALTIME_COARSE at its start: a report written
                                 since is another process's (session_write_nothing) */
+    struct timespec wclock; /* CLOCK_MONOTONIC at the first record (session_window_clock) */
+    uint64_t wraw;       /* records given until the decision */
+    double wseconds;     /* from the first record to the decision; < 0: not timed */
     emm_threads threads;
     emm_machine *machine;
     emm_table *table;    /* NULL: no table (a configured strategy without one) */
@@ -446,6 +449,11 @@ emm_status session_decide_rest(session *s, emm_error *err);
  * it over the window, then the fastest candidate there; else the chosen
  * strategy. Sets answer_model, runner_model, ranked and chosen. */
 void session_decide_answer(session *s);
+
+/* The window's clock: records given while profiling (n more now), and the
+ * time of the first. The decision reads it (wseconds): under the fault
+ * capture, what the window cost the program. */
+void session_window_clock(session *s, size_t n);
 
 /* Only the window was captured and simulated: a backend that sees the
  * window alone stops at the decision. */

@@ -11,12 +11,13 @@
  * - SIGSEGV on a protected page: record the access (address from si_addr;
  *   8 bytes, the size of a coordinate or a pointer, since decoding the
  *   instruction is not worth it; write from the page-fault error code),
- *   unprotect the page, set the trap flag so that SIGTRAP follows the one
- *   instruction, then protect the page again and clear the flag.
+ *   unprotect the page, run the one instruction — copied into a slot of
+ *   the thread's ending in int3, or in place under the trap flag
+ *   (emm_guard_step) — and at its SIGTRAP protect the page again.
  * - Until the first read, writes open their page for the next ones
  *   (emm_guard_build_open): a loader faults once a page, not once a write.
- * - Costs tens of microseconds per access, so it covers the profiling window
- *   only: when the session wants to decide, every protection is lifted and
+ * - Costs tens of microseconds per access (bench/fault_overhead.sh), so it
+ *   covers the profiling window only: when the session wants to decide, every protection is lifted and
  *   capture stops (the report says capture "fault").
  * - Threads other than the faulting one may slip through a page while it is
  *   open: capture is exact single-threaded, approximate otherwise.
@@ -42,12 +43,8 @@ static emm_guard *guard;
 static bool installed; /* our SIGSEGV/SIGTRAP handlers are in place */
 static size_t page_size;
 
-/* The pages a thread's fault opened, until its single step ends. */
-static __thread struct {
-    uintptr_t page;
-    emm_guard_region *r;
-} pending[4] SHIM_TLS;
-static __thread int npending SHIM_TLS;
+/* The calling thread's step: the pages its fault opened, until it ends. */
+static __thread emm_guard_step step SHIM_TLS;
 static __thread uintptr_t retried SHIM_TLS; /* the address last retried by this thread */
 
 /* A block a rule tags while profiling gets pages of its own. */
@@ -84,7 +81,7 @@ static void lift(void)
 static void fork_child(void)
 {
     emm_guard_lift(guard);
-    npending = 0;
+    step.n = 0;
 }
 
 /* The end of what a loader wrote on a page it had open (emm_guard_build_open). */
@@ -97,41 +94,37 @@ static void note_written(uintptr_t a)
 static void on_segv(int sig, siginfo_t *si, void *uctx)
 {
     uintptr_t a = (uintptr_t)si->si_addr;
+    ucontext_t *uc = uctx;
+    uintptr_t *pc = (uintptr_t *)&uc->uc_mcontext.gregs[REG_RIP];
     int in_array = 0;
     emm_guard_region *r = si->si_code == SEGV_ACCERR ? emm_guard_find(guard, a, &in_array) : NULL;
     if (!r) {
         /* A fault on pages opened lately: its handler ran late. */
         if (si->si_code == SEGV_ACCERR && emm_guard_retry(guard, a, &retried))
             return;
+        emm_guard_step_abandon(guard, &step, pc);
         emm_guard_chain(guard, sig, si, uctx);
         return;
     }
     retried = 0;
-    ucontext_t *uc = uctx;
     uintptr_t page = a & ~(uintptr_t)(page_size - 1);
     bool write = (uc->uc_mcontext.gregs[REG_ERR] & 2) != 0;
     if (emm_guard_watching(guard) && !shim_busy && in_array)
         shim_record(a, 8, write);
     if (emm_guard_build_open(guard, r, page, write, note_written))
         return; /* the mesh is being built: the page stays open, no single step */
-    mprotect((void *)page, page_size, PROT_READ | PROT_WRITE);
-    if (npending < 4) {
-        pending[npending].page = page;
-        pending[npending++].r = r;
-    }
-    uc->uc_mcontext.gregs[REG_EFL] |= TRAP_FLAG;
+    if (emm_guard_step_begin(guard, &step, r, page, pc))
+        uc->uc_mcontext.gregs[REG_EFL] |= TRAP_FLAG;
 }
 
 static void on_trap(int sig, siginfo_t *si, void *uctx)
 {
     ucontext_t *uc = uctx;
-    if (npending == 0 || !(uc->uc_mcontext.gregs[REG_EFL] & TRAP_FLAG)) {
+    if (!emm_guard_step_end(guard, &step, (uintptr_t *)&uc->uc_mcontext.gregs[REG_RIP],
+                            (uc->uc_mcontext.gregs[REG_EFL] & TRAP_FLAG) != 0)) {
         emm_guard_chain(guard, sig, si, uctx);
         return;
     }
-    for (int i = 0; i < npending; i++)
-        emm_guard_step_done(guard, pending[i].r, pending[i].page);
-    npending = 0;
     uc->uc_mcontext.gregs[REG_EFL] &= ~(greg_t)TRAP_FLAG;
 }
 

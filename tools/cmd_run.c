@@ -84,7 +84,10 @@ static void usage(FILE *out, const opts *o)
             "missing; --verbose says which). Its summary goes to the program's stderr. --capture\n"
             "auto does the same for a binary that neither links emm's coverage hooks\n"
             "(emm_sancov_executable) nor calls emm, when valgrind is on PATH and the tool\n"
-            "was built; otherwise it preloads the shim, which picks sancov, api or fault.\n"
+            "was built (the fault capture, the alternative there, pays tens of microseconds\n"
+            "a window access and sees the window only; --verbose says which auto took and\n"
+            "why, and the summary names auto's pick); otherwise it preloads the shim, which\n"
+            "picks sancov, api or fault.\n"
             "\n"
             "--list-sites runs PROGRAM once and lists, at exit, its candidate arrays: blocks\n"
             "of 64 KiB or more by call path, with the whole stack, what their records look\n"
@@ -267,16 +270,6 @@ static char *valgrind_setup(char *launcher, size_t lcap, char *why, size_t wcap)
     }
     *strrchr(tool, '/') = '\0';
     return tool;
-}
-
-/* The backend that runs under emm's Valgrind tool, the one auto picks for
- * an unmodified binary. */
-static emm_capture valgrind_capture(void)
-{
-    for (int c = 0; c < EMM_CAPTURE_COUNT; c++)
-        if (emm_capture_caps((emm_capture)c) & EMM_CAP_VALGRIND)
-            return (emm_capture)c;
-    return EMM_CAPTURE_AUTO;
 }
 
 static const char *get_env(const char *name)
@@ -561,16 +554,31 @@ int emm_cmd_run(int argc, char **argv)
             return EMM_EXIT_FAIL;
         }
     } else if (cfg.capture == EMM_CAPTURE_AUTO && !cfg.list_sites && found && !pf.links_emm) {
-        /* (--list-sites captures nothing: the preloaded shim suffices.) */
+        /* (--list-sites captures nothing: the preloaded shim suffices.)
+         * Valgrind before the fault capture: it covers the whole run in
+         * about the time the fault capture takes for the window alone
+         * (bench/fault_overhead.sh). */
         vgdir = valgrind_setup(launcher, sizeof launcher, why, sizeof why);
+        if (cfg.log >= 2)
+            cli_error("run: --capture auto: %s for %s, which neither links emm's coverage hooks "
+                     "nor calls emm: %s", vgdir ? "valgrind" : "fault", argv[i],
+                     vgdir ? "emm's Valgrind tool captures the whole run, in about the time the "
+                             "fault capture, at tens of microseconds an access, takes for the "
+                             "profiling window alone (README, Capture backends)"
+                           : why);
+    } else if (cfg.capture == EMM_CAPTURE_AUTO && !cfg.list_sites && found && cfg.log >= 2) {
+        cli_error("run: --capture auto: %s links emm (coverage hooks or emm calls): the shim "
+                 "captures its accesses itself (sancov or api)", argv[i]);
     }
 
     int bad = 0;
     bool under_valgrind = vgdir != NULL;
     if (vgdir) {
         bad |= setenv("VALGRIND_LIB", vgdir, 1);
-        values[EMM_CONFIG_CAPTURE] =
-            emm_capture_name(cfg.capture != EMM_CAPTURE_AUTO ? cfg.capture : valgrind_capture());
+        /* Under auto the shim picks the valgrind capture itself (it runs
+         * under emm's tool), and the summary says it was auto's pick. */
+        if (cfg.capture != EMM_CAPTURE_AUTO)
+            values[EMM_CONFIG_CAPTURE] = emm_capture_name(cfg.capture);
         free(vgdir);
     } else {
         char tried[4096];

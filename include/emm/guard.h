@@ -7,8 +7,12 @@
  * what that needs beside the signal plumbing: the protected regions (as
  * many as there are tagged blocks), which pages a fault belongs to, the
  * pages opened for good when the window closed, and the windows a system
- * call on protected memory opens. The calls marked signal-safe only read
- * atomics and call mprotect: a handler may make them. */
+ * call on protected memory opens, and how an access's step runs
+ * (emm_guard_step). Each protected range's pages are kept VMAs of their
+ * own (every other page flagged MADV_NOHUGEPAGE, up to 32,768 pages in
+ * all), so that opening and closing one page never splits and merges the
+ * mapping around it. The calls marked signal-safe only read atomics and
+ * call mprotect: a handler may make them. */
 #ifndef EMM_GUARD_H
 #define EMM_GUARD_H
 
@@ -58,6 +62,43 @@ EMM_API int emm_guard_retry(const emm_guard *g, uintptr_t addr, uintptr_t *retri
  * page again unless the guard stopped watching, the region left, or a
  * system call has it open. Signal-safe. */
 EMM_API void emm_guard_step_done(emm_guard *g, emm_guard_region *r, uintptr_t page);
+
+/* One access's step, the calling thread's (the fault handler keeps one per
+ * thread): the pages its fault opened, and where it runs. Single-stepping
+ * with the trap flag costs a debug exception, the dearest part of a fault
+ * capture's access in a virtual machine; so the guard copies the faulting
+ * instruction, when it is a plain load or store through a memory operand
+ * (x86-64: no branch, not RIP-relative, no string instruction), into an
+ * executable slot of the thread's followed by int3, and the access runs
+ * there: the SIGTRAP of the int3 ends the step and the thread resumes after
+ * the instruction. Other instructions, and every one where executable
+ * memory is refused, single-step with the trap flag. Zeroed: no step. */
+typedef struct emm_guard_step {
+    uintptr_t page[4];
+    emm_guard_region *r[4];
+    int n;
+    unsigned char *slot;     /* the thread's slot; NULL until its first step */
+    uintptr_t resume, end;   /* the instruction's end, and its copy's int3 + 1; 0: none */
+} emm_guard_step;
+/* A fault in region r on `page` of an access at *pc: opens the page for the
+ * step (s holds it) and either points *pc at the copy of the instruction
+ * (returns 0) or asks for the trap flag (returns 1). A fault inside the
+ * copy (an access that spans two protected pages) opens its page and the
+ * copy goes on (0). Signal-safe. */
+EMM_API int emm_guard_step_begin(emm_guard *g, emm_guard_step *s, emm_guard_region *r,
+                                 uintptr_t page, uintptr_t *pc);
+/* A SIGTRAP at *pc (trap: the trap flag was set): when it ends s's step,
+ * protects its pages again (emm_guard_step_done), moves *pc past the
+ * original instruction when it ran in the copy, and returns 1; 0 when the
+ * signal is not the step's. Signal-safe. */
+EMM_API int emm_guard_step_end(emm_guard *g, emm_guard_step *s, uintptr_t *pc, int trap);
+/* A fault that is not the guard's while s steps: the step is given up (its
+ * pages protected again, *pc back at the original instruction when it was
+ * in the copy), so the program's handler sees its own code. Signal-safe. */
+EMM_API void emm_guard_step_abandon(emm_guard *g, emm_guard_step *s, uintptr_t *pc);
+/* The length of the instruction at pc when the guard may run it in a slot
+ * (see emm_guard_step), else 0. Reads no byte past the instruction. */
+EMM_API size_t emm_guard_insn_len(const unsigned char *pc);
 
 /* While the mesh is being built — no read of a tagged array has faulted
  * yet — a write fault does not single-step: its page opens and stays open

@@ -108,5 +108,6 @@ print("window-only answer %s: %d cycles, direct %d; predicted %s: %d (%s)"
 PY
   expect_err decide '^emm: answer: .*over the profiling window only'
   expect_err decide 'for an answer over the whole run, capture all of it: emm run --capture valgrind'
+  expect_err decide 'its window took [0-9.]* s from the first access it captured to the decision, [0-9.]* us per access'
 fi
 echo "decide: ok"

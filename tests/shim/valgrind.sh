@@ -1,6 +1,6 @@
 # The valgrind capture on a program nobody tagged by hand or instrumented
 # (examples/smooth.c, EMM_TAG rules), as emm run's auto picks it for such a
-# binary (no --capture given):
+# binary (no --capture given; --verbose says so, and the summary):
 #   sh valgrind.sh SHIM WORKDIR EMM SANCOV_BUILD PROGRAM MESH
 # stdout and exit status as in the native run; the report covers the whole
 # run; its element accesses are its sancov build's, within 1%.
@@ -9,13 +9,16 @@ unset EMM_STRATEGY
 EMM=$1 SANCOV=$2; shift 2
 TAG='vertices:site=load_mesh,stride=12,xyz=0:f32;triangles:site=load_mesh,stride=12,vidx=0:u32'
 env -u LD_PRELOAD "$@" > "$WORK/native.out"; native_rc=$?
-"$EMM" run --tag "$TAG" --report "$WORK/valgrind.json" -- "$@" \
+"$EMM" run --verbose --tag "$TAG" --report "$WORK/valgrind.json" -- "$@" \
   > "$WORK/valgrind.out" 2> "$WORK/valgrind.err"; rc=$?
 [ $rc = $native_rc ] || { cat "$WORK/valgrind.err" >&2; fail "exit status $rc under valgrind capture, $native_rc natively"; }
 cmp -s "$WORK/native.out" "$WORK/valgrind.out" || { cat "$WORK/valgrind.err" >&2; fail "stdout differs under valgrind capture"; }
 grep -q '^emm: answer: ' "$WORK/valgrind.err" || { cat "$WORK/valgrind.err" >&2; fail "no answer"; }
-grep -q 'simulated: the whole run from the frozen mesh on, .*(the valgrind capture)' "$WORK/valgrind.err" ||
-  fail "the summary does not say the whole run was simulated"
+grep -q "simulated: the whole run from the frozen mesh on, .*(the valgrind capture, --capture auto's pick" "$WORK/valgrind.err" ||
+  fail "the summary does not say the whole run was simulated, by auto's pick"
+# auto says which backend it took and why (--verbose).
+grep -q "^emm: run: --capture auto: valgrind for .*: emm's Valgrind tool captures the whole run" "$WORK/valgrind.err" ||
+  { cat "$WORK/valgrind.err" >&2; fail "--verbose does not say why auto took valgrind"; }
 # The reports are read by Python's own JSON parser, each check with its
 # own message: here the valgrind run's, at the end both runs' counts.
 python3 - "$WORK/valgrind.json" <<'PY' || exit 1
