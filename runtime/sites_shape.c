@@ -677,7 +677,14 @@ void shape_describe(const shape *s, char *out, size_t cap)
     default:
         verdict = "no three coordinates or vertex indices in a row";
     }
-    snprintf(out + used, cap - used, "; %s in use of %s: %s", use, all, verdict);
+    /* The records in use count a mesh's elements; of a block that is no
+     * mesh array (a hash table's, a list of addresses) they depend on the
+     * addresses and hashes of the run, so the block's size stands alone and
+     * the listing stays the same from run to run. */
+    if (s->kind == SHAPE_NONE)
+        snprintf(out + used, cap - used, "; %s records: %s", all, verdict);
+    else
+        snprintf(out + used, cap - used, "; %s in use of %s: %s", use, all, verdict);
 }
 
 bool shape_rule(const shape *s, char axis, const char **kind, char *body, size_t cap)
