@@ -635,8 +635,11 @@ __attribute__((constructor(101))) static void shim_init(void)
     static const int fatal[] = {SIGTERM, SIGINT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
     for (size_t i = 0; i < sizeof fatal / sizeof *fatal && !shim.config.list_sites; i++)
         install_terminate(fatal[i]);
-    bool pcs = emm_capture_caps(shim.config.capture) & EMM_CAP_PCS;
-    shim.capture = shim.config.list_sites && !pcs ? EMM_CAPTURE_AUTO : pick_capture();
+    shim.capture = pick_capture(); /* auto's too: under Valgrind, valgrind */
+    if (shim.config.list_sites && !(emm_capture_caps(shim.capture) & EMM_CAP_PCS)) {
+        shim.capture = EMM_CAPTURE_AUTO;
+        shim.ops = &list_ops;
+    }
     if (shim.ops->init && !shim.ops->init(msg, sizeof msg)) {
         step_aside(msg);
         shim_leave();
