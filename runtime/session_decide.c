@@ -652,7 +652,7 @@ static emm_status choose(session *s, emm_error *err)
 static bool same_strategy(const emm_strategy *a, const emm_strategy *b)
 {
     return a->kind == b->kind && a->layout == b->layout && a->fetch == b->fetch &&
-           a->cell == b->cell;
+           a->cell == b->cell && a->indexed == b->indexed;
 }
 
 /* Whether the run confirms the choice (docs/profile.md "The contest"): the
@@ -703,8 +703,8 @@ static emm_status build_models(session *s, emm_error *err)
     if (s->cfg.compare != EMM_COMPARE_NONE || !s->has_chosen) {
         if (s->has_wd && s->wd.has_runner_up && !racing)
             all[n++] = s->wd.runner_up;
-        all[n++] = (emm_strategy){EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
-        all[n++] = (emm_strategy){EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
+        all[n++] = (emm_strategy){EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0, 0};
+        all[n++] = (emm_strategy){EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0, 0};
     }
     if (s->cfg.compare == EMM_COMPARE_ALL)
         n += emm_strategy_sweep_for(depth, all + n, cap - n);

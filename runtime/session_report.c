@@ -256,7 +256,7 @@ static void print_compute(FILE *out, const session *s)
 }
 
 static const emm_strategy direct_strategy = {EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL,
-                                             EMM_FETCH_NONE, 0};
+                                             EMM_FETCH_NONE, 0, 0};
 
 /* "decision.window_check" (docs/report.md): a window-only capture's
  * prediction against every candidate and direct reads over the window. */
@@ -501,13 +501,14 @@ static const emm_result *find_result(const emm_result *res, size_t n, const emm_
 {
     for (size_t i = 0; i < n; i++)
         if (res[i].strategy.kind == want->kind && res[i].strategy.layout == want->layout &&
-            res[i].strategy.fetch == want->fetch && res[i].strategy.cell == want->cell)
+            res[i].strategy.fetch == want->fetch && res[i].strategy.cell == want->cell &&
+            res[i].strategy.indexed == want->indexed)
             return &res[i];
     return NULL;
 }
 
 static const emm_strategy cache_strategy = {EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL,
-                                            EMM_FETCH_NONE, 0};
+                                            EMM_FETCH_NONE, 0, 0};
 
 /* "1.33x faster than" / "1.20x slower than" b, for a against b. */
 static const char *versus(uint64_t a, uint64_t b, char *buf, size_t cap)
