@@ -267,6 +267,11 @@ size_t emm_strategy_sweep_indexed(int depth, emm_strategy *out, size_t cap)
     return n;
 }
 
+int emm_indexed_joins_contest(size_t nv, size_t nt, uint64_t lookup_budget)
+{
+    return 4 * ((uint64_t)nv + (uint64_t)nt) > lookup_budget;
+}
+
 size_t emm_strategy_sweep(emm_strategy *out, size_t cap)
 {
     return emm_strategy_sweep_for(0, out, cap);

@@ -684,7 +684,16 @@ static emm_status build_models(session *s, emm_error *err)
     const emm_trace_geometry *g = &s->info.geometry;
     int depth = emm_geometry_has_depth(g->xyz, g->nv, g->tri, g->nt);
     size_t sweep = emm_strategy_sweep_for(depth, NULL, 0);
-    size_t cap = 4 + (s->cfg.compare == EMM_COMPARE_ALL || racing || checking ? 2 * sweep : 0);
+    /* A mesh whose look-up tables are paged brings the indexed variants
+     * into the contest: the answer may then be to adopt the layout's
+     * numbering. */
+    size_t indexed = (racing || checking) &&
+                             emm_indexed_joins_contest(
+                                 g->nv, g->nt, emm_machine_get(s->machine, "emm.lookup_budget"))
+                         ? emm_strategy_sweep_indexed(depth, NULL, 0)
+                         : 0;
+    size_t cap = 4 + (s->cfg.compare == EMM_COMPARE_ALL || racing || checking ? 2 * sweep : 0) +
+                 indexed;
     emm_strategy *all = calloc(cap, sizeof *all), *list = calloc(cap, sizeof *list);
     emm_error *errs = calloc(cap, sizeof *errs);
     size_t *entrants = calloc(cap, sizeof *entrants);
@@ -711,6 +720,8 @@ static emm_status build_models(session *s, emm_error *err)
     shown = n;
     if (racing || checking)
         n += emm_strategy_sweep_for(depth, all + n, cap - n);
+    if (indexed)
+        n += emm_strategy_sweep_indexed(depth, all + n, cap - n);
     for (size_t i = 0; i < n; i++) {
         /* The contest's sweep brings only what the machine offers: a
          * strategy it does not offer (cache@LAYOUT without a cache) is no
@@ -818,6 +829,22 @@ void session_decide_answer(session *s)
         s->runner_model = top[1];
     if (session_overruled(s))
         s->chosen = s->mstrat[s->answer_model];
+    /* An indexed answer: the best ranked strategy that keeps its look-up
+     * table, for the summary's "adopt this numbering" line. */
+    s->plain_model = SIZE_MAX;
+    size_t ans = session_answer_model(s);
+    const contest *c = s->contest ? s->contest : s->window_check ? s->window_rank : NULL;
+    if (c && ans != SIZE_MAX && ans < s->nmodels && s->mstrat[ans].indexed) {
+        size_t *idx = malloc(s->nmodels * sizeof *idx);
+        size_t n = idx ? contest_standing(c, idx, s->nmodels) : 0;
+        for (size_t k = 0; k < n && k < s->nmodels && s->plain_model == SIZE_MAX; k++)
+            if (s->mstrat[idx[k]].kind == EMM_STRATEGY_EMM && !s->mstrat[idx[k]].indexed &&
+                emm_runner_model(s->runner, idx[k])) {
+                s->plain_model = idx[k];
+                s->plain_total = model_cycles(s, idx[k]);
+            }
+        free(idx);
+    }
 }
 
 emm_status session_decide_read(session *s, emm_error *err)

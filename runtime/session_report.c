@@ -690,6 +690,16 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
                         emm_grouped(runner->total, num), fabs(d) * 100,
                         d >= 0 ? "slower" : "faster", span);
         }
+        /* An indexed answer assumes the program adopts the layout's
+         * numbering: what that saves, against the best that keeps the
+         * look-up table. */
+        if (chosen->strategy.indexed && s->plain_model != SIZE_MAX) {
+            emm_strategy_format(&s->mstrat[s->plain_model], name, sizeof name);
+            fprintf(out,
+                    "emm:   adopt this numbering (emm layout --write) and the look-up cost "
+                    "disappears: %s cycles vs %s (%s, with the look-up table)\n",
+                    emm_grouped(chosen->total, num), emm_grouped(s->plain_total, num2), name);
+        }
         /* What the window alone predicted, against the run's answer. */
         const emm_strategy *overruled = session_overruled(s);
         const emm_result *pred = overruled ? find_result(res, nres, overruled) : NULL;

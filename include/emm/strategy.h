@@ -121,6 +121,12 @@ EMM_API size_t emm_strategy_sweep(emm_strategy *out, size_t cap);
  * on a mesh whose look-up tables do not fit emm.lookup_budget). Returns
  * their count, filling up to cap. */
 EMM_API size_t emm_strategy_sweep_indexed(int depth, emm_strategy *out, size_t cap);
+/* Whether the indexed variants join the run's contest (and emm profile's)
+ * on a mesh of nv vertices and nt triangles: when its per-element look-up
+ * tables, 4 bytes a vertex and a triangle, exceed emm.lookup_budget
+ * (`lookup_budget`), so that they are paged and renumbering saves their
+ * pages. A smaller mesh keeps the contest of the standard sweep. */
+EMM_API int emm_indexed_joins_contest(size_t nv, size_t nt, uint64_t lookup_budget);
 /* The sweep for a mesh: with `depth` zero the standard sweep, exactly;
  * nonzero, the layouts in space join it (each after those in the plane, in
  * both the EMM strategies and the cache@ ones). */
