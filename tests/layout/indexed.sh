@@ -6,12 +6,17 @@
 # length); and their run under an :indexed strategy keeps no per-element
 # look-up table: the report's look-up bytes are the per-cell table, 16 bytes
 # a cell, where the same strategy without :indexed keeps 4 bytes an element.
-# usage: indexed.sh EMM WORKDIR REGION_GROWING CURVE_TRACING
+# With REGION_GROWING_SANCOV (a sancov build: the whole run, so a contest),
+# the run's contest takes the indexed variants on a mesh whose per-element
+# tables exceed emm.lookup_budget (here lowered to 4K) and not otherwise,
+# and an indexed answer's summary says what adopting the numbering saves.
+# usage: indexed.sh EMM WORKDIR REGION_GROWING CURVE_TRACING [REGION_GROWING_SANCOV]
 set -u
 EMM=$1
 DIR=$2
 RG=$3
 CT=$4
+RG_SANCOV=${5:-}
 PY=/usr/bin/python3
 rm -rf "$DIR" && mkdir -p "$DIR" || exit 1
 fails=0
@@ -90,6 +95,35 @@ assert r["emm"]["lookup_paged"] == 0 and r["emm"]["lookups"] > 0, r["emm"]
 assert q["emm"]["lookup_bytes"] > 4 * 2000 + 16 * cells, q["emm"]["lookup_bytes"]
 PY
 done
+
+# The run's contest: the indexed variants join where the tables are paged.
+if [ -n "$RG_SANCOV" ]; then
+    printf '[emm]\nlookup_budget = 4K\n' > "$DIR/small.ini"
+    for budget in default small; do
+        set -- --capture sancov
+        [ "$budget" = small ] && set -- "$@" --machine "$DIR/small.ini"
+        EMM_REPORT="$DIR/contest-$budget.json" "$EMM" run "$@" \
+            --finalists 2 -- "$RG_SANCOV" "$DIR/plane.off" > "$DIR/contest.out" 2> "$DIR/contest-$budget.err" ||
+            fail "contest ($budget): $(cat "$DIR/contest-$budget.err")"
+        "$RG" "$DIR/plane.off" | cmp -s - "$DIR/contest.out" || fail "contest ($budget): output changes"
+    done
+    "$PY" - "$DIR/contest-default.json" "$DIR/contest-small.json" "$DIR/contest-small.err" <<'PY' ||
+import json, sys
+d, m = (json.load(open(p)) for p in sys.argv[1:3])
+names = lambda r: [x["strategy"] for x in r["results"]]
+assert not any(n.endswith(":indexed") for n in names(d)), names(d)
+# The small budget's contest: the default's entrants and the indexed variant
+# of each of its EMM strategies (63 in the plane).
+assert m["decision"]["contest"]["entrants"] == d["decision"]["contest"]["entrants"] + 63, (
+    m["decision"]["contest"]["entrants"], d["decision"]["contest"]["entrants"])
+assert any(n.endswith(":indexed") for n in names(m)), names(m)
+rep = json.load(open(sys.argv[2]))
+summary = open(sys.argv[3]).read()
+line = "adopt this numbering (emm layout --write) and the look-up cost disappears"
+assert (line in summary) == rep["strategy"].endswith(":indexed"), (rep["strategy"], summary)
+PY
+        fail "the contest's indexed variants: $(grep answer "$DIR/contest-small.err")"
+fi
 
 # A bad output: one message naming the file.
 "$EMM" layout "$DIR/plane.off" --strategy tiles+naive --write "$DIR/m.ply" > /dev/null 2> "$DIR/err" &&
