@@ -81,7 +81,7 @@ static const char *get_env(const char *name)
 static int same(const emm_strategy *a, const emm_strategy *b)
 {
     return a->kind == b->kind && a->layout == b->layout && a->fetch == b->fetch &&
-           a->cell == b->cell;
+           a->cell == b->cell && a->indexed == b->indexed;
 }
 
 int main(int argc, char **argv)

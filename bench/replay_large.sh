@@ -7,20 +7,36 @@
 # 4 GiB). Prints wall time and peak RSS. Target: under 10 minutes and under
 # 8 GiB on a 2-core machine. Not a test; the mesh takes a few minutes to
 # generate and is kept in WORK_DIR when one is given.
-# usage: bench/replay_large.sh BUILD_DIR [WORK_DIR] [FACES]
+#
+# --surface S: the mesh is a closed surface in space instead (emm mesh gen
+# --surface S: sphere, torus or terrain), whose sweep adds the layouts in
+# space (grid3d, tiles3d, octree). --indexed: the indexed variant of every
+# EMM strategy joins the sweep (emm replay --all --indexed: the program
+# renumbered by the layout, no per-element look-up table).
+# usage: bench/replay_large.sh [--surface S] [--indexed] BUILD_DIR [WORK_DIR] [FACES]
 set -eu
-BUILD=${1:?usage: replay_large.sh BUILD_DIR [WORK_DIR] [FACES]}
+SURFACE=
+INDEXED=
+while [ $# -gt 0 ]; do
+    case $1 in
+    --surface) SURFACE=${2:?--surface needs sphere, torus or terrain}; shift 2 ;;
+    --indexed) INDEXED=--indexed; shift ;;
+    *) break ;;
+    esac
+done
+BUILD=${1:?usage: replay_large.sh [--surface S] [--indexed] BUILD_DIR [WORK_DIR] [FACES]}
 EMM=$BUILD/bin/emm
 MEASURE=$BUILD/bin/measure
 W=${2:-${TMPDIR:-/tmp}/emm-replay-large.$$}
 FACES=${3:-10000000}
 mkdir -p "$W"
 [ -n "${2:-}" ] || trap 'rm -rf "$W"' EXIT
-mesh=$W/mesh-$FACES.off
-trace=$W/region-$FACES.emmt
+name=mesh${SURFACE:+-$SURFACE}-$FACES
+mesh=$W/$name.off
+trace=$W/region-$name.emmt
 if [ ! -s "$mesh" ]; then
-    echo "generating a $FACES-face mesh"
-    "$MEASURE" "$EMM" mesh gen --faces "$FACES" -o "$mesh"
+    echo "generating a $FACES-face ${SURFACE:-planar} mesh"
+    "$MEASURE" "$EMM" mesh gen ${SURFACE:+--surface "$SURFACE"} --faces "$FACES" -o "$mesh"
 fi
 if [ ! -s "$trace" ]; then
     "$MEASURE" "$EMM" trace synth --mesh "$mesh" --pattern region --visits $((FACES / 4)) \
@@ -28,7 +44,7 @@ if [ ! -s "$trace" ]; then
 fi
 echo "cpus online: $(getconf _NPROCESSORS_ONLN)"
 "$EMM" trace info "$trace" | grep -E '^(geometry|accesses):'
-"$MEASURE" "$EMM" replay "$trace" --all --quiet --json "$W/report.json"
+"$MEASURE" "$EMM" replay "$trace" --all $INDEXED --quiet --json "$W/report.json"
 skipped=$(grep -c '"error":' "$W/report.json" || true)
 paged=$(grep -c '"lookup_paged": 1' "$W/report.json" || true)
 echo "strategies skipped: $skipped; EMM strategies with paged look-up tables: $paged"

@@ -5,6 +5,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "error.h"
@@ -32,7 +33,7 @@ static const char *const fetch_words[EMM_FETCH_COUNT] = {"", EMM_FETCH_LIST(WORD
 #define LAYOUTS (&(EMM_LAYOUT_LIST(LLIST_))[2])
 #define FETCHES (&(EMM_FETCH_LIST(LIST_))[2])
 
-#define ACCEPTED "direct, cache, cache@LAYOUT or LAYOUT+FETCH[@CELL]"
+#define ACCEPTED "direct, cache, cache@LAYOUT or LAYOUT+FETCH[@CELL][" EMM_INDEXED_SUFFIX "]"
 
 /* The standard sweep's cell sizes (thesis §6.3: "small cells" win). */
 static const uint32_t sweep_cells[] = {4, 8, 16, 32, 64, 128, 256};
@@ -85,12 +86,40 @@ static emm_status parse_cell(const char *q, const char *s, uint32_t *cell, emm_e
  * list of what is accepted always fits. */
 emm_status emm_strategy_parse(const char *text, emm_strategy *out, emm_error *err)
 {
-    emm_strategy s = {EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
+    emm_strategy s = {EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0, 0};
     char q[EMM_CLIP + 1], part[EMM_CLIP + 1];
 
     if (!text || !*text)
         return emm_fail(err, EMM_ERR_INVALID, "strategy is empty; accepted: " ACCEPTED);
     emm_clip(text, strlen(text), q);
+    /* The indexed variant: an EMM strategy with the suffix, parsed without
+     * it. */
+    const char *colon = strchr(text, ':');
+    if (colon) {
+        char body[128];
+        size_t bn = (size_t)(colon - text);
+        if (strcmp(colon, EMM_INDEXED_SUFFIX) != 0)
+            return emm_fail(err, EMM_ERR_INVALID,
+                            "strategy '%s': unknown variant '%s'; accepted: " EMM_INDEXED_SUFFIX
+                            " after LAYOUT+FETCH[@CELL]",
+                            q, emm_clip(colon, strlen(colon), part));
+        if (bn >= sizeof body)
+            return emm_fail(err, EMM_ERR_INVALID, "strategy '%s' is too long", q);
+        memcpy(body, text, bn);
+        body[bn] = '\0';
+        emm_status st = emm_strategy_parse(body, &s, err);
+        if (st != EMM_OK)
+            return st;
+        if (s.kind != EMM_STRATEGY_EMM)
+            return emm_fail(err, EMM_ERR_INVALID,
+                            "strategy '%s': " EMM_INDEXED_SUFFIX
+                            " applies to an EMM strategy LAYOUT+FETCH[@CELL], whose look-up "
+                            "table it replaces",
+                            q);
+        s.indexed = 1;
+        *out = s;
+        return EMM_OK;
+    }
     if (strcmp(text, "direct") == 0) {
         *out = s;
         return EMM_OK;
@@ -155,8 +184,8 @@ size_t emm_strategy_format(const emm_strategy *s, char *buf, size_t cap)
             n = snprintf(buf, cap, "cache@%s", emm_layout_name(s->layout));
         break;
     default:
-        n = snprintf(buf, cap, "%s+%s@%u", emm_layout_name(s->layout), emm_fetch_name(s->fetch),
-                     s->cell);
+        n = snprintf(buf, cap, "%s+%s@%u%s", emm_layout_name(s->layout), emm_fetch_name(s->fetch),
+                     s->cell, s->indexed ? EMM_INDEXED_SUFFIX : "");
         break;
     }
     return n < 0 ? 0 : (size_t)n;
@@ -198,7 +227,7 @@ size_t emm_strategy_sweep_for(int depth, emm_strategy *out, size_t cap)
 #define PUT(...)                                                                               \
     do {                                                                                       \
         if (n < cap)                                                                           \
-            out[n] = (emm_strategy){__VA_ARGS__};                                              \
+            out[n] = (emm_strategy){__VA_ARGS__, 0};                                            \
         n++;                                                                                   \
     } while (0)
     /* The layouts in the plane, then (with depth) those in space. */
@@ -217,6 +246,30 @@ size_t emm_strategy_sweep_for(int depth, emm_strategy *out, size_t cap)
                 PUT(EMM_STRATEGY_CACHE, (emm_layout_kind)l, EMM_FETCH_NONE, EMM_DEFAULT_CELL);
 #undef PUT
     return n;
+}
+
+size_t emm_strategy_sweep_indexed(int depth, emm_strategy *out, size_t cap)
+{
+    size_t all = emm_strategy_sweep_for(depth, NULL, 0), n = 0;
+    emm_strategy *s = malloc(all * sizeof *s);
+    if (!s)
+        return 0;
+    emm_strategy_sweep_for(depth, s, all);
+    for (size_t i = 0; i < all; i++)
+        if (s[i].kind == EMM_STRATEGY_EMM) {
+            if (n < cap) {
+                out[n] = s[i];
+                out[n].indexed = 1;
+            }
+            n++;
+        }
+    free(s);
+    return n;
+}
+
+int emm_indexed_joins_contest(size_t nv, size_t nt, uint64_t lookup_budget)
+{
+    return 4 * ((uint64_t)nv + (uint64_t)nt) > lookup_budget;
 }
 
 size_t emm_strategy_sweep(emm_strategy *out, size_t cap)
@@ -251,8 +304,10 @@ size_t emm_strategy_words(const emm_strategy *s, char *buf, size_t cap)
         n = snprintf(buf, cap, "the hardware cache on the %s layout of %u triangles per cell",
                      emm_layout_name(s->layout), s->cell);
     else
-        n = snprintf(buf, cap, "layout %s (%s), fetch %s (%s), %u triangles per cell",
+        n = snprintf(buf, cap, "layout %s (%s), fetch %s (%s), %u triangles per cell%s",
                      emm_layout_name(s->layout), layout_words[s->layout],
-                     emm_fetch_name(s->fetch), fetch_words[s->fetch], s->cell);
+                     emm_fetch_name(s->fetch), fetch_words[s->fetch], s->cell,
+                     s->indexed ? ", the program numbered as the layout (no look-up table)"
+                                : "");
     return n < 0 ? 0 : (size_t)n;
 }

@@ -265,7 +265,13 @@ emm_status emm_contest_trace(const char *path, const emm_machine *m, const emm_s
     /* A mesh with depth brings the layouts in space into the sweep. */
     const emm_trace_geometry *g = &emm_trace_reader_info(r)->geometry;
     int depth = emm_geometry_has_depth(g->xyz, g->nv, g->tri, g->nt);
-    count = emm_strategy_sweep_for(depth, NULL, 0);
+    size_t plain = emm_strategy_sweep_for(depth, NULL, 0);
+    /* As the run's contest: the indexed variants join on a mesh whose
+     * look-up tables are paged. */
+    count = plain + (emm_indexed_joins_contest(g->nv, g->nt,
+                                               emm_machine_get(m, "emm.lookup_budget"))
+                         ? emm_strategy_sweep_indexed(depth, NULL, 0)
+                         : 0);
     list = calloc(count + 1, sizeof *list);
     errs = calloc(count + 1, sizeof *errs);
     idx = calloc(count + 1, sizeof *idx);
@@ -278,7 +284,9 @@ emm_status emm_contest_trace(const char *path, const emm_machine *m, const emm_s
     /* The prediction first (kept running to the end, to set against the
      * answer), then every other candidate of the sweep the machine offers. */
     list[n++] = *predicted;
-    emm_strategy_sweep_for(depth, sweep, count);
+    emm_strategy_sweep_for(depth, sweep, plain);
+    if (count > plain)
+        emm_strategy_sweep_indexed(depth, sweep + plain, count - plain);
     for (size_t i = 0; i < count; i++)
         if (emm_machine_offers(m, &sweep[i]) && memcmp(&sweep[i], predicted, sizeof *predicted))
             list[n++] = sweep[i];

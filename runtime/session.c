@@ -48,6 +48,7 @@ emm_status session_engine_new(const emm_session_config *sc, emm_session **out, e
     if (!s)
         return emm_fail(err, EMM_ERR_NOMEM, "session: out of memory");
     s->handle.transport = &engine_transport;
+    s->plain_model = SIZE_MAX; /* until session_decide_answer */
     if (sc->config)
         s->cfg = *sc->config;
     else

@@ -684,7 +684,7 @@ static emm_status choose_on_window(session *s, emm_error *err)
 static bool same_strategy(const emm_strategy *a, const emm_strategy *b)
 {
     return a->kind == b->kind && a->layout == b->layout && a->fetch == b->fetch &&
-           a->cell == b->cell;
+           a->cell == b->cell && a->indexed == b->indexed;
 }
 
 /* Whether the run confirms the choice (docs/profile.md "The contest"): the
@@ -716,7 +716,16 @@ static emm_status build_models(session *s, emm_error *err)
     const emm_trace_geometry *g = &s->info.geometry;
     int depth = emm_geometry_has_depth(g->xyz, g->nv, g->tri, g->nt);
     size_t sweep = emm_strategy_sweep_for(depth, NULL, 0);
-    size_t cap = 4 + (s->cfg.compare == EMM_COMPARE_ALL || racing || checking ? 2 * sweep : 0);
+    /* A mesh whose look-up tables are paged brings the indexed variants
+     * into the contest: the answer may then be to adopt the layout's
+     * numbering. */
+    size_t indexed = (racing || checking) &&
+                             emm_indexed_joins_contest(
+                                 g->nv, g->nt, emm_machine_get(s->machine, "emm.lookup_budget"))
+                         ? emm_strategy_sweep_indexed(depth, NULL, 0)
+                         : 0;
+    size_t cap = 4 + (s->cfg.compare == EMM_COMPARE_ALL || racing || checking ? 2 * sweep : 0) +
+                 indexed;
     emm_strategy *all = calloc(cap, sizeof *all), *list = calloc(cap, sizeof *list);
     emm_error *errs = calloc(cap, sizeof *errs);
     size_t *entrants = calloc(cap, sizeof *entrants);
@@ -735,14 +744,16 @@ static emm_status build_models(session *s, emm_error *err)
     if (s->cfg.compare != EMM_COMPARE_NONE || !s->has_chosen) {
         if (s->has_wd && s->wd.has_runner_up && !racing)
             all[n++] = s->wd.runner_up;
-        all[n++] = (emm_strategy){EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
-        all[n++] = (emm_strategy){EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0};
+        all[n++] = (emm_strategy){EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0, 0};
+        all[n++] = (emm_strategy){EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL, EMM_FETCH_NONE, 0, 0};
     }
     if (s->cfg.compare == EMM_COMPARE_ALL)
         n += emm_strategy_sweep_for(depth, all + n, cap - n);
     shown = n;
     if (racing || checking)
         n += emm_strategy_sweep_for(depth, all + n, cap - n);
+    if (indexed)
+        n += emm_strategy_sweep_indexed(depth, all + n, cap - n);
     for (size_t i = 0; i < n; i++) {
         /* The contest's sweep brings only what the machine offers: a
          * strategy it does not offer (cache@LAYOUT without a cache) is no
@@ -850,6 +861,22 @@ void session_decide_answer(session *s)
         s->runner_model = top[1];
     if (session_overruled(s))
         s->chosen = s->mstrat[s->answer_model];
+    /* An indexed answer: the best ranked strategy that keeps its look-up
+     * table, for the summary's "adopt this numbering" line. */
+    s->plain_model = SIZE_MAX;
+    size_t ans = session_answer_model(s);
+    const contest *c = s->contest ? s->contest : s->window_check ? s->window_rank : NULL;
+    if (c && ans != SIZE_MAX && ans < s->nmodels && s->mstrat[ans].indexed) {
+        size_t *idx = malloc(s->nmodels * sizeof *idx);
+        size_t n = idx ? contest_standing(c, idx, s->nmodels) : 0;
+        for (size_t k = 0; k < n && k < s->nmodels && s->plain_model == SIZE_MAX; k++)
+            if (s->mstrat[idx[k]].kind == EMM_STRATEGY_EMM && !s->mstrat[idx[k]].indexed &&
+                emm_runner_model(s->runner, idx[k])) {
+                s->plain_model = idx[k];
+                s->plain_total = model_cycles(s, idx[k]);
+            }
+        free(idx);
+    }
 }
 
 void session_window_clock(session *s, size_t n)

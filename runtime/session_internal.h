@@ -267,6 +267,12 @@ typedef struct session {
      * lost to direct reads there), not the window's prediction. */
     size_t answer_model, runner_model;
     bool ranked;
+    /* When the answer is an indexed variant (":indexed"): the best of the
+     * ranked candidates that keeps the look-up table (an EMM strategy
+     * without :indexed), whose cycles the summary sets against the
+     * answer's; SIZE_MAX otherwise. Its total, read at finish. */
+    size_t plain_model;
+    uint64_t plain_total;
     size_t nmodels;      /* models added to the runner (built or skipped) */
     emm_strategy *mstrat; /* their strategies, nmodels */
     emm_error *merr;     /* why each could not be built (status != EMM_OK), nmodels */

@@ -256,7 +256,7 @@ static void print_compute(FILE *out, const session *s)
 }
 
 static const emm_strategy direct_strategy = {EMM_STRATEGY_DIRECT, EMM_LAYOUT_ORIGINAL,
-                                             EMM_FETCH_NONE, 0};
+                                             EMM_FETCH_NONE, 0, 0};
 
 /* "decision.window_check" (docs/report.md): a window-only capture's
  * prediction against every candidate and direct reads over the window. */
@@ -572,13 +572,14 @@ static const emm_result *find_result(const emm_result *res, size_t n, const emm_
 {
     for (size_t i = 0; i < n; i++)
         if (res[i].strategy.kind == want->kind && res[i].strategy.layout == want->layout &&
-            res[i].strategy.fetch == want->fetch && res[i].strategy.cell == want->cell)
+            res[i].strategy.fetch == want->fetch && res[i].strategy.cell == want->cell &&
+            res[i].strategy.indexed == want->indexed)
             return &res[i];
     return NULL;
 }
 
 static const emm_strategy cache_strategy = {EMM_STRATEGY_CACHE, EMM_LAYOUT_ORIGINAL,
-                                            EMM_FETCH_NONE, 0};
+                                            EMM_FETCH_NONE, 0, 0};
 
 /* "1.33x faster than" / "1.20x slower than" b, for a against b. */
 static const char *versus(uint64_t a, uint64_t b, char *buf, size_t cap)
@@ -868,6 +869,16 @@ void session_print_summary(const session *s, FILE *out, const emm_result *res, s
                 fprintf(out, "emm:   runner-up %s: %s cycles (%.1f%% %s %s)\n", name,
                         emm_grouped(runner->total, num), fabs(d) * 100,
                         d >= 0 ? "slower" : "faster", span);
+        }
+        /* An indexed answer assumes the program adopts the layout's
+         * numbering: what that saves, against the best that keeps the
+         * look-up table. */
+        if (chosen->strategy.indexed && s->plain_model != SIZE_MAX) {
+            emm_strategy_format(&s->mstrat[s->plain_model], name, sizeof name);
+            fprintf(out,
+                    "emm:   adopt this numbering (emm layout --write) and the look-up cost "
+                    "disappears: %s cycles vs %s (%s, with the look-up table)\n",
+                    emm_grouped(chosen->total, num), emm_grouped(s->plain_total, num2), name);
         }
         /* What the window alone predicted, against the run's answer. */
         const emm_strategy *overruled = session_overruled(s);

@@ -6,8 +6,11 @@
  * element *request*, not per word; a vertex that the triangle just
  * requested names is reached through the triangle's pointer to its copy in
  * the same cell; the look-up tables in the local store while they fit their
- * budget, paged in by DMA beyond it. The costs and every choice are in
- * docs/fetch.md.
+ * budget, paged in by DMA beyond it. The indexed variant (":indexed", the
+ * program renumbered by the layout) has no per-element table: a renumbered
+ * id's cell is its own cell when it falls in the cell of the previous
+ * access, else a binary search of the per-cell table. The costs and every
+ * choice are in docs/fetch.md and docs/layouts.md.
  *
  * The model keeps a clock: the core's time advances by every charge, DMA
  * transfers run on the engine's channels meanwhile (simulator/dma.c), and
@@ -48,12 +51,13 @@ enum { CELL_PRESENT = 1u, CELL_PREFETCHED = 2u, CELL_USELESS = 4u };
 
 /* The look-up tables in remote memory, when they are paged: the triangle
  * and vertex id tables (4 bytes an entry), then the cell table (8 bytes a
- * cell), then the rest (quadtree nodes). A frame holds one page; the frames
- * are kept least-recently-used. */
+ * cell), then the rest (quadtree nodes); for the indexed variant, the
+ * per-cell table alone (EMM_INDEXED_CELL_BYTES a cell). A frame holds one
+ * page; the frames are kept least-recently-used. */
 typedef struct pager {
     uint64_t page;                  /* bytes per page */
     uint32_t frames, used;
-    uint64_t tri_off, vert_off, cell_off;
+    uint64_t tri_off, vert_off, cell_off, cell_entry;
     uint32_t npages;
     uint32_t *page_frame;           /* npages: the frame holding the page, or NONE */
     uint32_t *frame_page;           /* frames */
@@ -92,6 +96,8 @@ struct fetch_model {
     bool filter;              /* emm.prefetch_filter */
     uint64_t budget, lookup_bytes;
     bool paged;
+    bool indexed;             /* the ":indexed" variant */
+    uint64_t search;          /* indexed: emm.quadtree_level x the binary search's steps */
     pager pg;
 
     /* The run. */
@@ -287,6 +293,15 @@ static void lookup(fetch_model *m, int kind, uint64_t e, uint32_t c)
 {
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->find[c] + m->residency);
     m->lookups++;
+    if (m->indexed) {
+        /* The renumbered id against the previous access's cell, one
+         * compare; outside it, a binary search of the cells' starts. */
+        if (c != m->cur)
+            charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->search);
+        if (m->paged)
+            touch_table(m, m->pg.cell_off + m->pg.cell_entry * (uint64_t)c);
+        return;
+    }
     if (m->paged) {
         touch_table(m, (kind == ARR_TRIANGLES ? m->pg.tri_off : m->pg.vert_off) + 4 * e);
         touch_table(m, m->pg.cell_off + 8 * (uint64_t)c);
@@ -339,7 +354,7 @@ void emm_fetcher_prefetch(fetch_model *m, uint32_t c, uint32_t entered)
 {
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->find[c]);
     if (m->paged)
-        touch_table(m, m->pg.cell_off + 8 * (uint64_t)c);
+        touch_table(m, m->pg.cell_off + m->pg.cell_entry * (uint64_t)c);
     if (m->cells[c].ntri == 0)
         return;
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->residency);
@@ -637,7 +652,8 @@ static emm_status plan_local_store(fetch_model *m, const emm_machine_params *p,
 {
     char name[64], where[200], b1[32], b2[32];
     emm_strategy_format(s, name, sizeof name);
-    m->lookup_bytes = emm_layout_lookup_bytes(m->layout);
+    m->lookup_bytes = m->indexed ? (uint64_t)EMM_INDEXED_CELL_BYTES * m->ncells
+                                 : emm_layout_lookup_bytes(m->layout);
     uint64_t tables = m->lookup_bytes;
     /* The tables' budget, and never more than half the local store: the
      * cells need the rest. */
@@ -693,8 +709,9 @@ static emm_status alloc_pager(fetch_model *m, const char *name, emm_error *err)
     pager *g = &m->pg;
     const emm_layout *l = m->layout;
     g->tri_off = 0;
-    g->vert_off = 4 * (uint64_t)l->nt;
-    g->cell_off = g->vert_off + 4 * (uint64_t)l->nv;
+    g->vert_off = m->indexed ? 0 : 4 * (uint64_t)l->nt;
+    g->cell_off = m->indexed ? 0 : g->vert_off + 4 * (uint64_t)l->nv;
+    g->cell_entry = m->indexed ? EMM_INDEXED_CELL_BYTES : 8;
     uint64_t npages = (m->lookup_bytes + g->page - 1) / g->page;
     if (npages > UINT32_MAX - 1)
         return emm_fail(err, EMM_ERR_RANGE, "%s: %llu pages of look-up tables are too many",
@@ -786,6 +803,7 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
     m->vcopy_start = l->vcopy_start;
     m->vcopy = l->vcopy;
     m->cells = l->cells;
+    m->indexed = s->indexed != 0;
     if ((st = plan_local_store(m, p, s, trace, &o, err)) != EMM_OK)
         goto fail;
     if (m->paged && (st = alloc_pager(m, name, err)) != EMM_OK)
@@ -802,8 +820,16 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
         goto fail;
     }
     m->residency = p->emm_residency;
+    /* The indexed variant finds a cell from the id, not by descending the
+     * tree: its steps are the binary search's, and only outside the cell of
+     * the previous access (lookup()). */
     for (uint32_t c = 0; c < nc; c++)
-        m->find[c] = p->emm_lookup + p->emm_quadtree_level * m->cells[c].depth;
+        m->find[c] =
+            p->emm_lookup + (m->indexed ? 0 : p->emm_quadtree_level * m->cells[c].depth);
+    uint32_t steps = 0;
+    while (steps < 32 && (1ull << steps) < nc)
+        steps++;
+    m->search = (uint64_t)p->emm_quadtree_level * steps;
     m->issue_instr = p->emm_dma_issue_instr;
     m->local_cycles = p->local_cycles;
     m->compute_per_access = p->compute_per_access;

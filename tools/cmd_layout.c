@@ -1,10 +1,13 @@
 /* emm layout: build a strategy's layout (thesis §4.1) over a mesh file and
  * draw its cells over the mesh as an SVG (the pictures of thesis Figs. 4.2,
- * 4.5 and 4.6) or print its cell statistics. */
+ * 4.5 and 4.6), print its cell statistics, or write the mesh renumbered in
+ * the layout's order (the numbering the ":indexed" strategies assume). */
 #include <errno.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -22,6 +25,7 @@ static void usage(FILE *out, const opts *o)
     fprintf(out,
             "usage: emm layout MESH --strategy S [--svg FILE] [--stats] [--local BYTES]\n"
             "                  [--vertex-bytes N] [--triangle-bytes N]\n"
+            "                  [--write OUT [--perm FILE]]\n"
             "\n"
             "Builds the layout of strategy S (grid, tiles or quadtree in the plane, thesis\n"
             "4.1; grid3d, tiles3d or octree in space) over a mesh file and draws or\n"
@@ -36,7 +40,18 @@ static void usage(FILE *out, const opts *o)
             "bounding box is largest; one in space over x, y and z. The SVG of a layout\n"
             "in space is a projection onto its first two axes (the third is seen\n"
             "end-on): triangles coloured by cell, the cells' boxes outlined, so boxes one\n"
-            "behind the other overlap. docs/layouts.md explains the layouts.\n",
+            "behind the other overlap. docs/layouts.md explains the layouts.\n"
+            "\n"
+            "--write renumbers the mesh in the layout's order: the triangles cell by cell,\n"
+            "each cell's in ascending original id; each used vertex in the first cell\n"
+            "that uses it, in the order of first use there; unused vertices last, in\n"
+            "their original order. A program that reads the written mesh finds each\n"
+            "cell's triangles and vertices contiguous, so an element's cell follows from\n"
+            "its id through a table with an entry per cell: what the S:indexed strategies\n"
+            "simulate (docs/layouts.md, \"The indexed variant\"). --perm writes the\n"
+            "permutation as text: a line 'vertices N', then N lines 'NEW OLD' in\n"
+            "ascending NEW, then 'triangles M' and M such lines (ids from 0; OLD is the\n"
+            "id in MESH, counting a polygon's fan triangles in order).\n",
             EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES);
 }
 
@@ -235,6 +250,124 @@ static int write_svg(const char *out, const emm_layout *l, const double *xyz, co
     return EMM_EXIT_OK;
 }
 
+/* ---- --write: the mesh in the layout's order ------------------------------------------- */
+
+/* The permutations: new_of_v[old] and old_of_t[new] / old_of_v[new]. */
+typedef struct renumbering {
+    uint32_t *old_of_v, *new_of_v, *old_of_t;
+    size_t nv, nt;
+} renumbering;
+
+static void renumbering_free(renumbering *r)
+{
+    free(r->old_of_v);
+    free(r->new_of_v);
+    free(r->old_of_t);
+}
+
+static int renumber(const emm_layout *l, size_t nv, size_t nt, renumbering *r)
+{
+    r->nv = nv;
+    r->nt = nt;
+    r->old_of_v = malloc((nv ? nv : 1) * sizeof *r->old_of_v);
+    r->new_of_v = malloc((nv ? nv : 1) * sizeof *r->new_of_v);
+    r->old_of_t = malloc((nt ? nt : 1) * sizeof *r->old_of_t);
+    if (!r->old_of_v || !r->new_of_v || !r->old_of_t)
+        return -1;
+    for (size_t v = 0; v < nv; v++)
+        r->new_of_v[v] = UINT32_MAX;
+    size_t kv = 0, kt = 0;
+    for (uint32_t c = 0; c < emm_layout_cell_count(l); c++) {
+        const uint32_t *tris, *verts;
+        uint32_t n = emm_layout_cell_triangles(l, c, &tris);
+        for (uint32_t i = 0; i < n; i++)
+            r->old_of_t[kt++] = tris[i];
+        n = emm_layout_cell_vertices(l, c, &verts);
+        for (uint32_t i = 0; i < n; i++)
+            if (r->new_of_v[verts[i]] == UINT32_MAX) { /* its home: the first cell */
+                r->new_of_v[verts[i]] = (uint32_t)kv;
+                r->old_of_v[kv++] = verts[i];
+            }
+    }
+    for (size_t v = 0; v < nv; v++)
+        if (r->new_of_v[v] == UINT32_MAX) {
+            r->new_of_v[v] = (uint32_t)kv;
+            r->old_of_v[kv++] = (uint32_t)v;
+        }
+    return kv == nv && kt == nt ? 0 : -1;
+}
+
+static int write_perm(const char *path, const renumbering *r)
+{
+    emm_error err;
+    emm_outfile o;
+    if (emm_outfile_open(&o, path, "the permutation", &err) != EMM_OK)
+        return cli_fail(&err);
+    fprintf(o.f, "vertices %zu\n", r->nv);
+    for (size_t i = 0; i < r->nv; i++)
+        fprintf(o.f, "%zu %u\n", i, r->old_of_v[i]);
+    fprintf(o.f, "triangles %zu\n", r->nt);
+    for (size_t i = 0; i < r->nt; i++)
+        fprintf(o.f, "%zu %u\n", i, r->old_of_t[i]);
+    if (emm_outfile_commit(&o, "the permutation", &err) != EMM_OK)
+        return cli_fail(&err);
+    return EMM_EXIT_OK;
+}
+
+/* Whether `path` ends in .obj (1), .off (0) or neither (-1). */
+static int mesh_format(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    if (!dot || strchr(dot, '/'))
+        return -1;
+    return strcasecmp(dot, ".obj") == 0 ? 1 : strcasecmp(dot, ".off") == 0 ? 0 : -1;
+}
+
+static int write_renumbered(const char *out, const char *perm, const emm_layout *l,
+                            const double *xyz, size_t nv, const int32_t *tri, size_t nt,
+                            const emm_strategy *s)
+{
+    emm_error err;
+    renumbering r = {0};
+    double *nxyz = malloc((nv ? nv : 1) * 3 * sizeof *nxyz);
+    int32_t *ntri = malloc((nt ? nt : 1) * 3 * sizeof *ntri);
+    int rc = EMM_EXIT_OK;
+    emm_mesh *m = NULL;
+    if (!nxyz || !ntri || renumber(l, nv, nt, &r) != 0) {
+        cli_error("%s: out of memory for the renumbered mesh", out);
+        rc = EMM_EXIT_FAIL;
+        goto out;
+    }
+    for (size_t i = 0; i < nv; i++)
+        memcpy(nxyz + 3 * i, xyz + 3 * (size_t)r.old_of_v[i], 3 * sizeof *nxyz);
+    for (size_t i = 0; i < nt; i++)
+        for (int k = 0; k < 3; k++)
+            ntri[3 * i + k] = (int32_t)r.new_of_v[tri[3 * (size_t)r.old_of_t[i] + k]];
+    emm_status st = emm_mesh_from_arrays(nxyz, nv, ntri, nt, out, &m, &err);
+    if (st == EMM_OK)
+        st = mesh_format(out) == 1 ? emm_mesh_write_obj(m, out, &err)
+                                   : emm_mesh_write_off(m, out, &err);
+    if (st != EMM_OK) {
+        rc = cli_fail(&err);
+        goto out;
+    }
+    if (perm && (rc = write_perm(perm, &r)) != EMM_EXIT_OK)
+        goto out;
+    char name[64];
+    emm_strategy_format(s, name, sizeof name);
+    printf("wrote %s: %zu vertices and %zu triangles in the order of %s's %u cells\n", out, nv,
+           nt, name, emm_layout_cell_count(l));
+    if (perm)
+        printf("wrote %s: the permutation, 'NEW OLD' per line (vertices, then triangles)\n",
+               perm);
+out:
+    emm_mesh_free(m);
+    renumbering_free(&r);
+    free(nxyz);
+    free(ntri);
+    return rc;
+}
+
 /* --help's default CELL. */
 #define DEFAULT_CELL_TEXT "64"
 _Static_assert(EMM_DEFAULT_CELL == 64u, "DEFAULT_CELL_TEXT is EMM_DEFAULT_CELL");
@@ -243,7 +376,8 @@ _Static_assert(EMM_DEFAULT_CELL == 64u, "DEFAULT_CELL_TEXT is EMM_DEFAULT_CELL")
 #define LOCAL_UNSET UINT64_MAX
 
 static int layout(const char *mesh_path, const char *strategy, const char *svg, int stats,
-                  uint64_t local, uint64_t vbytes, uint64_t tbytes)
+                  uint64_t local, uint64_t vbytes, uint64_t tbytes, const char *write,
+                  const char *perm)
 {
     const char *cmd = "layout";
     emm_strategy s;
@@ -254,7 +388,12 @@ static int layout(const char *mesh_path, const char *strategy, const char *svg, 
                                "strategy '%s' keeps the original layout; give "
                                "LAYOUT+FETCH[@CELL] or cache@LAYOUT",
                                strategy);
-    if (!svg)
+    if (perm && !write)
+        return cli_usage_error(cmd, "--perm %s goes with --write", perm);
+    if (write && mesh_format(write) < 0)
+        return cli_usage_error(cmd, "--write %s: the file must end in .off (OFF) or .obj (OBJ)",
+                               write);
+    if (!svg && !write)
         stats = 1;
     /* Only an EMM strategy moves whole cells into the local store. */
     if (local == LOCAL_UNSET && s.kind == EMM_STRATEGY_EMM) {
@@ -289,6 +428,9 @@ static int layout(const char *mesh_path, const char *strategy, const char *svg, 
     int rc = EMM_EXIT_OK;
     if (svg)
         rc = write_svg(svg, l, xyz, tri, mesh_path, &s);
+    if (rc == EMM_EXIT_OK && write)
+        rc = write_renumbered(write, perm, l, xyz, emm_mesh_vertex_count(mesh), tri,
+                              emm_mesh_triangle_count(mesh), &s);
     if (rc == EMM_EXIT_OK && stats)
         print_stats(l, mesh_path, &s);
     emm_layout_free(l);
@@ -298,15 +440,15 @@ static int layout(const char *mesh_path, const char *strategy, const char *svg, 
 
 int emm_cmd_layout(int argc, char **argv)
 {
-    const char *mesh_path = NULL, *strategy = NULL, *svg = NULL;
+    const char *mesh_path = NULL, *strategy = NULL, *svg = NULL, *write = NULL, *perm = NULL;
     int stats = 0;
     uint64_t local = LOCAL_UNSET, vbytes = EMM_THESIS_VERTEX_BYTES;
     uint64_t tbytes = EMM_THESIS_TRIANGLE_BYTES;
     opts_row rows[] = {
         {.name = "--strategy", .alias = "-s", .metavar = "S", .kind = OPT_STRATEGY,
          .dst = &strategy, .required = true,
-         .help = "LAYOUT+FETCH[@CELL] or cache@LAYOUT, e.g. tiles+convolution@64; CELL is "
-                 "triangles per cell (default " DEFAULT_CELL_TEXT ")"},
+         .help = "LAYOUT+FETCH[@CELL][:indexed] or cache@LAYOUT, e.g. tiles+convolution@64; "
+                 "CELL is triangles per cell (default " DEFAULT_CELL_TEXT ")"},
         {.name = "--svg", .metavar = "FILE", .kind = OPT_TEXT, .dst = &svg,
          .help = "draw the mesh, each cell's triangles in its own colour and the cell "
                  "boundaries in bold (y up; a layout in space projected along its third "
@@ -315,6 +457,12 @@ int emm_cmd_layout(int argc, char **argv)
          .help = "print cells, triangles and bytes per cell (min, median, max), duplicated "
                  "vertices, look-up bytes, quadtree or octree depths; the default when --svg is "
                  "not given"},
+        {.name = "--write", .metavar = "OUT", .kind = OPT_TEXT, .dst = &write,
+         .help = "write the mesh renumbered in the layout's cell order, OFF or OBJ by OUT's "
+                 "extension (.off, .obj), whole or not at all; see below"},
+        {.name = "--perm", .metavar = "FILE", .kind = OPT_TEXT, .dst = &perm,
+         .help = "with --write: also write the permutation, 'NEW OLD' per line, vertices then "
+                 "triangles (see below)"},
         {.name = "--local", .metavar = "BYTES", .kind = OPT_SIZE, .dst = &local,
          .help = "local store size (K, M, G allowed): a cell larger than it is an error for an "
                  "EMM strategy (default: the machine's, 256K; 0 = no check)"},
@@ -330,5 +478,5 @@ int emm_cmd_layout(int argc, char **argv)
     int rc;
     if (opts_parse(&o, argc, argv, &rc))
         return rc;
-    return layout(mesh_path, strategy, svg, stats, local, vbytes, tbytes);
+    return layout(mesh_path, strategy, svg, stats, local, vbytes, tbytes, write, perm);
 }

@@ -276,7 +276,8 @@ static const plot_result *find(const plot_report *rep, const char *name)
         return NULL;
     for (size_t i = 0; i < rep->n; i++)
         if (rep->r[i].ran && rep->r[i].s.kind == s.kind && rep->r[i].s.layout == s.layout &&
-            rep->r[i].s.fetch == s.fetch && rep->r[i].s.cell == s.cell)
+            rep->r[i].s.fetch == s.fetch && rep->r[i].s.cell == s.cell &&
+            rep->r[i].s.indexed == s.indexed)
             return &rep->r[i];
     return NULL;
 }
@@ -699,7 +700,8 @@ static emm_status fig_breakdown(plot_ctx *c, const plot_report *rep, int *made_c
                 for (size_t i = 0; i < rep->n; i++) {
                     const plot_result *r = &rep->r[i];
                     if (r->ran && r->s.kind == EMM_STRATEGY_EMM && (int)r->s.layout == l &&
-                        (int)r->s.fetch == k && r->s.cell == best->s.cell)
+                        (int)r->s.fetch == k && r->s.cell == best->s.cell &&
+                        r->s.indexed == best->s.indexed)
                         label_bar(&bars[n++], r, r == best ? " (best)" : NULL);
                 }
         snprintf(title, sizeof title, "%s: EMM layouts and fetch schemes, %u triangles per cell",
@@ -763,7 +765,8 @@ static emm_status fig_transfer(plot_ctx *c, const plot_report *rep, int *made, e
             size_t cnt = 0;
             for (size_t i = 0; i < rep->n; i++)
                 cnt += rep->r[i].ran && rep->r[i].s.kind == EMM_STRATEGY_EMM &&
-                       (int)rep->r[i].s.layout == l + 1 && (int)rep->r[i].s.fetch == k + 1;
+                       (int)rep->r[i].s.layout == l + 1 && (int)rep->r[i].s.fetch == k + 1 &&
+                       !rep->r[i].s.indexed;
             *made |= cnt >= 2;
         }
     if (!*made)
@@ -782,7 +785,8 @@ static emm_status fig_transfer(plot_ctx *c, const plot_report *rep, int *made, e
                 for (size_t i = 0; i < rep->n; i++) {
                     const plot_result *r = &rep->r[i];
                     if (r->ran && r->s.kind == EMM_STRATEGY_EMM && r->s.layout == L &&
-                        r->s.fetch == F && r->s.cell > last && (!next || r->s.cell < next->s.cell))
+                        r->s.fetch == F && !r->s.indexed && r->s.cell > last &&
+                        (!next || r->s.cell < next->s.cell))
                         next = r;
                 }
                 if (!next)

@@ -23,7 +23,7 @@ static void usage(FILE *out, const opts *o)
             "usage: emm replay TRACE [--strategy S]... [--json FILE] [--timeline FILE]\n"
             "                  [--machine FILE] [--set KEY=VALUE]... [--jobs N]\n"
             "                  [--memory BYTES] [--quiet]\n"
-            "       emm replay TRACE --all [--json FILE] [--jobs N] ...\n"
+            "       emm replay TRACE --all [--indexed] [--json FILE] [--jobs N] ...\n"
             "\n"
             "Simulates the accesses recorded in TRACE on the machine model, once per\n"
             "strategy, in one pass over the file, and prints a table: total cycles, seconds\n"
@@ -40,7 +40,10 @@ static void usage(FILE *out, const opts *o)
             "speed-up over direct and over cache, and the largest buckets. A\n"
             "strategy that cannot run on this trace (a cell larger than the local store, a\n"
             "trace without geometry) is listed as skipped with the reason, and the sweep\n"
-            "goes on.\n"
+            "goes on. With --indexed, the indexed variant of each of its EMM strategies\n"
+            "(LAYOUT+FETCH@CELL:indexed: as if the program used the layout's numbering,\n"
+            "which emm layout --write gives it, so no per-element look-up table) joins\n"
+            "the sweep after it; the standard sweep itself stays as it is.\n"
             "\n",
             sweep, EMM_DEPTH_RATIO, emm_strategy_sweep_for(1, NULL, 0));
     opts_help(out, o);
@@ -55,7 +58,7 @@ struct replay_args {
     machine_cli mc;
     opts_list strategies; /* checked strategy strings */
     const char *trace, *json, *timeline;
-    int quiet, all;
+    int quiet, all, indexed;
     uint64_t jobs, memory;
 };
 
@@ -274,8 +277,14 @@ static int replay_main(struct replay_args *a, emm_strategy *strategies, emm_resu
 
     if (all && a->strategies.n > 0)
         return cli_usage_error("replay", "--all and --strategy do not go together");
+    if (a->indexed && !all)
+        return cli_usage_error("replay", "--indexed goes with --all");
     if (all) {
-        nstrategies = emm_strategy_sweep_for(trace_depth(trace), strategies, cap);
+        int depth = trace_depth(trace);
+        nstrategies = emm_strategy_sweep_for(depth, strategies, cap);
+        if (a->indexed)
+            nstrategies += emm_strategy_sweep_indexed(depth, strategies + nstrategies,
+                                                      cap - nstrategies);
     } else if (a->strategies.n == 0) {
         emm_strategy_parse("direct", &strategies[nstrategies++], NULL);
         emm_strategy_parse("cache", &strategies[nstrategies++], NULL);
@@ -341,7 +350,8 @@ static int replay(void *p)
     struct replay_args *a = p;
     /* One strategy per --strategy, or the sweep (with room for the layouts
      * in space). */
-    size_t cap = a->strategies.n + emm_strategy_sweep_for(1, NULL, 0);
+    size_t cap = a->strategies.n + emm_strategy_sweep_for(1, NULL, 0) +
+                 emm_strategy_sweep_indexed(1, NULL, 0);
     emm_strategy *strategies = calloc(cap, sizeof *strategies);
     emm_result *results = calloc(cap, sizeof *results);
     emm_error *skipped = calloc(cap, sizeof *skipped);
@@ -367,11 +377,15 @@ int emm_cmd_replay(int argc, char **argv)
          .help = "direct (word-by-word remote reads), cache (the hardware cache on the original "
                  "addresses), cache@LAYOUT (the cache on the addresses of a reordered layout: "
                  "grid, tiles, quadtree, grid3d, tiles3d, octree) or LAYOUT+FETCH[@CELL] (an "
-                 "EMM strategy); may be "
+                 "EMM strategy), with :indexed after it for the program renumbered by the layout "
+                 "(emm layout --write); may be "
                  "repeated; default: direct and cache"},
         {.name = "--all", .kind = OPT_FLAG, .dst = &a.all,
          .help = "the standard sweep, with the layouts in space for a mesh with depth (not "
                  "with --strategy)"},
+        {.name = "--indexed", .kind = OPT_FLAG, .dst = &a.indexed,
+         .help = "with --all: the indexed variant (:indexed) of each EMM strategy of the sweep "
+                 "joins it"},
         {.name = "--jobs", .alias = "-j", .metavar = "N", .kind = OPT_U64, .dst = &a.jobs,
          .min = 1, .max = MAX_JOBS,
          .help = "threads simulating strategies (default: the online CPUs, at most one per "

@@ -3,7 +3,10 @@
  *
  *   direct                      word-by-word remote reads
  *   cache[@LAYOUT]              the hardware cache, on the original or a reordered layout
- *   LAYOUT+FETCH[@CELL]         an EMM strategy, CELL = triangles per cell
+ *   LAYOUT+FETCH[@CELL][:indexed]
+ *                               an EMM strategy, CELL = triangles per cell;
+ *                               :indexed, as if the program used the layout's
+ *                               numbering (no per-element look-up table)
  *   LAYOUT = grid | tiles | quadtree            (in the plane)
  *          | grid3d | tiles3d | octree          (in space, for a mesh with depth)
  *   FETCH = naive | convolution | extrapolated
@@ -78,7 +81,18 @@ typedef struct emm_strategy {
     emm_layout_kind layout; /* ORIGINAL for direct and plain cache */
     emm_fetch_kind fetch;   /* NONE unless kind == EMM_STRATEGY_EMM */
     uint32_t cell;          /* triangles per cell; 0 for direct and plain cache */
+    uint32_t indexed;       /* EMM only, 1: the ":indexed" variant — the program adopts the
+                               layout's numbering (emm layout --write), so the per-element
+                               look-up table gives way to a per-cell table (docs/layouts.md,
+                               "The indexed variant"); 0 otherwise */
 } emm_strategy;
+
+/* The suffix of an indexed variant, and its bytes per cell in the local
+ * store: the cell's first renumbered triangle and vertex (4 bytes each) and
+ * the cell's place and residency (8), the table a renumbered id's cell is
+ * found in. */
+#define EMM_INDEXED_SUFFIX ":indexed"
+#define EMM_INDEXED_CELL_BYTES 16u
 
 /* Parses a strategy string. On failure err names the string, the bad part
  * and the accepted values. */
@@ -102,6 +116,17 @@ EMM_API const char *emm_fetch_name(emm_fetch_kind k);
  * cache@ each of those layouts. Fills up to cap entries (out may be NULL
  * when cap is 0) and returns the sweep's full length. */
 EMM_API size_t emm_strategy_sweep(emm_strategy *out, size_t cap);
+/* The indexed variant of every EMM strategy of emm_strategy_sweep_for(depth),
+ * in the sweep's order (`emm replay --all --indexed`, and the run's contest
+ * on a mesh whose look-up tables do not fit emm.lookup_budget). Returns
+ * their count, filling up to cap. */
+EMM_API size_t emm_strategy_sweep_indexed(int depth, emm_strategy *out, size_t cap);
+/* Whether the indexed variants join the run's contest (and emm profile's)
+ * on a mesh of nv vertices and nt triangles: when its per-element look-up
+ * tables, 4 bytes a vertex and a triangle, exceed emm.lookup_budget
+ * (`lookup_budget`), so that they are paged and renumbering saves their
+ * pages. A smaller mesh keeps the contest of the standard sweep. */
+EMM_API int emm_indexed_joins_contest(size_t nv, size_t nt, uint64_t lookup_budget);
 /* The sweep for a mesh: with `depth` zero the standard sweep, exactly;
  * nonzero, the layouts in space join it (each after those in the plane, in
  * both the EMM strategies and the cache@ ones). */

@@ -170,7 +170,7 @@ static void against_reference(void)
         REQUIRE(emm_machine_set(m, "cache.bytes=8K", &err) == EMM_OK);
         for (int k = 0; k < 3; k++)
             for (int c = 0; c < 2; c++) {
-                emm_strategy s = {EMM_STRATEGY_CACHE, kinds[k], EMM_FETCH_NONE, cells[c]};
+                emm_strategy s = {EMM_STRATEGY_CACHE, kinds[k], EMM_FETCH_NONE, cells[c], 0};
                 emm_model *model;
                 emm_result got, want;
                 char name[64];

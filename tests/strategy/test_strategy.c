@@ -49,6 +49,37 @@ int main(void)
     round_trip("quadtree+extrapolated", EMM_STRATEGY_EMM, EMM_LAYOUT_QUADTREE,
                EMM_FETCH_EXTRAPOLATED, EMM_DEFAULT_CELL, "quadtree+extrapolated@64");
 
+    /* The indexed variant of an EMM strategy, with or without its cell. */
+    round_trip("tiles+extrapolated@32:indexed", EMM_STRATEGY_EMM, EMM_LAYOUT_TILES,
+               EMM_FETCH_EXTRAPOLATED, 32, "tiles+extrapolated@32:indexed");
+    round_trip("octree+naive:indexed", EMM_STRATEGY_EMM, EMM_LAYOUT_OCTREE, EMM_FETCH_NAIVE,
+               EMM_DEFAULT_CELL, "octree+naive@64:indexed");
+    {
+        emm_strategy x, y;
+        CHECK(emm_strategy_parse("grid+naive@16:indexed", &x, NULL) == EMM_OK && x.indexed == 1);
+        CHECK(emm_strategy_parse("grid+naive@16", &y, NULL) == EMM_OK && y.indexed == 0);
+    }
+    refused("grid+naive@16:sorted", "':sorted'");
+    refused("grid+naive@16:indexed:indexed", "unknown variant");
+    refused("direct:indexed", "applies to an EMM strategy");
+    refused("cache@tiles:indexed", "applies to an EMM strategy");
+    refused("grid+magic:indexed", "'magic'");
+    {
+        /* One indexed variant per EMM strategy of the sweep, in its order. */
+        emm_strategy all[512], ix[512];
+        size_t n = emm_strategy_sweep_for(1, all, 512), k = emm_strategy_sweep_indexed(1, ix, 512);
+        size_t j = 0;
+        for (size_t i = 0; i < n; i++)
+            if (all[i].kind == EMM_STRATEGY_EMM) {
+                CHECK(j < k && ix[j].indexed == 1 && ix[j].layout == all[i].layout &&
+                      ix[j].fetch == all[i].fetch && ix[j].cell == all[i].cell);
+                j++;
+            } else {
+                CHECK(all[i].indexed == 0);
+            }
+        CHECKF(j == k && k > 0, "%zu indexed of %zu EMM strategies", k, j);
+    }
+
     refused("", "empty");
     refused("cahce", "cahce");
     refused("cache@hex", "'hex'");
