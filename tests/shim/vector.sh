@@ -4,7 +4,7 @@
 EMM_TAG='vertices:site=build_mesh,stride=80,xyz=8:f64'; EMM_LOG=2; export EMM_TAG EMM_LOG
 run_both vector "$@"
 expect_err vector 'at exit: 1 arrays tagged'
-expect_err vector 'at exit: vertices at 0x[0-9a-f]+, 32768 records of 80 bytes'
+expect_err vector 'at exit: vertices at 0x[0-9a-f]+, 2048 records of 80 bytes'
 n=$(grep -c 'tagged vertices' "$WORK/vector.shim.err")
 [ "$n" -gt 1 ] || fail "expected the growing vector to be tagged several times, got $n"
 echo "vector: ok ($n buffers tagged on the way)"
