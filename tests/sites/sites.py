@@ -95,6 +95,7 @@ programs = [  # name, argv, stdin
     ("qdelaunay", ["qdelaunay", "Qt", "i"], "q.in"),
     ("tetgen", ["tetgen", "-Q", "p.node"], None),
     ("OpenMesh-Smoothing", ["OpenMesh-Smoothing", "1", "m.obj", "sm.obj"], None),
+    ("OpenMesh-mconvert", ["OpenMesh-mconvert", "-i", "m.off", "-o", "mc.obj"], None),
     ("python3-meshio", ["/usr/bin/python3", "np.py", "m.off"], None),
 ]
 present = []
