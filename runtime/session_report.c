@@ -680,19 +680,58 @@ static const char *no_reads_why(const session *s, char *buf, size_t cap)
 }
 
 /* "the mesh: 50,225 vertices (12-byte records) and 100,000 triangles
- * (12-byte records)": the arrays simulated, by kind. */
+ * (12-byte records)": the arrays simulated, by kind. More than two of a
+ * kind (a growing vector's buffers, each read in the window) are counted,
+ * with the largest: "8 vertex arrays (80-byte records, the largest 5,000)". */
 static void print_mesh_arrays(const session *s, FILE *out)
 {
     char line[512] = "", num[32];
-    for (uint32_t a = 0; a < s->ntarrays; a++) {
-        const emm_trace_array *t = &s->tarrays[a];
-        size_t used = strlen(line);
-        snprintf(line + used, sizeof line - used, "%s%s %s (%u-byte records)",
-                 a == 0 ? "" : a + 1 == s->ntarrays ? " and " : ", ", emm_grouped(t->count, num),
-                 t->kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles", t->record_size);
+    const char *part[2];
+    char text[2][160];
+    int nparts = 0;
+    for (int kind = 0; kind < 2; kind++) {
+        emm_array_kind k = kind == 0 ? EMM_ARRAY_VERTICES : EMM_ARRAY_TRIANGLES;
+        uint32_t n = 0, largest = 0, rec = 0;
+        bool same = true;
+        for (uint32_t a = 0; a < s->ntarrays; a++) {
+            const emm_trace_array *t = &s->tarrays[a];
+            if (t->kind != k)
+                continue;
+            same = same && (n == 0 || t->record_size == rec);
+            rec = t->record_size;
+            if (n++ == 0 || t->count > s->tarrays[largest].count)
+                largest = a;
+        }
+        if (n == 0)
+            continue;
+        const char *what = k == EMM_ARRAY_VERTICES ? "vertices" : "triangles";
+        if (n <= 2) { /* each, as many arrays are few */
+            size_t used = 0;
+            text[nparts][0] = '\0';
+            for (uint32_t a = 0; a < s->ntarrays; a++) {
+                const emm_trace_array *t = &s->tarrays[a];
+                if (t->kind == k && used < sizeof text[0])
+                    used += (size_t)snprintf(text[nparts] + used, sizeof text[0] - used,
+                                             "%s%s %s (%u-byte records)", used ? " and " : "",
+                                             emm_grouped(t->count, num), what, t->record_size);
+            }
+        } else if (same) {
+            snprintf(text[nparts], sizeof text[0], "%u %s arrays (%u-byte records, the largest %s)",
+                     n, k == EMM_ARRAY_VERTICES ? "vertex" : "triangle", rec,
+                     emm_grouped(s->tarrays[largest].count, num));
+        } else {
+            snprintf(text[nparts], sizeof text[0], "%u %s arrays (the largest %s)", n,
+                     k == EMM_ARRAY_VERTICES ? "vertex" : "triangle",
+                     emm_grouped(s->tarrays[largest].count, num));
+        }
+        part[nparts] = text[nparts];
+        nparts++;
     }
-    if (s->ntarrays)
-        fprintf(out, "emm:   simulated arrays: %s\n", line);
+    if (nparts == 0)
+        return;
+    snprintf(line, sizeof line, "%s%s%s", part[0], nparts > 1 ? " and " : "",
+             nparts > 1 ? part[1] : "");
+    fprintf(out, "emm:   simulated arrays: %s\n", line);
 }
 
 /* What the window was: short of its length, waiting for an array, a

@@ -7,4 +7,7 @@ expect_err vector 'at exit: 1 arrays tagged'
 expect_err vector 'at exit: vertices at 0x[0-9a-f]+, 2048 records of 80 bytes'
 n=$(grep -c 'tagged vertices' "$WORK/vector.shim.err")
 [ "$n" -gt 1 ] || fail "expected the growing vector to be tagged several times, got $n"
+# The buffers read in the window are simulated, and counted in one line.
+grep -Eq '^emm:   simulated arrays: [0-9]+ vertex arrays \(80-byte records, the largest 2,000\)$' "$WORK/vector.shim.err" ||
+  fail "the summary does not count the vector's buffers in one line"
 echo "vector: ok ($n buffers tagged on the way)"
