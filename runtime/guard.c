@@ -12,6 +12,7 @@
 #include "emm/guard.h"
 
 #include <pthread.h>
+#include <sched.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
@@ -249,12 +250,17 @@ emm_guard_region *emm_guard_find(emm_guard *g, uintptr_t a, int *in_array)
 
 int emm_guard_retry(const emm_guard *g, uintptr_t a, uintptr_t *retried)
 {
-    if (*retried == a)
-        return 0;
+    if (retried[0] == a) {
+        if (retried[1]++ >= EMM_GUARD_RETRIES)
+            return 0;
+        sched_yield(); /* to the thread that is opening the page */
+    } else {
+        retried[1] = 0;
+    }
     for (unsigned k = 0; k < LIFTED; k++) {
         uintptr_t lo = __atomic_load_n(&g->lifted[k].lo, __ATOMIC_ACQUIRE);
         if (lo && a >= lo && a < __atomic_load_n(&g->lifted[k].hi, __ATOMIC_RELAXED)) {
-            *retried = a;
+            retried[0] = a;
             return 1;
         }
     }

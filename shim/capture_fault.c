@@ -45,7 +45,7 @@ static size_t page_size;
 
 /* The calling thread's step: the pages its fault opened, until it ends. */
 static __thread emm_guard_step step SHIM_TLS;
-static __thread uintptr_t retried SHIM_TLS; /* the address last retried by this thread */
+static __thread uintptr_t retried[2] SHIM_TLS; /* the address last retried, and how often */
 
 /* A block a rule tags while profiling gets pages of its own. */
 static void *map(size_t size, size_t align, size_t *map_len)
@@ -100,13 +100,13 @@ static void on_segv(int sig, siginfo_t *si, void *uctx)
     emm_guard_region *r = si->si_code == SEGV_ACCERR ? emm_guard_find(guard, a, &in_array) : NULL;
     if (!r) {
         /* A fault on pages opened lately: its handler ran late. */
-        if (si->si_code == SEGV_ACCERR && emm_guard_retry(guard, a, &retried))
+        if (si->si_code == SEGV_ACCERR && emm_guard_retry(guard, a, retried))
             return;
         emm_guard_step_abandon(guard, &step, pc);
         emm_guard_chain(guard, sig, si, uctx);
         return;
     }
-    retried = 0;
+    retried[0] = 0;
     uintptr_t page = a & ~(uintptr_t)(page_size - 1);
     bool write = (uc->uc_mcontext.gregs[REG_ERR] & 2) != 0;
     if (emm_guard_watching(guard) && !shim_busy && in_array)

@@ -54,9 +54,13 @@ EMM_API int emm_guard_watching(const emm_guard *g);
 typedef struct emm_guard_region emm_guard_region;
 EMM_API emm_guard_region *emm_guard_find(emm_guard *g, uintptr_t addr, int *in_array);
 /* A fault no region claims, on pages opened lately: the handler ran after
- * the window closed or the block left, and the access is to be retried,
- * once per address and thread (*retried: the thread's last retried
- * address, updated). Signal-safe. */
+ * the window closed or the block left, and the access is to be retried.
+ * retried[0] is the thread's last retried address, retried[1] how many
+ * times in a row (both updated): the same access faults again when another
+ * thread, preempted, has yet to open the page it protected for a moment
+ * (emm_guard_step_done), so it yields and retries, EMM_GUARD_RETRIES times
+ * at most before the fault is taken for the program's own. Signal-safe. */
+#define EMM_GUARD_RETRIES 1000
 EMM_API int emm_guard_retry(const emm_guard *g, uintptr_t addr, uintptr_t *retried);
 /* After the single step of an access on `page` of region r: protects the
  * page again unless the guard stopped watching, the region left, or a
