@@ -364,7 +364,7 @@ emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *
     return EMM_OK;
 }
 
-static const char *scalar_name(emm_scalar t)
+const char *emm_scalar_name(emm_scalar t)
 {
     switch (t) {
     case EMM_F32: return "f32";
@@ -417,7 +417,7 @@ void emm_tag_rule_format(const emm_tag_rule *r, char *out, size_t cap)
              : r->shape == EMM_TAG_AXIS    ? axes[r->axis < 3 ? r->axis : 0]
              : vertices                    ? "xyz"
                                            : "vidx",
-             r->offset, scalar_name(r->type));
+             r->offset, emm_scalar_name(r->type));
 }
 
 void emm_tag_rules_help(FILE *out)

@@ -583,19 +583,6 @@ bool shape_from_accesses(const shape_acc *a, const unsigned char *p, size_t len,
 
 /* ---- words ---------------------------------------------------------------- */
 
-static const char *type_name(emm_scalar t)
-{
-    switch (t) {
-    case EMM_F32: return "f32";
-    case EMM_F64: return "f64";
-    case EMM_I32: return "i32";
-    case EMM_U32: return "u32";
-    case EMM_I64: return "i64";
-    case EMM_U16: return "u16";
-    default: return "?";
-    }
-}
-
 static const char *class_words(char c)
 {
     return c == 'f'   ? "coordinate-like"
@@ -620,13 +607,13 @@ void shape_describe(const shape *s, char *out, size_t cap)
         snprintf(out, cap,
                  "one %s coordinate per %u bytes (a structure of arrays: a block per axis), %s "
                  "in use of %s (%s)",
-                 type_name(s->type), s->stride, use, all, src);
+                 emm_scalar_name(s->type), s->stride, use, all, src);
         return;
     }
     if (plain && (s->kind == SHAPE_VERTICES || s->kind == SHAPE_TRIANGLES)) {
-        snprintf(out, cap, "3 x %s in %u bytes (%s), %s in use of %s (%s)", type_name(s->type),
-                 s->stride, s->kind == SHAPE_VERTICES ? "coordinates" : "vertex indices", use, all,
-                 src);
+        snprintf(out, cap, "3 x %s in %u bytes (%s), %s in use of %s (%s)",
+                 emm_scalar_name(s->type), s->stride,
+                 s->kind == SHAPE_VERTICES ? "coordinates" : "vertex indices", use, all, src);
         return;
     }
     size_t used = 0;
@@ -639,7 +626,7 @@ void shape_describe(const shape *s, char *out, size_t cap)
                                                                     : s->f[i - 1].type == f->type);
         char what[96];
         if (f->cls == 'f' || f->cls == 'i' || f->cls == 'h')
-            snprintf(what, sizeof what, "%s %s", type_name(f->type), class_words(f->cls));
+            snprintf(what, sizeof what, "%s %s", emm_scalar_name(f->type), class_words(f->cls));
         else if (f->cls == 'p')
             snprintf(what, sizeof what, "addresses (pointers)");
         else
@@ -657,7 +644,7 @@ void shape_describe(const shape *s, char *out, size_t cap)
     char v[128];
     switch (s->kind) {
     case SHAPE_VERTICES:
-        snprintf(v, sizeof v, "three %s coordinates at %u", type_name(s->type), s->at);
+        snprintf(v, sizeof v, "three %s coordinates at %u", emm_scalar_name(s->type), s->at);
         verdict = v;
         break;
     case SHAPE_TRIANGLES:
@@ -692,19 +679,19 @@ bool shape_rule(const shape *s, char axis, const char **kind, char *body, size_t
     switch (s->kind) {
     case SHAPE_VERTICES:
         *kind = "vertices";
-        snprintf(body, cap, "stride=%u,xyz=%u:%s", s->stride, s->at, type_name(s->type));
+        snprintf(body, cap, "stride=%u,xyz=%u:%s", s->stride, s->at, emm_scalar_name(s->type));
         return true;
     case SHAPE_TRIANGLES:
         *kind = "triangles";
-        snprintf(body, cap, "stride=%u,vidx=%u:%s", s->stride, s->at, type_name(s->type));
+        snprintf(body, cap, "stride=%u,vidx=%u:%s", s->stride, s->at, emm_scalar_name(s->type));
         return true;
     case SHAPE_SOUP:
         *kind = "soup";
-        snprintf(body, cap, "stride=%u,corners=%u:%s", s->stride, s->at, type_name(s->type));
+        snprintf(body, cap, "stride=%u,corners=%u:%s", s->stride, s->at, emm_scalar_name(s->type));
         return true;
     case SHAPE_AXIS:
         *kind = "vertices";
-        snprintf(body, cap, "%c=0:%s", axis ? axis : 'x', type_name(s->type));
+        snprintf(body, cap, "%c=0:%s", axis ? axis : 'x', emm_scalar_name(s->type));
         return true;
     default:
         return false;

@@ -146,6 +146,9 @@ EMM_API void emm_tag_rules_free(emm_tag_rules *rs);
 /* A rule as EMM_TAG spells it ("vertices:site=read_mesh,stride=24,xyz=0:f64"),
  * into out (cap bytes, NUL included; cut when it does not fit). */
 EMM_API void emm_tag_rule_format(const emm_tag_rule *r, char *out, size_t cap);
+/* A scalar type as a rule spells it: "f32", "f64", "i32", "u32", "i64",
+ * "u16" ("?" for another value). */
+EMM_API const char *emm_scalar_name(emm_scalar t);
 /* The grammar, as `emm run --help` prints it. */
 EMM_API void emm_tag_rules_help(FILE *out);
 /* Whether a block of `size` bytes is what rule r describes: a whole number
