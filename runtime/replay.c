@@ -4,6 +4,7 @@
  * the JSON report of docs/report.md. */
 #include <errno.h>
 #include <stdbool.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -85,7 +86,7 @@ static emm_status replay_pass(emm_trace_reader *r, const emm_machine *m, const e
                               size_t n, const unsigned *pass, unsigned p, unsigned passes,
                               const emm_replay_options *opt, emm_trace_record *buf,
                               emm_result *results, emm_error *skipped, uint64_t *done,
-                              const char *path, emm_error *err)
+                              size_t *fastest, const char *path, emm_error *err)
 {
     const emm_trace_info *info = emm_trace_reader_info(r);
     emm_threads threads = {opt->jobs, NULL, NULL};
@@ -148,7 +149,15 @@ static emm_status replay_pass(emm_trace_reader *r, const emm_machine *m, const e
         if (!model)
             continue;
         emm_model_result(model, &results[i]);
-        if (opt->cells && (st = emm_model_cells(model, &results[i], err)) != EMM_OK)
+        bool cells = opt->cells == EMM_REPLAY_CELLS_ALL;
+        if (opt->cells == EMM_REPLAY_CELLS_FASTEST && results[i].strategy.kind == EMM_STRATEGY_EMM &&
+            (*fastest == SIZE_MAX || results[i].total < results[*fastest].total)) {
+            if (*fastest != SIZE_MAX)
+                emm_result_release(&results[*fastest]);
+            *fastest = i;
+            cells = true;
+        }
+        if (cells && (st = emm_model_cells(model, &results[i], err)) != EMM_OK)
             goto out;
     }
 out:
@@ -178,6 +187,7 @@ emm_status emm_replay_ex(const char *path, const emm_machine *m, const emm_strat
     emm_trace_record *buf = NULL;
     unsigned *pass = NULL;
     uint64_t done = 0;
+    size_t fastest = SIZE_MAX; /* EMM_REPLAY_CELLS_FASTEST: the result holding cells */
     emm_status st;
 
     if (!opt)
@@ -199,8 +209,8 @@ emm_status emm_replay_ex(const char *path, const emm_machine *m, const emm_strat
     unsigned passes = plan_passes(s, n, info->geometry.nt,
                                   opt->memory ? opt->memory : emm_replay_default_memory(), pass);
     for (unsigned p = 0; p < passes && st == EMM_OK; p++)
-        st = replay_pass(r, m, s, n, pass, p, passes, opt, buf, results, skipped, &done, path,
-                         err);
+        st = replay_pass(r, m, s, n, pass, p, passes, opt, buf, results, skipped, &done, &fastest,
+                         path, err);
     if (st != EMM_OK) {
         for (size_t i = 0; i < n; i++)
             emm_result_release(&results[i]);

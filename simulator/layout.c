@@ -47,6 +47,7 @@ void emm_layout_free(emm_layout *l)
     free(l->nb_start);
     free(l->nb);
     free(l->nb_side);
+    free(l->cell_of);
     free(l);
 }
 
@@ -93,6 +94,54 @@ static void choose_space(emm_layout *l, const double *xyz, const int32_t *tri)
         l->lo[k] = lo[l->axes[k]];
         l->hi[k] = hi[l->axes[k]];
     }
+}
+
+/* ops->compact: drops the cells without triangles, keeping the others in
+ * the kind's order, and their neighbours that hold triangles. The kind's
+ * data keeps its own numbering; cell_of translates. */
+static emm_status drop_empty(emm_layout *l, const char *name, emm_error *err)
+{
+    uint32_t nraw = l->ncells, n = 0;
+    uint32_t *cell_of = calloc((size_t)nraw + 1, sizeof *cell_of);
+    if (!cell_of)
+        return emm_layout_nomem(err, name);
+    for (size_t t = 0; t < l->nt; t++)
+        cell_of[l->tri_cell[t]] = 1;
+    for (uint32_t r = 0; r < nraw; r++)
+        cell_of[r] = cell_of[r] ? n++ : EMM_LAYOUT_NONE;
+    /* In place: a kept cell's new place is never after its old one, and a
+     * kept neighbour's entry never after where it was read. */
+    uint32_t k = 0;
+    for (uint32_t r = 0; r < nraw; r++) {
+        uint32_t c = cell_of[r], from = l->nb_start[r], to = l->nb_start[r + 1];
+        if (c == EMM_LAYOUT_NONE)
+            continue;
+        l->cells[c] = l->cells[r];
+        l->nb_start[c] = k;
+        for (uint32_t j = from; j < to; j++) {
+            uint32_t d = cell_of[l->nb[j]];
+            if (d == EMM_LAYOUT_NONE)
+                continue;
+            if (l->nb_side)
+                l->nb_side[k] = l->nb_side[j];
+            l->nb[k++] = d;
+        }
+    }
+    l->nb_start[n] = k;
+    for (size_t t = 0; t < l->nt; t++)
+        l->tri_cell[t] = cell_of[l->tri_cell[t]];
+    /* Shrinking never fails in practice; when it does the larger blocks
+     * serve as well. */
+    emm_layout_cell *cells = realloc(l->cells, ((size_t)n + 1) * sizeof *cells);
+    if (cells)
+        l->cells = cells;
+    uint32_t *starts = realloc(l->nb_start, ((size_t)n + 1) * sizeof *starts);
+    if (starts)
+        l->nb_start = starts;
+    l->ncells = n;
+    l->nraw = nraw;
+    l->cell_of = cell_of;
+    return EMM_OK;
 }
 
 /* Counting sort of the triangles by cell: positions follow ascending ids. */
@@ -269,6 +318,8 @@ static emm_status build_once(const double *xyz, size_t nv, const int32_t *tri, s
         }
     }
     st = l->ops->build(l, (const double *const *)c, name, err);
+    if (st == EMM_OK && l->ops->compact)
+        st = drop_empty(l, name, err);
     if (st == EMM_OK)
         st = fill_triangles(l, name, err);
     if (st == EMM_OK)
@@ -456,7 +507,8 @@ uint32_t emm_layout_neighbors(const emm_layout *l, uint32_t c, const uint32_t **
 
 uint32_t emm_layout_cell_at(const emm_layout *l, const double *p, uint32_t *levels)
 {
-    return l->ops->cell_at(l, p, levels);
+    uint32_t r = l->ops->cell_at(l, p, levels);
+    return l->cell_of ? l->cell_of[r] : r;
 }
 
 emm_layout_index emm_layout_triangle_index(const emm_layout *l, uint32_t t)
@@ -549,6 +601,7 @@ void emm_layout_get_stats(const emm_layout *l, emm_layout_stats *out)
 {
     memset(out, 0, sizeof *out);
     out->cells = l->ncells;
+    out->dropped_cells = l->cell_of ? l->nraw - l->ncells : 0;
     uint64_t *v = malloc((size_t)l->ncells * sizeof *v);
     /* Without memory for the medians, report them as 0 rather than fail a
      * query. */

@@ -40,6 +40,15 @@ struct emm_layout_ops {
     /* Nonzero when CELL bounds the triangles of every cell (a tree that
      * splits until it does); used to suggest a layout in messages. */
     int bounded;
+    /* Nonzero: the cells build cuts that hold no triangle are dropped
+     * (layout.c, drop_empty): in space a surface meets few of the boxes or
+     * octants that fill its bounding box, and an empty cell would still
+     * take a header in the image, an entry in every per-cell table and
+     * state in every model. The kind's own data keeps its numbering (its
+     * "raw" cells): cell_at gives a raw cell, which layout.c translates;
+     * move_side takes the layout's cells and reads their geometry
+     * (l->cells), never the kind's per-raw-cell data. */
+    int compact;
 };
 
 /* One table per kind, named from EMM_LAYOUT_LIST: emm_layout_grid_ops, ... */
@@ -73,6 +82,9 @@ struct emm_layout {
     uint32_t *nb_start;        /* ncells + 1 */
     uint32_t *nb;
     uint8_t *nb_side;
+    /* ops->compact: the kind's cells (nraw of them) against the layout's */
+    uint32_t nraw;
+    uint32_t *cell_of;         /* nraw: the cell of each of the kind's, or EMM_LAYOUT_NONE */
 };
 
 /* "NAME: out of memory building the layout". */

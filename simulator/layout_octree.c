@@ -461,20 +461,35 @@ static uint32_t cell_at(const emm_layout *l, const double *p, uint32_t *levels)
     return o->nodes[i].cell;
 }
 
-/* Leaf cubes in units of the finest level, exact: a side bit when `to` lies
- * wholly beyond that face of `from`. */
+/* A leaf's cube in units of the finest level, from its path: exact. */
+static void leaf_cube(const emm_layout_cell *cell, uint64_t lo[3], uint64_t hi[3])
+{
+    uint64_t ix[3] = {0, 0, 0};
+    for (uint32_t d = 0; d < cell->depth; d++) {
+        uint64_t k = (cell->path >> (3 * (cell->depth - 1 - d))) & 7u;
+        for (int a = 0; a < 3; a++)
+            ix[a] = 2 * ix[a] + ((k >> a) & 1u);
+    }
+    uint32_t s = MAXD - cell->depth;
+    for (int a = 0; a < 3; a++) {
+        lo[a] = ix[a] << s;
+        hi[a] = (ix[a] + 1) << s;
+    }
+}
+
+/* Leaf cubes compared: a side bit when `to` lies wholly beyond that face
+ * of `from`. From the cells' paths, as the leaves without triangles are
+ * dropped after the build (layout.c). */
 static unsigned move_side(const emm_layout *l, uint32_t from, uint32_t to)
 {
-    const octree *o = O(l);
-    const oc_node *na = &o->nodes[o->leaf_node[from]], *nb = &o->nodes[o->leaf_node[to]];
-    uint32_t sa = MAXD - na->depth, sb = MAXD - nb->depth;
+    uint64_t a0[3], a1[3], b0[3], b1[3];
+    leaf_cube(&l->cells[from], a0, a1);
+    leaf_cube(&l->cells[to], b0, b1);
     unsigned s = 0;
     for (int a = 0; a < 3; a++) {
-        uint64_t a0 = (uint64_t)na->i[a] << sa, a1 = (uint64_t)(na->i[a] + 1) << sa;
-        uint64_t b0 = (uint64_t)nb->i[a] << sb, b1 = (uint64_t)(nb->i[a] + 1) << sb;
-        if (b1 <= a0)
+        if (b1[a] <= a0[a])
             s |= EMM_SIDE_MINUS(a);
-        if (b0 >= a1)
+        if (b0[a] >= a1[a])
             s |= EMM_SIDE_PLUS(a);
     }
     return s;
@@ -506,6 +521,7 @@ static void destroy(emm_layout *l)
 const struct emm_layout_ops emm_layout_octree_ops = {
     .dims = 3,
     .build = build,
+    .compact = 1,
     .move_side = move_side,
     .cell_at = cell_at,
     .lookup_bytes = lookup_bytes,

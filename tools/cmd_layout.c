@@ -80,8 +80,12 @@ static void print_stats(const emm_layout *l, const char *path, const emm_strateg
     for (uint32_t k = 0; k < dims; k++)
         printf("%s%c", k == 0 ? "" : k + 1 < dims ? ", " : " and ", "xyz"[axes[k]]);
     printf("\n");
-    printf("cells           %s (%s without triangles)\n", emm_grouped(st.cells, a),
-           emm_grouped(st.empty_cells, b));
+    if (st.dropped_cells)
+        printf("cells           %s (%s %s without triangles dropped)\n", emm_grouped(st.cells, a),
+               emm_grouped(st.dropped_cells, b), s->layout == EMM_LAYOUT_OCTREE ? "octants" : "boxes");
+    else
+        printf("cells           %s (%s without triangles)\n", emm_grouped(st.cells, a),
+               emm_grouped(st.empty_cells, b));
     printf("triangles/cell  min %s, median %s, max %s\n", emm_grouped(st.tri_min, a),
            emm_grouped(st.tri_median, b), emm_grouped(st.tri_max, c));
     printf("bytes/cell      min %s, median %s, max %s\n", emm_grouped(st.bytes_min, a),

@@ -295,7 +295,11 @@ static int replay_main(struct replay_args *a, emm_strategy *strategies, emm_resu
         return rc;
 
     pctx.on = !quiet && isatty(STDERR_FILENO);
-    emm_replay_options ropt = {(unsigned)a->jobs, progress, &pctx, json != NULL, a->memory,
+    /* A sweep's report carries the per-cell data of its fastest EMM
+     * strategy only: every strategy's would grow with strategies x cells. */
+    int cells = !json ? EMM_REPLAY_CELLS_NONE
+                      : all ? EMM_REPLAY_CELLS_FASTEST : EMM_REPLAY_CELLS_ALL;
+    emm_replay_options ropt = {(unsigned)a->jobs, progress, &pctx, cells, a->memory,
                                NULL, NULL, NULL};
     if (timeline && emm_timeline_open(timeline, m, &strategies[0], 0, &ropt.timeline, &err) !=
                         EMM_OK) {
@@ -391,7 +395,8 @@ int emm_cmd_replay(int argc, char **argv)
          .help = "threads simulating strategies (default: the online CPUs, at most one per "
                  "strategy); results do not depend on N"},
         {.name = "--json", .metavar = "FILE", .kind = OPT_TEXT, .dst = &a.json,
-         .help = "also write the JSON report (docs/report.md), whole or not at all"},
+         .help = "also write the JSON report (docs/report.md), whole or not at all; "
+                 "with --all, the per-cell data of the fastest EMM strategy only"},
         {.name = "--timeline", .metavar = "FILE", .kind = OPT_TEXT, .dst = &a.timeline,
          .help = "write the first strategy's simulated run as Chrome/Perfetto trace-event JSON "
                  "(open it in ui.perfetto.dev or chrome://tracing): a track per DMA channel with "

@@ -120,6 +120,8 @@ typedef struct emm_layout_index {
 typedef struct emm_layout_stats {
     uint32_t cells;
     uint32_t empty_cells;              /* cells without triangles */
+    uint32_t dropped_cells;            /* layouts in space: boxes or octants without
+                                          triangles, which are no cells */
     uint32_t tri_min, tri_median, tri_max;
     uint64_t bytes_min, bytes_median, bytes_max;
     uint64_t vertex_copies;            /* sum of the cells' nvert */
@@ -183,7 +185,8 @@ EMM_API unsigned emm_layout_move_side(const emm_layout *l, uint32_t from, uint32
 /* The cell containing point p (the layout's dims coordinates, clamped into
  * the bounding box), by arithmetic for grid and tiles and by descending the
  * quadtree; *levels (may be NULL) gets the levels descended (0 for grid
- * and tiles). */
+ * and tiles). A layout in space has no cells where the mesh has no
+ * triangles: EMM_LAYOUT_NONE for a point in such a box or octant. */
 EMM_API uint32_t emm_layout_cell_at(const emm_layout *l, const double *p, uint32_t *levels);
 
 /* Triangle t's layout index. */

@@ -59,6 +59,8 @@ EMM_API emm_status emm_replay(const char *path, const emm_machine *m, const emm_
                               emm_progress_fn progress, void *progress_ctx, emm_error *err);
 
 /* How emm_replay_ex runs; zero-initialise, then set what you need. */
+enum { EMM_REPLAY_CELLS_NONE, EMM_REPLAY_CELLS_ALL, EMM_REPLAY_CELLS_FASTEST };
+
 typedef struct emm_replay_options {
     /* Threads simulating models; 0: the online CPUs. Never more than the
      * models. Each model runs on one thread at a time and sees every record
@@ -66,9 +68,11 @@ typedef struct emm_replay_options {
     unsigned jobs;
     emm_progress_fn progress; /* may be NULL; called from the calling thread */
     void *progress_ctx;
-    /* Nonzero: also fill each EMM strategy's per-cell DMA bytes
-     * (emm_model_cells); the caller then releases every result with
-     * emm_result_release. */
+    /* EMM_REPLAY_CELLS_ALL: also fill each EMM strategy's per-cell DMA
+     * bytes (emm_model_cells); EMM_REPLAY_CELLS_FASTEST: only the fastest
+     * EMM strategy's (a sweep's per-cell data for every strategy grows with
+     * strategies x cells: gigabytes on a mesh of millions of faces). The
+     * caller then releases every result with emm_result_release. */
     int cells;
     /* Bytes the models may take together (0: emm_replay_default_memory).
      * Strategies that do not fit together run in further passes over the

@@ -32,6 +32,10 @@ expect 0 "$EMM" trace synth --mesh "$W/m.off" --pattern curve --visits 6000 --le
     --work 2 -o "$W/t.emmt"
 expect 0 "$EMM" replay "$W/t.emmt" --all --quiet --json "$W/all.json"
 grep -q '"rects"' "$W/all.json" || no "the report has no per-cell bytes"
+# A sweep keeps the per-cell bytes of its fastest EMM strategy only.
+[ "$(grep -c '"rects"' "$W/all.json")" = 1 ] || no "a sweep's report has per-cell bytes for more than the fastest EMM strategy"
+expect 0 "$EMM" replay "$W/t.emmt" --strategy tiles+naive@8 --strategy grid+naive@16 --quiet \
+    --json "$W/two.json"
 
 # The default DIR: REPORT minus .json, plus -plots.
 expect 0 "$EMM" plot "$W/all.json"
@@ -61,12 +65,12 @@ ne=$(grep -c '"strategy": "[a-z][a-z0-9]*+' "$W/all.json")
 [ "$(grep -c '^[0-9]' "$W/all-plots/transfer.dat")" = "$ne" ] || no "transfer has not $ne points"
 
 # --format and --out; the figures' script can be rerun by hand.
-expect 0 "$EMM" plot "$W/all.json" --out "$W/svg" --format svg --cells grid+naive@16
+expect 0 "$EMM" plot "$W/two.json" --out "$W/svg" --format svg --cells grid+naive@16
 is_svg "$W/svg/cells.svg" || no "--format svg: no cells.svg"
 [ -e "$W/svg/cells.png" ] && no "--format svg wrote a PNG"
 grep -q 'grid+naive@16' "$W/svg/cells.dat" || no "--cells: not the strategy asked for"
-(cd "$W/svg" && gnuplot -e "fmt='png'" transfer.gp) && is_png "$W/svg/transfer.png" ||
-    no "transfer.gp does not rerun"
+(cd "$W/svg" && gnuplot -e "fmt='png'" cells.gp) && is_png "$W/svg/cells.png" ||
+    no "cells.gp does not rerun"
 
 # Malformed and missing reports: one line, exit 1, nothing written.
 printf '{"emm_report": 1, "results": [}' >"$W/bad.json"
