@@ -23,6 +23,7 @@
 #include "cache.h"
 #include "emm/layout.h"
 #include "error.h"
+#include "layout_internal.h"
 #include "model.h"
 
 #define NO_ARRAY UINT32_MAX
@@ -43,6 +44,18 @@ typedef struct cache_layout_model {
                                   an access to t */
     uint32_t cur_cell;         /* cell of the most recent triangle access */
     uint32_t cur_tri;          /* that triangle, or NO_TRI */
+    /* The look-up of an element request (thesis §4.1.1: the program keeps
+     * the original ids, so a request goes through the id -> layout index
+     * table and the cell table to the record, as the EMM runtime's does):
+     * the tables in remote memory after the image, read through the cache,
+     * and the look-up's instructions. */
+    uint64_t tri_table, vert_table, cell_table, node_table;
+    uint64_t *find;            /* per cell: emm.lookup + emm.quadtree_level x its depth */
+    uint32_t *path_start;      /* a tree's: ncells + 1, each cell's descent in path */
+    uint32_t *path;            /* the nodes each descent reads, root first (NULL: no tree) */
+    uint64_t lookup_cycles, lookups, table_reads;
+    uint32_t last_array;       /* the previous record's element, or NO_ARRAY */
+    uint64_t last_element;
     emm_cache cache;
 } cache_layout_model;
 
@@ -65,6 +78,38 @@ static inline uint64_t vertex_addr(const cache_layout_model *m, uint64_t v)
     return m->vhome_addr[v];
 }
 
+/* The cell whose copy of vertex v vertex_addr reads. */
+static inline uint32_t vertex_cell(const cache_layout_model *m, uint64_t v)
+{
+    uint32_t i = m->vcopy_start[v], end = m->vcopy_start[v + 1];
+    for (uint32_t k = i; k < end && m->vcopy_cell[k] <= m->cur_cell; k++)
+        if (m->vcopy_cell[k] == m->cur_cell)
+            return m->cur_cell;
+    return i < end ? m->vcopy_cell[i] : EMM_LAYOUT_NONE;
+}
+
+/* The look-up of a request for element e (the EMM model's rule, emm_fetch.c:
+ * not for a further load of the record just requested, nor for a vertex of
+ * the triangle just requested, which that triangle points at): its id
+ * table entry, a tree's nodes on the way down to its cell, and its cell's
+ * entry, read through the cache, and the look-up's instructions. */
+static inline void table_lookup(cache_layout_model *m, uint64_t entry, uint32_t cell)
+{
+    emm_cache_access(&m->cache, entry, 4, 0, 0);
+    m->table_reads++;
+    if (cell != EMM_LAYOUT_NONE) {
+        if (m->path)
+            for (uint32_t k = m->path_start[cell]; k < m->path_start[cell + 1]; k++) {
+                emm_cache_access(&m->cache, m->node_table + 16 * (uint64_t)m->path[k], 16, 0, 0);
+                m->table_reads++;
+            }
+        emm_cache_access(&m->cache, m->cell_table + 8 * (uint64_t)cell, 8, 0, 0);
+        m->table_reads++;
+        m->lookup_cycles += m->find[cell];
+    }
+    m->lookups++;
+}
+
 static void cl_run(emm_model *model, const emm_trace_record *recs, size_t n)
 {
     cache_layout_model *m = (cache_layout_model *)model;
@@ -72,11 +117,25 @@ static void cl_run(emm_model *model, const emm_trace_record *recs, size_t n)
     for (size_t i = 0; i < n; i++) {
         const emm_trace_record *r = &recs[i];
         uint64_t addr;
+        int request = r->array != m->last_array || r->element != m->last_element;
+        m->last_array = r->array;
+        m->last_element = r->element;
         if (r->array == tarray) {
             m->cur_cell = m->tri_cell[r->element];
             m->cur_tri = (uint32_t)r->element;
+            if (request)
+                table_lookup(m, m->tri_table + 4 * r->element, m->cur_cell);
             addr = m->tri_addr[r->element] + r->offset;
         } else if (r->array == varray) {
+            if (request) {
+                int pointer = 0;
+                if (m->cur_tri != NO_TRI) {
+                    const uint32_t *tv = m->tri_v + 3 * (size_t)m->cur_tri;
+                    pointer = tv[0] == r->element || tv[1] == r->element || tv[2] == r->element;
+                }
+                if (!pointer)
+                    table_lookup(m, m->vert_table + 4 * r->element, vertex_cell(m, r->element));
+            }
             addr = vertex_addr(m, r->element) + r->offset;
         } else {
             addr = emm_addr_of(&m->map, r);
@@ -90,12 +149,21 @@ static void cl_reset(emm_model *model)
     cache_layout_model *m = (cache_layout_model *)model;
     m->cur_cell = EMM_LAYOUT_NONE;
     m->cur_tri = NO_TRI;
+    m->last_array = NO_ARRAY;
+    m->last_element = 0;
+    m->lookup_cycles = m->lookups = m->table_reads = 0;
     emm_cache_reset(&m->cache);
 }
 
+/* The table reads are the look-up's loads, not the program's accesses: its
+ * cycles stay, the count of accesses is the program's. */
 static void cl_result(const emm_model *model, emm_result *out)
 {
-    emm_cache_result(&((const cache_layout_model *)model)->cache, out);
+    const cache_layout_model *m = (const cache_layout_model *)model;
+    emm_cache_result(&m->cache, out);
+    out->accesses -= m->table_reads;
+    out->cycles[EMM_BUCKET_EMM_INSTRUCTIONS] += m->lookup_cycles;
+    out->total += m->lookup_cycles;
 }
 
 static void cl_destroy(emm_model *model)
@@ -113,6 +181,9 @@ static void cl_destroy(emm_model *model)
     free(m->vcopy_cell);
     free(m->vcopy_addr);
     free(m->vhome_addr);
+    free(m->find);
+    free(m->path_start);
+    free(m->path);
     free(m);
 }
 
@@ -227,7 +298,9 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
     m->vcopy_cell = malloc((ncopies ? ncopies : 1) * sizeof *m->vcopy_cell);
     m->vcopy_addr = malloc((ncopies ? ncopies : 1) * sizeof *m->vcopy_addr);
     m->vhome_addr = malloc(nv * sizeof *m->vhome_addr);
-    if (!m->tri_addr || !m->tri_cell || !m->tri_v || !m->tri_vaddr || !m->vcopy_start ||
+    uint32_t ncells = emm_layout_cell_count(l);
+    m->find = malloc((ncells ? ncells : 1) * sizeof *m->find);
+    if (!m->find || !m->tri_addr || !m->tri_cell || !m->tri_v || !m->tri_vaddr || !m->vcopy_start ||
         !m->vcopy_cell || !m->vcopy_addr || !m->vhome_addr || ncopies > UINT32_MAX) {
         st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the layout's addresses", name);
         goto fail;
@@ -240,6 +313,31 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
     for (size_t t = 0; t < nt; t++) {
         m->tri_addr[t] = base + emm_layout_triangle_address(l, (uint32_t)t, 0);
         m->tri_cell[t] = emm_layout_triangle_index(l, (uint32_t)t).cell;
+    }
+    /* The look-up tables follow the image (4 KiB aligned), laid out as the
+     * EMM runtime's (emm_fetch.c): triangle ids, vertex ids, cells. */
+    m->tri_table = (base + emm_layout_image_bytes(l) + 4095) & ~(uint64_t)4095;
+    m->vert_table = m->tri_table + 4 * (uint64_t)nt;
+    m->cell_table = m->vert_table + 4 * (uint64_t)nv;
+    m->node_table = m->cell_table + 8 * (uint64_t)ncells;
+    for (uint32_t c = 0; c < ncells; c++)
+        m->find[c] = p->emm_lookup + p->emm_quadtree_level * (uint64_t)l->cells[c].depth;
+    if (l->ops->path_nodes) {
+        uint32_t nodes[EMM_LAYOUT_MAX_DEPTH + 1];
+        size_t total = 0;
+        m->path_start = malloc(((size_t)ncells + 1) * sizeof *m->path_start);
+        for (uint32_t c = 0; m->path_start && c < ncells; c++) {
+            m->path_start[c] = (uint32_t)total;
+            total += l->ops->path_nodes(l, c, nodes);
+        }
+        m->path = m->path_start ? malloc((total ? total : 1) * sizeof *m->path) : NULL;
+        if (!m->path) {
+            st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the layout's tree", name);
+            goto fail;
+        }
+        m->path_start[ncells] = (uint32_t)total;
+        for (uint32_t c = 0; c < ncells; c++)
+            l->ops->path_nodes(l, c, m->path + m->path_start[c]);
     }
     uint32_t k = 0;
     for (size_t v = 0; v < nv; v++) {
@@ -269,8 +367,7 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
 
     if ((st = emm_cache_init(&m->cache, p, err)) != EMM_OK)
         goto fail;
-    m->cur_cell = EMM_LAYOUT_NONE;
-    m->cur_tri = NO_TRI;
+    cl_reset(&m->base);
     *out = &m->base;
     return EMM_OK;
 fail:

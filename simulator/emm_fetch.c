@@ -58,6 +58,9 @@ typedef struct pager {
     uint64_t page;                  /* bytes per page */
     uint32_t frames, used;
     uint64_t tri_off, vert_off, cell_off, cell_entry;
+    uint64_t node_off;              /* a tree's nodes, 16 bytes each */
+    uint32_t *path_start;           /* ncells + 1: each cell's descent in path */
+    uint32_t *path;                 /* the nodes each descent reads, root first */
     uint32_t npages;
     uint32_t *page_frame;           /* npages: the frame holding the page, or NONE */
     uint32_t *frame_page;           /* frames */
@@ -285,10 +288,23 @@ static void touch_table(fetch_model *m, uint64_t off)
     g->bytes += g->page;
 }
 
+/* The descent to cell c's leaf reads the tree's nodes on its path, which
+ * are part of the paged tables (emm_layout_lookup_bytes counts them): their
+ * pages. Nothing for a layout without a tree. */
+static void touch_path(fetch_model *m, uint32_t c)
+{
+    const pager *g = &m->pg;
+    if (!g->path)
+        return;
+    for (uint32_t k = g->path_start[c]; k < g->path_start[c + 1]; k++)
+        touch_table(m, g->node_off + 16 * (uint64_t)g->path[k]);
+}
+
 /* A look-up of element `e` of an array of `kind` in cell c (the id table
- * gives its layout index; the cell table its cell's place and residency):
- * emm.lookup, plus emm.quadtree_level per level descended, plus
- * emm.residency; with paged tables, the pages those entries live in. */
+ * gives its layout index; a tree's nodes on the way down, or the cell
+ * table, its cell's place and residency): emm.lookup, plus
+ * emm.quadtree_level per level descended, plus emm.residency; with paged
+ * tables, the pages those entries live in. */
 static void lookup(fetch_model *m, int kind, uint64_t e, uint32_t c)
 {
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->find[c] + m->residency);
@@ -304,6 +320,7 @@ static void lookup(fetch_model *m, int kind, uint64_t e, uint32_t c)
     }
     if (m->paged) {
         touch_table(m, (kind == ARR_TRIANGLES ? m->pg.tri_off : m->pg.vert_off) + 4 * e);
+        touch_path(m, c);
         touch_table(m, m->pg.cell_off + 8 * (uint64_t)c);
     }
 }
@@ -353,8 +370,11 @@ static void demand_fetch(fetch_model *m, uint32_t c)
 void emm_fetcher_prefetch(fetch_model *m, uint32_t c, uint32_t entered)
 {
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->find[c]);
-    if (m->paged)
+    if (m->paged) {
+        if (!m->indexed)
+            touch_path(m, c);
         touch_table(m, m->pg.cell_off + m->pg.cell_entry * (uint64_t)c);
+    }
     if (m->cells[c].ntri == 0)
         return;
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->residency);
@@ -625,6 +645,8 @@ static void fetch_destroy(emm_model *model)
     free(m->find);
     free(m->scheme_state);
     free(m->pg.page_frame);
+    free(m->pg.path_start);
+    free(m->pg.path);
     free(m->pg.frame_page);
     free(m->pg.prev);
     free(m->pg.next);
@@ -712,6 +734,24 @@ static emm_status alloc_pager(fetch_model *m, const char *name, emm_error *err)
     g->vert_off = m->indexed ? 0 : 4 * (uint64_t)l->nt;
     g->cell_off = m->indexed ? 0 : g->vert_off + 4 * (uint64_t)l->nv;
     g->cell_entry = m->indexed ? EMM_INDEXED_CELL_BYTES : 8;
+    g->node_off = g->cell_off + 8 * (uint64_t)l->ncells;
+    if (!m->indexed && l->ops->path_nodes) {
+        uint32_t nodes[EMM_LAYOUT_MAX_DEPTH + 1];
+        size_t total = 0;
+        g->path_start = malloc(((size_t)l->ncells + 1) * sizeof *g->path_start);
+        if (!g->path_start)
+            return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the paged tables", name);
+        for (uint32_t c = 0; c < l->ncells; c++) {
+            g->path_start[c] = (uint32_t)total;
+            total += l->ops->path_nodes(l, c, nodes);
+        }
+        g->path_start[l->ncells] = (uint32_t)total;
+        g->path = malloc((total ? total : 1) * sizeof *g->path);
+        if (!g->path)
+            return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the paged tables", name);
+        for (uint32_t c = 0; c < l->ncells; c++)
+            l->ops->path_nodes(l, c, g->path + g->path_start[c]);
+    }
     uint64_t npages = (m->lookup_bytes + g->page - 1) / g->page;
     if (npages > UINT32_MAX - 1)
         return emm_fail(err, EMM_ERR_RANGE, "%s: %llu pages of look-up tables are too many",

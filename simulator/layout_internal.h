@@ -33,6 +33,11 @@ struct emm_layout_ops {
     /* Bytes of the kind's own look-up tables in the local store, beyond the
      * id tables every layout has (NULL: none). */
     uint64_t (*lookup_bytes)(const emm_layout *l);
+    /* The tree nodes a look-up of cell c reads on its way down, root
+     * first: their indices in the kind's look-up table (lookup_bytes, 16
+     * bytes a node), at most EMM_LAYOUT_MAX_DEPTH + 1 of them; returns how
+     * many (NULL: no tree, nothing read). */
+    uint32_t (*path_nodes)(const emm_layout *l, uint32_t c, uint32_t *nodes);
     /* The kind's own statistics (NULL: none). */
     void (*stats)(const emm_layout *l, emm_layout_stats *out);
     /* Frees l->priv (NULL: free()). */

@@ -484,6 +484,20 @@ static uint64_t lookup_bytes(const emm_layout *l)
     return 16 * (uint64_t)Q(l)->nnodes;
 }
 
+/* The nodes from the root down to cell c's leaf, by the leaf's path. */
+static uint32_t path_nodes(const emm_layout *l, uint32_t c, uint32_t *nodes)
+{
+    const quadtree *t = Q(l);
+    const emm_layout_cell *cell = &l->cells[c];
+    uint32_t i = 0, n = 0;
+    nodes[n++] = 0;
+    for (uint32_t d = cell->depth; d > 0; d--) {
+        i = (uint32_t)t->nodes[i].child + (uint32_t)((cell->path >> (2 * (d - 1))) & 3u);
+        nodes[n++] = i;
+    }
+    return n;
+}
+
 static void stats(const emm_layout *l, emm_layout_stats *out)
 {
     out->quadtree_nodes = Q(l)->nnodes;
@@ -506,6 +520,7 @@ const struct emm_layout_ops emm_layout_quadtree_ops = {
     .move_side = move_side,
     .cell_at = cell_at,
     .lookup_bytes = lookup_bytes,
+    .path_nodes = path_nodes,
     .stats = stats,
     .destroy = destroy,
     .bounded = 1,

@@ -121,6 +121,25 @@ static void naive_by_hand(void)
     CHECK(r.cycles[EMM_BUCKET_EMM_INSTRUCTIONS] >= 3 * (6 + 6) + 2 * 20);
     emm_model_free(model);
 
+    /* The descent reads the tree's nodes, which are part of the tables: the
+     * root splits once (tri 0 in child 0, tri 1 in child 3), so 4 cells and
+     * 5 nodes: 8 + 16 + 32 bytes of id and cell tables, then the nodes at
+     * 56 (16 bytes each). Paged in 64-byte pages with two frames (the 136
+     * bytes exceed a 128-byte budget), every look-up reads page 0 (ids,
+     * cells, the root) and page 1 (both leaves, at 72 and 120): 2 pages
+     * fetched, where the ids and cells alone would need 1. */
+    REQUIRE(emm_machine_set(m, "emm.lookup_page=64", &err) == EMM_OK);
+    REQUIRE(emm_machine_set(m, "emm.lookup_budget=128", &err) == EMM_OK);
+    model = model_of(m, "quadtree+naive@1", &t);
+    emm_model_run(model, recs, 5);
+    emm_model_result(model, &r);
+    CHECK(r.emm.lookup_bytes == 8 + 16 + 32 + 5 * 16);
+    CHECK(r.emm.lookup_paged);
+    CHECKF(r.emm.lookup_pages == 2, "lookup pages %llu", (unsigned long long)r.emm.lookup_pages);
+    emm_model_free(model);
+    REQUIRE(emm_machine_set(m, "emm.lookup_page=1K", &err) == EMM_OK);
+    REQUIRE(emm_machine_set(m, "emm.lookup_budget=128K", &err) == EMM_OK);
+
     /* Further loads of the record just requested are local accesses: the
      * triangle's three field loads pay one look-up. A vertex that triangle
      * 1 does not name (vertex 0) is looked up. */
