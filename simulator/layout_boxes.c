@@ -227,11 +227,17 @@ uint32_t emm_boxes_per_axis(const emm_layout *l, uint32_t n[EMM_MAX_DIMS])
 }
 
 /* The boxes that touch each box by a face, an edge or a corner: those of
- * the layers, rows and places around it whose closed boxes meet its own. */
-static emm_status neighbors(emm_layout *l, const char *name, emm_error *err)
+ * the layers, rows and places around it whose closed boxes meet its own.
+ * Only between boxes that hold triangles (held[box] nonzero): the others
+ * are dropped once the layout is cut (layout.c), and on a surface they are
+ * most of the boxes. */
+static emm_status neighbors(emm_layout *l, const uint8_t *held, const char *name, emm_error *err)
 {
     const struct boxes *b = B(l);
-    size_t cap = (size_t)l->ncells * (b->shift ? 14u : 26u);
+    size_t nheld = 0;
+    for (uint32_t c = 0; c < l->ncells; c++)
+        nheld += held[c] != 0;
+    size_t cap = nheld * (b->shift ? 14u : 26u) + 1;
     l->nb_start = malloc(((size_t)l->ncells + 1) * sizeof *l->nb_start);
     l->nb = malloc(cap * sizeof *l->nb);
     if (!l->nb_start || !l->nb)
@@ -239,6 +245,8 @@ static emm_status neighbors(emm_layout *l, const char *name, emm_error *err)
     uint32_t n = 0;
     for (uint32_t c = 0; c < l->ncells; c++) {
         l->nb_start[c] = n;
+        if (!held[c])
+            continue;
         const int32_t *co = l->cells[c].coord;
         int64_t me[3];
         box4(b, co, me);
@@ -259,10 +267,11 @@ static emm_status neighbors(emm_layout *l, const char *name, emm_error *err)
                         touch = touch && other[a] <= me[a] + 4 && me[a] <= other[a] + 4;
                         same = same && other[a] == me[a];
                     }
-                    if (touch && !same) {
+                    uint32_t o = layer_start(b, (uint32_t)k) +
+                                 row_start(b, (uint32_t)j, (uint32_t)k) + (uint32_t)i;
+                    if (touch && !same && held[o]) {
                         assert(n < cap);
-                        l->nb[n++] = layer_start(b, (uint32_t)k) +
-                                     row_start(b, (uint32_t)j, (uint32_t)k) + (uint32_t)i;
+                        l->nb[n++] = o;
                     }
                 }
             }
@@ -305,9 +314,15 @@ emm_status emm_boxes_build(emm_layout *l, const double *const *c, int shift, con
                     cell->hi[a] = l->lo[a] + (double)(q[a] + 4) / 4 * b->w[a];
                 }
             }
+    uint8_t *held = calloc(ncells, 1);
+    if (!held)
+        return emm_layout_nomem(err, name);
     for (size_t t = 0; t < l->nt; t++) {
         double p[3] = {c[0][t], c[1][t], c[2][t]};
         l->tri_cell[t] = box_at(l, b, p);
+        held[l->tri_cell[t]] = 1;
     }
-    return neighbors(l, name, err);
+    emm_status st = neighbors(l, held, name, err);
+    free(held);
+    return st;
 }

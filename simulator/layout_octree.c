@@ -362,6 +362,23 @@ static int number_leaves(oc_build *b)
     return 0;
 }
 
+/* A side bit when node nb's cube lies wholly beyond that face of na's, in
+ * units of the finest level: exact. */
+static unsigned node_side(const oc_node *na, const oc_node *nb)
+{
+    uint32_t sa = MAXD - na->depth, sb = MAXD - nb->depth;
+    unsigned s = 0;
+    for (int a = 0; a < 3; a++) {
+        uint64_t a0 = (uint64_t)na->i[a] << sa, a1 = (uint64_t)(na->i[a] + 1) << sa;
+        uint64_t b0 = (uint64_t)nb->i[a] << sb, b1 = (uint64_t)(nb->i[a] + 1) << sb;
+        if (b1 <= a0)
+            s |= EMM_SIDE_MINUS(a);
+        if (b0 >= a1)
+            s |= EMM_SIDE_PLUS(a);
+    }
+    return s;
+}
+
 static int neighbors(oc_build *b)
 {
     emm_layout *l = b->l;
@@ -373,11 +390,18 @@ static int neighbors(oc_build *b)
         return -1;
     for (uint32_t c = 0; c < l->ncells; c++) {
         l->nb_start[c] = (uint32_t)n;
+        /* Leaves without triangles are dropped once the layout is cut
+         * (layout.c): no list of their own, in no one's list. */
+        if (o->nodes[o->leaf_node[c]].count == 0)
+            continue;
         touching(b, o->leaf_node[c], 0);
         if (b->oom)
             return -1;
+        size_t kept = 0;
         for (size_t k = 0; k < b->ntmp; k++)
-            b->tmp[k] = o->nodes[b->tmp[k]].cell;
+            if (o->nodes[b->tmp[k]].count > 0)
+                b->tmp[kept++] = o->nodes[b->tmp[k]].cell;
+        b->ntmp = kept;
         if (b->ntmp > 1)
             qsort(b->tmp, b->ntmp, sizeof *b->tmp, cmp_u32);
         if (n + b->ntmp > UINT32_MAX)
@@ -434,7 +458,17 @@ static emm_status build(emm_layout *l, const double *const *c, const char *name,
     free(b.code);
     free(b.id);
     free(b.tmp);
-    return emm_layout_fill_sides(l, name, err);
+    /* The sides from the leaves' cubes, which the nodes hold: faster than
+     * move_side's decoding of the paths, which serves after the empty
+     * leaves are dropped. */
+    l->nb_side = malloc((size_t)l->nb_start[l->ncells] + 1);
+    if (!l->nb_side)
+        return emm_layout_nomem(err, name);
+    for (uint32_t cell = 0; cell < l->ncells; cell++)
+        for (uint32_t k = l->nb_start[cell]; k < l->nb_start[cell + 1]; k++)
+            l->nb_side[k] = (uint8_t)node_side(&o->nodes[o->leaf_node[cell]],
+                                               &o->nodes[o->leaf_node[l->nb[k]]]);
+    return EMM_OK;
 oom:
     st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory building the octree layout", name);
     free(b.code);
