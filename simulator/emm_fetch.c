@@ -665,9 +665,9 @@ static const struct emm_model_ops fetch_ops = {fetch_run,   fetch_reset,   fetch
  * frames, or fewer (at least two) when the largest cell needs the room.
  * Those
  * tables depend on the layout, so it is built (shared, unchecked) first; a
- * cell that does not fit what the tables leave is reported by a private
- * build checked against exactly that, whose message names a CELL that
- * fits. */
+ * cell that does not fit what the tables leave is reported with a CELL
+ * that fits, searched once for the models of the layout that share that
+ * local store (emm_model_share_fit). */
 static emm_status plan_local_store(fetch_model *m, const emm_machine_params *p,
                                    const emm_strategy *s, const emm_trace_info *t,
                                    const emm_layout_options *o, emm_error *err)
@@ -708,22 +708,13 @@ static emm_status plan_local_store(fetch_model *m, const emm_machine_params *p,
     m->budget = p->local_bytes - tables;
     if (largest <= m->budget)
         return EMM_OK;
-    emm_layout *again = NULL;
-    emm_layout_options checked = *o;
-    checked.local_store = m->budget;
     snprintf(where, sizeof where, "%s (local store less %s bytes of look-up tables)", name,
              emm_grouped(tables, b1));
-    const emm_trace_geometry *g = &t->geometry;
-    emm_status st = emm_layout_build(g->xyz, (size_t)g->nv, g->tri, (size_t)g->nt, &checked,
-                                     where, &again, err);
-    if (st == EMM_OK) { /* cannot happen: the same build, now checked */
-        emm_layout_free(again);
-        return emm_fail(err, EMM_ERR_RANGE,
-                        "%s: a cell of %s bytes does not fit the %s bytes of local store left "
-                        "by the look-up tables: use a smaller CELL than %u",
-                        name, emm_grouped(largest, b1), emm_grouped(m->budget, b2), s->cell);
-    }
-    return st;
+    uint32_t suggest = 0;
+    emm_status st = emm_model_share_fit(m->share, t, m->layout, m->budget, &suggest, where, err);
+    if (st != EMM_OK)
+        return st;
+    return emm_layout_too_large(m->layout, o->fetch, m->budget, suggest, where, err);
 }
 
 static emm_status alloc_pager(fetch_model *m, const char *name, emm_error *err)

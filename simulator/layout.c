@@ -356,22 +356,19 @@ static uint32_t floor_pow2(uint64_t x)
     return p;
 }
 
-/* The error for a cell larger than the local store. The CELL it suggests
- * is one that fits: cell bytes grow about linearly with CELL, which gives a
- * first guess, and the guess is halved until a build of it fits (largest
- * grid cells do not shrink exactly in proportion). */
-static emm_status too_large(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
-                            const emm_layout *l, const char *name, emm_error *err)
+emm_status emm_layout_fit_cell(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
+                               const emm_layout *l, uint64_t local, uint32_t *suggest,
+                               const char *name, emm_error *err)
 {
-    uint32_t worst = largest_cell(l);
-    uint64_t bytes = l->cells[worst].bytes, local = l->opt.local_store;
+    uint64_t bytes = l->cells[largest_cell(l)].bytes;
     uint64_t fit = (uint64_t)((double)l->opt.cell * (double)local / (double)bytes);
-    uint32_t suggest = fit >= 1 ? floor_pow2(fit) : 1;
-    if (suggest >= l->opt.cell)
-        suggest = l->opt.cell / 2;
-    for (; suggest >= 1; suggest /= 2) {
+    uint32_t s = fit >= 1 ? floor_pow2(fit) : 1;
+    if (s >= l->opt.cell)
+        s = l->opt.cell / 2;
+    for (; s >= 1; s /= 2) {
         emm_layout_options o = l->opt;
-        o.cell = suggest;
+        o.cell = s;
+        o.local_store = 0;
         emm_layout *trial = NULL;
         emm_status st = build_once(xyz, nv, tri, nt, &o, name, &trial, err);
         if (st != EMM_OK)
@@ -381,6 +378,15 @@ static emm_status too_large(const double *xyz, size_t nv, const int32_t *tri, si
         if (fits)
             break;
     }
+    *suggest = s;
+    return EMM_OK;
+}
+
+emm_status emm_layout_too_large(const emm_layout *l, emm_fetch_kind fetch, uint64_t local,
+                                uint32_t suggest, const char *name, emm_error *err)
+{
+    uint32_t worst = largest_cell(l);
+    uint64_t bytes = l->cells[worst].bytes;
     char b1[32], b2[32];
     const char *layout = emm_layout_name(l->opt.kind);
     if (suggest == 0)
@@ -389,12 +395,25 @@ static emm_status too_large(const double *xyz, size_t nv, const int32_t *tri, si
                         "and no CELL makes every %s cell fit%s",
                         name, layout, worst, emm_grouped(bytes, b1), emm_grouped(local, b2), layout,
                         l->ops->bounded ? "" : " (the quadtree bounds triangles per cell)");
-    const char *fetch = l->opt.fetch != EMM_FETCH_NONE ? emm_fetch_name(l->opt.fetch) : "FETCH";
+    const char *f = fetch != EMM_FETCH_NONE ? emm_fetch_name(fetch) : "FETCH";
     return emm_fail(err, EMM_ERR_RANGE,
                     "%s: %s cell %u takes %s bytes, more than the %s-byte local store: "
                     "use a smaller CELL than %u (e.g. %s+%s@%u)",
                     name, layout, worst, emm_grouped(bytes, b1), emm_grouped(local, b2), l->opt.cell,
-                    layout, fetch, suggest);
+                    layout, f, suggest);
+}
+
+/* The error for a cell larger than the local store, with a CELL that fits
+ * (emm_layout_fit_cell). */
+static emm_status too_large(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
+                            const emm_layout *l, const char *name, emm_error *err)
+{
+    uint32_t suggest = 0;
+    emm_status st =
+        emm_layout_fit_cell(xyz, nv, tri, nt, l, l->opt.local_store, &suggest, name, err);
+    if (st != EMM_OK)
+        return st;
+    return emm_layout_too_large(l, l->opt.fetch, l->opt.local_store, suggest, name, err);
 }
 
 emm_status emm_layout_build(const double *xyz, size_t nv, const int32_t *tri, size_t nt,

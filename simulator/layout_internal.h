@@ -92,6 +92,19 @@ struct emm_layout {
     uint32_t *cell_of;         /* nraw: the cell of each of the kind's, or EMM_LAYOUT_NONE */
 };
 
+/* A CELL for l's kind whose every cell fits `local` bytes: cell bytes grow
+ * about linearly with CELL, which gives a first guess, and the guess is
+ * halved until a build of it fits (largest grid cells do not shrink exactly
+ * in proportion); *suggest 0 when none does. The geometry is l's. Fails
+ * only when a trial build does. */
+emm_status emm_layout_fit_cell(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
+                               const emm_layout *l, uint64_t local, uint32_t *suggest,
+                               const char *name, emm_error *err);
+/* The error for l's largest cell exceeding `local` bytes, naming `suggest`
+ * (emm_layout_fit_cell) with `fetch` as the strategy to use instead. */
+emm_status emm_layout_too_large(const emm_layout *l, emm_fetch_kind fetch, uint64_t local,
+                                uint32_t suggest, const char *name, emm_error *err);
+
 /* "NAME: out of memory building the layout". */
 emm_status emm_layout_nomem(emm_error *err, const char *name);
 /* Fills l->nb_side from the kind's move_side, for lists already in l->nb. */

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "error.h"
+#include "layout_internal.h"
 
 enum { BUILDING, READY, FAILED };
 
@@ -19,8 +20,18 @@ struct entry {
     emm_error failure;
 };
 
+/* A CELL that fits a local store, found for a layout once
+ * (emm_model_share_fit). */
+struct fit {
+    emm_layout_options opt; /* the layout's key */
+    uint64_t local;
+    uint32_t suggest;
+};
+
 struct emm_model_share {
     int refs; /* atomic */
+    struct fit *fits;
+    size_t nfits, capfits;
     pthread_mutex_t mu;
     pthread_cond_t built;
     struct entry *e;
@@ -60,6 +71,7 @@ void emm_model_share_unref(emm_model_share *sh)
     for (size_t i = 0; i < sh->n; i++)
         emm_layout_free(sh->e[i].layout);
     free(sh->e);
+    free(sh->fits);
     free(sh->tri);
     pthread_cond_destroy(&sh->built);
     pthread_mutex_destroy(&sh->mu);
@@ -173,4 +185,39 @@ const int32_t *emm_model_share_triangles(emm_model_share *sh, const emm_trace_in
     if (!tri)
         emm_fail(err, EMM_ERR_NOMEM, "out of memory for the triangles' vertex ids");
     return tri;
+}
+
+emm_status emm_model_share_fit(emm_model_share *sh, const emm_trace_info *t, const emm_layout *l,
+                               uint64_t local, uint32_t *suggest, const char *name,
+                               emm_error *err)
+{
+    const emm_layout_options *opt = emm_layout_get_options(l);
+    pthread_mutex_lock(&sh->mu);
+    for (size_t i = 0; i < sh->nfits; i++)
+        if (sh->fits[i].local == local && same_key(&sh->fits[i].opt, opt)) {
+            *suggest = sh->fits[i].suggest;
+            pthread_mutex_unlock(&sh->mu);
+            return EMM_OK;
+        }
+    pthread_mutex_unlock(&sh->mu);
+
+    /* Found outside the lock: two models may both search, and agree. */
+    const emm_trace_geometry *g = &t->geometry;
+    emm_status st = emm_layout_fit_cell(g->xyz, (size_t)g->nv, g->tri, (size_t)g->nt, l, local,
+                                        suggest, name, err);
+    if (st != EMM_OK)
+        return st;
+    pthread_mutex_lock(&sh->mu);
+    if (sh->nfits == sh->capfits) {
+        size_t cap = sh->capfits ? 2 * sh->capfits : 8;
+        struct fit *nf = realloc(sh->fits, cap * sizeof *nf);
+        if (nf) {
+            sh->fits = nf;
+            sh->capfits = cap;
+        }
+    }
+    if (sh->nfits < sh->capfits) /* else not remembered: found again next time */
+        sh->fits[sh->nfits++] = (struct fit){*opt, local, *suggest};
+    pthread_mutex_unlock(&sh->mu);
+    return EMM_OK;
 }

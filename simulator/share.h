@@ -33,6 +33,14 @@ emm_status emm_model_share_layout(emm_model_share *sh, const emm_trace_info *t,
                                   const emm_layout **out, emm_error *err);
 void emm_model_share_release(emm_model_share *sh, const emm_layout *l);
 
+/* A CELL for layout l's kind whose cells fit `local` bytes
+ * (emm_layout_fit_cell over t's geometry), found once per layout and local
+ * store and remembered: the models of one layout and cell size that do not
+ * fit, one per fetch scheme, share the search's trial builds. */
+emm_status emm_model_share_fit(emm_model_share *sh, const emm_trace_info *t, const emm_layout *l,
+                               uint64_t local, uint32_t *suggest, const char *name,
+                               emm_error *err);
+
 /* The triangles' vertex ids, 3 per triangle, copied from t once; NULL
  * (with err) when memory runs out. Lives as long as the share. */
 const int32_t *emm_model_share_triangles(emm_model_share *sh, const emm_trace_info *t,
