@@ -529,7 +529,8 @@ static void tag_locked(emm_agent *a, const struct tag *nt)
     int idx = -1;
     if (live_locked(a)) {
         emm_array_desc d = {t->kind, EMM_TAG_RECORDS, -1, (const void *)t->base,
-                            t->bytes / t->stride, t->stride, t->offset, t->type, 0, NULL};
+                            t->bytes / t->stride, t->stride, t->offset, t->type, 0, NULL,
+                            {EMM_TAG_NO_LINK, EMM_TAG_NO_LINK, EMM_TAG_NO_LINK, EMM_TAG_NO_LINK}};
         char origin[640];
         if (t->rule >= 0)
             emm_tag_rule_describe(&a->cfg.tags.rule[t->rule], (size_t)t->rule,
