@@ -411,8 +411,42 @@ emm_status emm_tag_rule_parse(const char *text, emm_tag_rule *out, emm_error *er
     return parse_rule(text, strlen(text), out, err);
 }
 
+/* OpenMesh's ArrayKernel (OpenMesh 8 and 9, the default TriMesh/PolyMesh
+ * traits: Vec3f points, half-edges with prev): the points property
+ * (12 bytes), vertices_ (one outgoing half-edge), edges_ (two 16-byte
+ * half-edges {face, to, next, prev}, so the block is the half-edge array
+ * with h ^ 1 the opposite) and faces_ (one half-edge). A reader that knows
+ * the counts (OFF, PLY, STL) reserves them in ArrayKernel::reserve, in that
+ * order (vertices_, edges_, faces_, then the properties); one that does not
+ * (OBJ) grows them, the points and vertices_ under the importer's
+ * add_vertex (points first past 4 KiB), the edges under new_edge, the faces
+ * under add_face (after the edges it makes). Each site= is the innermost
+ * frame (^): the properties that grow beside them (under new_edge, under
+ * ArrayKernel::reserve) are other blocks. */
+static const char openmesh_preset[] =
+    "vertices:site=^PropertyT::reserve,stride=12,xyz=0:f32;"
+    "vconn:site=^ArrayKernel::reserve,stride=4,he=0:i32;"
+    "halfedges:site=^ArrayKernel::reserve,stride=16,to=4:i32,next=8,prev=12,face=0;"
+    "faces:site=^ArrayKernel::reserve,stride=4,he=0:i32;"
+    "vertices:site=^ImporterT::add_vertex,stride=12,xyz=0:f32;"
+    "vconn:site=^ImporterT::add_vertex,stride=4,he=0:i32;"
+    "halfedges:site=^ArrayKernel::new_edge,stride=16,to=4:i32,next=8,prev=12,face=0;"
+    "faces:site=^PolyConnectivity::add_face,stride=4,he=0:i32";
+
+const char *emm_tag_preset(const char *name)
+{
+    return strcmp(name, "openmesh") == 0 ? openmesh_preset : NULL;
+}
+
 emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *err)
 {
+    const char *preset = emm_tag_preset(text);
+    if (preset) {
+        emm_status st = emm_tag_rules_parse(preset, out, err);
+        for (size_t i = 0; st == EMM_OK && i < out->n; i++)
+            out->rule[i].alternative = 1;
+        return st;
+    }
     emm_tag_rules rs = {0, NULL};
     size_t cap = 0;
     emm_status st = EMM_OK;

@@ -438,7 +438,10 @@ static void decide_locked(emm_agent *a)
         if (a->cfg.log >= 2)
             emm_agent_say("%s", err.message);
     }
-    a->state = EMM_SESSION_SIMULATING;
+    /* A session whose window started again profiles on. */
+    a->state = emm_session_access(a->session, NULL, 0) == EMM_SESSION_PROFILING
+                   ? EMM_SESSION_PROFILING
+                   : EMM_SESSION_SIMULATING;
     ranges_changed_locked(a);
 }
 

@@ -535,8 +535,12 @@ static inline bool convert(session *s, const emm_raw_access *raw, emm_trace_reco
     r->element = div_stride(a, rel);
     if (r->element >= a->count)
         return false; /* a column's entries past the records in use */
-    if (r->element >= a->top)
+    if (r->element >= a->top) {
+        /* A half-edge mesh that grows in the window is still being built. */
+        s->he_grew += emm_tag_shape_is_connectivity(a->shape) && s->wopen &&
+                      s->phase == PHASE_PROFILING && (raw->bytes_write & EMM_RAW_WRITE);
         a->top = r->element + 1;
+    }
     r->offset = (uint32_t)(rel - r->element * a->stride + column * a->stride);
     r->array = (uint32_t)i;
     /* A trace record stays within one record of its array (trace.h): a
@@ -720,6 +724,8 @@ static void flush_chunk(session *s)
 static emm_session_state engine_access(emm_session *h, const emm_raw_access *a, size_t n)
 {
     session *s = (session *)h;
+    if (n == 0) /* a question: the state (after a decision that started a window again) */
+        return public_state(s);
     if (s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE) {
         session_window_clock(s, n);
         window_add(s, a, n);
@@ -789,12 +795,16 @@ static emm_status decide_done(session *s, emm_status st, emm_error *err)
  * the run as for any mesh (PHASE_DEFERRED). */
 static bool window_restart(session *s)
 {
-    if (s->he_slot < 0 || s->restarts >= SESSION_HALFEDGE_RESTARTS ||
+    bool connectivity = false;
+    for (int i = 0; i < s->narrays && !connectivity; i++)
+        connectivity = s->arrays[i].live && emm_tag_shape_is_connectivity(s->arrays[i].shape);
+    if (!connectivity || s->restarts >= SESSION_HALFEDGE_RESTARTS ||
         !(emm_capture_caps(s->capture) & EMM_CAP_WHOLE_RUN) ||
         (s->wend != WINDOW_FULL && s->wend != WINDOW_RECORDS && s->wend != WINDOW_WRITES))
         return false;
     s->restarts++;
     s->restart_records += s->wn;
+    s->he_grew = 0;
     s->loader_writes += s->wwrites;
     for (int i = 0; i < s->narrays; i++) {
         s->arrays[i].refs = 0;
@@ -835,6 +845,9 @@ static emm_status engine_decide_read(emm_session *h, emm_error *err)
             *err = s->failure;
         return s->failure.status;
     }
+    /* The loader's window: its half-edge mesh grew while it filled. */
+    if (s->he_grew && !s->deferred && window_restart(s))
+        return EMM_OK;
     emm_status st = session_decide_read(s, &s->failure);
     if (st == EMM_ERR_MESH && s->geometry_failed && !s->deferred && window_restart(s))
         return EMM_OK;

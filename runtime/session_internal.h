@@ -267,6 +267,7 @@ typedef struct session {
     uint64_t *taccesses; /* per trace array, simulated records */
     unsigned restarts;   /* windows started again: the half-edge mesh was being built */
     uint64_t restart_records; /* the records of those windows, left out */
+    uint64_t he_grew;    /* connectivity records appended since the window opened */
     char pick_note[1024]; /* which of a rule's several arrays is the mesh, what a soup's
                              corners made, or "" */
     bool soup;           /* the triangles are a soup's: the vertices are their corners */

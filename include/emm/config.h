@@ -146,6 +146,10 @@ typedef struct emm_tag_rule {
                                      triangles and the half-edge kinds */
     uint32_t link[EMM_TAG_LINKS]; /* EMM_TAG_HALFEDGES: next, prev, face, opp offsets (of
                                      `type`), EMM_TAG_NO_LINK when absent; else all absent */
+    uint8_t alternative;          /* a preset's rule (--tag openmesh): one of several ways a
+                                     library allocates an array (reserve or growth); it says
+                                     nothing at exit for matching nothing when a rule of its
+                                     kind and shape tagged */
 } emm_tag_rule;
 
 /* The rules, as many as EMM_TAG has: rule[0..n), malloc'ed (NULL when n is
@@ -155,8 +159,11 @@ typedef struct emm_tag_rules {
     emm_tag_rule *rule;
 } emm_tag_rules;
 
+/* The rules of EMM_TAG's presets ("openmesh"), as EMM_TAG spells them, or
+ * NULL for another name. */
+EMM_API const char *emm_tag_preset(const char *name);
 /* Parses EMM_TAG's grammar: rules split by ';', each KIND:key=value,...
- * (docs in emm_tag_rules_help). On failure err says what is wrong in one
+ * (docs in emm_tag_rules_help), or a preset's name (emm_tag_preset). On failure err says what is wrong in one
  * line that quotes at most a bounded part of the text. Axis rules (x=, y=,
  * z=) come in sets: every axis rule needs an x rule and a y rule of its
  * stride and type (z is optional: the layouts work in the plane). */
