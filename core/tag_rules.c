@@ -420,7 +420,10 @@ emm_status emm_tag_rule_parse(const char *text, emm_tag_rule *out, emm_error *er
  * order (vertices_, edges_, faces_, then the properties); one that does not
  * (OBJ) grows them, the points and vertices_ under the importer's
  * add_vertex (points first past 4 KiB), the edges under new_edge, the faces
- * under add_face (after the edges it makes). Each site= is the innermost
+ * under add_face (after the edges it makes); a program that builds or
+ * refines a mesh (a subdivider) grows them under PolyMeshT::new_vertex
+ * (the points are its first vertex property), new_edge and new_face. Each
+ * site= but that of the growing points is the innermost
  * frame (^): the properties that grow beside them (under new_edge, under
  * ArrayKernel::reserve) are other blocks. */
 static const char openmesh_preset[] =
@@ -431,7 +434,10 @@ static const char openmesh_preset[] =
     "vertices:site=^ImporterT::add_vertex,stride=12,xyz=0:f32;"
     "vconn:site=^ImporterT::add_vertex,stride=4,he=0:i32;"
     "halfedges:site=^ArrayKernel::new_edge,stride=16,to=4:i32,next=8,prev=12,face=0;"
-    "faces:site=^PolyConnectivity::add_face,stride=4,he=0:i32";
+    "faces:site=^PolyConnectivity::add_face,stride=4,he=0:i32;"
+    "vertices:site=PolyMeshT::new_vertex,stride=12,xyz=0:f32;"
+    "vconn:site=^PolyMeshT::new_vertex,stride=4,he=0:i32;"
+    "faces:site=^ArrayKernel::new_face,stride=4,he=0:i32";
 
 const char *emm_tag_preset(const char *name)
 {

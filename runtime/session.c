@@ -786,10 +786,10 @@ static emm_status decide_done(session *s, emm_status st, emm_error *err)
     return EMM_OK;
 }
 
-/* A half-edge mesh that did not check out when its window filled is, most
- * often, one still being built: OpenMesh's add_face reads the half-edges it
- * links, and those reads opened the window. The window so far was the
- * loader's: its records are left out (its writes counted as the loader's),
+/* A half-edge mesh that did not check out when its window filled, or that
+ * grew in it while hardly a position was read, is one still being built:
+ * OpenMesh's add_face reads the half-edges it links, and those reads opened
+ * the window. The window so far was the loader's: its records are left out (its writes counted as the loader's),
  * and a window starts again at the next read, up to
  * SESSION_HALFEDGE_RESTARTS times; then the decision waits for the end of
  * the run as for any mesh (PHASE_DEFERRED). */
@@ -845,8 +845,17 @@ static emm_status engine_decide_read(emm_session *h, emm_error *err)
             *err = s->failure;
         return s->failure.status;
     }
-    /* The loader's window: its half-edge mesh grew while it filled. */
-    if (s->he_grew && !s->deferred && window_restart(s))
+    /* The loader's window: its half-edge mesh grew while it filled, and
+     * hardly a record of the positions it keeps was accessed (a loader's
+     * growing vector copies its old blocks; a subdivider grows its mesh
+     * too, but reads the positions it averages: its window is its
+     * traversal's). */
+    uint64_t positions = 0;
+    for (int i = 0; i < s->narrays; i++)
+        if (s->arrays[i].live && s->arrays[i].kind == EMM_ARRAY_VERTICES &&
+            !emm_tag_shape_is_connectivity(s->arrays[i].shape))
+            positions += s->arrays[i].refs;
+    if (s->he_grew && positions * 100 < s->wn && !s->deferred && window_restart(s))
         return EMM_OK;
     emm_status st = session_decide_read(s, &s->failure);
     if (st == EMM_ERR_MESH && s->geometry_failed && !s->deferred && window_restart(s))
