@@ -141,7 +141,7 @@ static emm_status walk_face(session *s, session_array *H, uint64_t nh, uint64_t 
     if (h != h0)
         REFUSE(H,
                "half-edge %lld's cycle does not close in 3 steps (%lld -> %lld -> %lld -> %lld): "
-               "only triangle faces are simulated",
+               "a broken cycle, or a face of more sides: only triangle faces are simulated",
                (long long)h0, (long long)path[0], (long long)path[1], (long long)path[2],
                (long long)path[3]);
     return EMM_OK;

@@ -172,7 +172,8 @@ static emm_session_config base_config(void)
 static int tag_call(emm_session *s, emm_array_kind kind, const void *base, size_t count,
                     size_t stride, size_t offset, emm_scalar type)
 {
-    emm_array_desc d = {kind, EMM_TAG_RECORDS, -1, base, count, stride, offset, type, 0, NULL};
+    emm_array_desc d = {kind, EMM_TAG_RECORDS, -1, base, count, stride, offset, type, 0, NULL,
+                        {EMM_TAG_NO_LINK, EMM_TAG_NO_LINK, EMM_TAG_NO_LINK, EMM_TAG_NO_LINK}};
     return emm_session_tag(s, &d);
 }
 

@@ -1,0 +1,52 @@
+#!/bin/sh
+# A program on a half-edge mesh under emm run, against its native run
+# (issue 30):
+#   sh halfedge.sh MODE EMM CAPTURE RULES WANT WORK PROG ARGS...
+# Both runs in WORK; stdout and the exit status must be identical.
+# MODE simulated: the report has an answer (a strategy) and counts
+#   accesses to each kind of connectivity in WANT (comma-separated:
+#   halfedges, faces, vconn), each non-zero, in the parts of its arrays.
+# MODE refused: the mesh is refused in exactly one line of emm's that names
+#   the rule (WANT: its text's start, e.g. "EMM_TAG rule 2 (halfedges:") and
+#   the broken cycle, and the program runs on untouched.
+set -u
+MODE=$1 EMM=$2 CAPTURE=$3 RULES=$4 WANT=$5 WORK=$6
+shift 6
+fail() { echo "FAIL: $*" >&2; exit 1; }
+rm -rf "$WORK" && mkdir -p "$WORK" || fail "cannot make $WORK"
+env -u LD_PRELOAD "$@" > "$WORK/native.out" 2>&1
+native_rc=$?
+"$EMM" run --capture "$CAPTURE" --tag "$RULES" --report "$WORK/report.json" -- "$@" \
+  > "$WORK/emm.out" 2> "$WORK/emm.err"
+rc=$?
+[ "$rc" = "$native_rc" ] || { cat "$WORK/emm.err" >&2; fail "exit status $rc under emm run, $native_rc natively"; }
+grep -v '^emm:' "$WORK/emm.out" | cmp -s - "$WORK/native.out" ||
+  { diff "$WORK/native.out" "$WORK/emm.out" >&2; fail "the output differs from the native run's"; }
+if [ "$MODE" = refused ]; then
+  n=$(grep -c 'the half-edge mesh is refused' "$WORK/emm.err")
+  [ "$n" = 1 ] || { cat "$WORK/emm.err" >&2; fail "$n lines refuse the mesh, not 1"; }
+  line=$(grep 'the half-edge mesh is refused' "$WORK/emm.err")
+  case $line in
+    *"$WANT"*"does not close in 3 steps"*) ;;
+    *) fail "the refusal does not name '$WANT' and the cycle: $line" ;;
+  esac
+  echo "refused in one line: $line"
+  exit 0
+fi
+[ -s "$WORK/report.json" ] || { cat "$WORK/emm.err" >&2; fail "no report"; }
+/usr/bin/python3 - "$WORK/report.json" "$WANT" <<'PY' || { cat "$WORK/emm.err" >&2; exit 1; }
+import json, sys
+r = json.load(open(sys.argv[1]))
+if r['strategy'] is None:
+    sys.exit("FAIL: no strategy decided")
+seen = {}
+for a in r['arrays']:
+    for p in a.get('parts', []):
+        seen[p['kind']] = seen.get(p['kind'], 0) + p['accesses']
+for kind in sys.argv[2].split(','):
+    if seen.get(kind, 0) <= 0:
+        sys.exit("FAIL: no accesses to %s counted (parts: %s)" % (kind, seen))
+print("strategy %s; accesses by array: %s" % (
+    r['strategy'], ', '.join('%s %d' % kv for kv in sorted(seen.items()))))
+PY
+grep -E '^emm: answer|^emm:   connectivity' "$WORK/emm.err" | cut -c1-200
