@@ -620,6 +620,10 @@ static void report_extra(json_writer *w, void *ctx)
     json_bool(w, s->sweep_profiled);
     json_key(w, "waited");
     json_u64(w, s->waited);
+    json_key(w, "restarts");
+    json_u64(w, s->restarts);
+    json_key(w, "restart_records");
+    json_u64(w, s->restart_records);
     json_end_object(w);
     write_arrays(w, s);
     write_profile(w, s);
