@@ -809,6 +809,10 @@ static bool window_restart(session *s)
     for (int i = 0; i < s->narrays; i++) {
         s->arrays[i].refs = 0;
         forget_view(&s->arrays[i]); /* read again at the next decision */
+        if (!s->arrays[i].live) { /* a block the loader freed: its window's, gone with it */
+            free(s->arrays[i].snap);
+            s->arrays[i].snap = NULL;
+        }
     }
     free(s->tri);
     free(s->xyz);

@@ -301,8 +301,25 @@ emm_status session_halfedge_freeze(session *s, emm_error *err)
     session_part *hp = add_part(s, H, t, (uint32_t)face_bytes, H->count);
     hp->remap = s->he_owner;
     hp->pos = s->he_pos;
-    /* The vertices' records grow by their connectivity record. */
+    /* The mesh's positions are the first vertex array of the trace, which
+     * the layouts take for the mesh's (a growing vector's old buffers,
+     * read in the window, are arrays of their own: read directly). */
     int32_t vt = s->vertex_slot >= 0 ? s->arrays[s->vertex_slot].trace_index : -1;
+    for (int32_t k = 0; vt > 0 && k < vt; k++) {
+        if (s->tarrays[k].kind != EMM_ARRAY_VERTICES)
+            continue;
+        emm_trace_array keep = s->tarrays[k];
+        s->tarrays[k] = s->tarrays[vt];
+        s->tarrays[vt] = keep;
+        for (int i = 0; i < s->narrays; i++)
+            if (s->arrays[i].trace_index == k)
+                s->arrays[i].trace_index = vt;
+            else if (s->arrays[i].trace_index == vt)
+                s->arrays[i].trace_index = k;
+        vt = k;
+        break;
+    }
+    /* The vertices' records grow by their connectivity record. */
     if (C && vt >= 0 && s->arrays[s->vertex_slot].axis < 0) {
         emm_trace_array *va = &s->tarrays[vt];
         uint64_t n = used(C) < va->count ? used(C) : va->count;
