@@ -616,9 +616,9 @@ void emm_tag_rules_help(FILE *out)
             "each record a half-edge (without opp= the opposite of h is h ^ 1, a face of -1\n"
             "a boundary); faces:stride=BYTES,he=OFFSET:TYPE, a face's half-edge; vconn:\n"
             "stride=BYTES,he=OFFSET:TYPE, a vertex's half-edge. A face's corners\n"
-            "are the to-vertices of its half-edge cycle, which must close in 3 steps\n"
-            "(triangle meshes); each face and its cycle's half-edges are placed in that\n"
-            "triangle's cell, a vertex's vconn record with its position. --tag openmesh\n"
+            "are the to-vertices of its half-edge cycle, which must close (a polygon is\n"
+            "a fan of triangles); each face and its cycle's half-edges are placed in its\n"
+            "triangles' cells, a vertex's vconn record with its position. --tag openmesh\n"
             "(EMM_TAG=openmesh) is the set for OpenMesh's ArrayKernel.\n");
 }
 

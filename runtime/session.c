@@ -440,9 +440,14 @@ static emm_session_state engine_untag(emm_session *h, uint64_t lo)
          * read ("freeze the data"). A growing std::vector frees its old
          * buffer after the new one is tagged, so it does not end the
          * window. */
-        bool last = s->phase == PHASE_PROFILING;
+        /* Of its kind: a half-edge mesh's faces and vertex connectivity are
+         * beside its half-edges and positions, which decide alone. */
+        bool last = s->phase == PHASE_PROFILING && a->shape != EMM_TAG_FACES &&
+                    a->shape != EMM_TAG_VCONN;
         for (int j = 0; j < s->narrays && last; j++)
-            last = j == i || !s->arrays[j].live || s->arrays[j].kind != a->kind;
+            last = j == i || !s->arrays[j].live || s->arrays[j].kind != a->kind ||
+                   (s->arrays[j].shape == EMM_TAG_HALFEDGES) != (a->shape == EMM_TAG_HALFEDGES) ||
+                   s->arrays[j].shape == EMM_TAG_FACES || s->arrays[j].shape == EMM_TAG_VCONN;
         drop_slot(s, i, last);
         if (last) {
             s->phase = PHASE_DECIDE;

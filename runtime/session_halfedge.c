@@ -89,6 +89,8 @@ void session_halfedge_free(session *s)
 {
     free(s->he_owner);
     free(s->he_pos);
+    free(s->face_tri);
+    s->face_tri = NULL;
     free(s->taccesses);
     s->he_owner = NULL;
     s->he_pos = NULL;
@@ -106,14 +108,21 @@ void session_halfedge_free(session *s)
                         s->program, session_origin(s, (a), o_, sizeof o_), m_);            \
     } while (0)
 
-/* Walks face f's cycle from half-edge h0: three half-edges, each of face
- * f, closing back on h0; their to-vertices are triangle f's corners. */
+/* The most sides a face may have: a longer cycle is taken for a broken one. */
+#define MAX_SIDES 64
+
+/* Walks face f's cycle from half-edge h0 into cyc (its length into *n):
+ * half-edges of face f, each in no other face's cycle, to-vertices in
+ * range, prev the inverse of next when there is prev, back to h0 in at
+ * least 3 and at most MAX_SIDES steps. Marks them as face f's (he_owner). */
 static emm_status walk_face(session *s, session_array *H, uint64_t nh, uint64_t f, int64_t h0,
-                            const session_array *v, int32_t *tri, emm_error *err)
+                            const session_array *v, int64_t *cyc, int *n, emm_error *err)
 {
-    int64_t h = h0, path[4] = {h0, -1, -1, -1};
+    int64_t h = h0;
     bool prev = (H->hhas & 1u << F_PREV) != 0;
-    for (int c = 0; c < 3; c++) {
+    int c = 0;
+    char path[160];
+    for (;;) {
         int64_t face = index_at(s, H, (uint64_t)h, F_FACE);
         if (face != (int64_t)f)
             REFUSE(H, "half-edge %lld of face %llu's cycle belongs to face %lld", (long long)h,
@@ -122,12 +131,23 @@ static emm_status walk_face(session *s, session_array *H, uint64_t nh, uint64_t 
         if (to < 0 || (uint64_t)to >= v->count || to > INT32_MAX)
             REFUSE(H, "half-edge %lld points to vertex %lld, outside the %llu vertex records",
                    (long long)h, (long long)to, (unsigned long long)v->count);
-        if (s->he_owner[h] != UINT32_MAX && s->he_owner[h] != (uint32_t)f)
+        if (s->he_owner[h] != UINT32_MAX) {
+            size_t at = 0;
+            for (int k = 0; k < c && at < sizeof path; k++)
+                at += (size_t)snprintf(path + at, sizeof path - at, "%lld -> ",
+                                       (long long)cyc[k]);
+            if (s->he_owner[h] == (uint32_t)f)
+                REFUSE(H, "half-edge %lld's cycle does not close: it comes back to half-edge "
+                          "%lld, not to %lld (%s%lld)",
+                       (long long)h0, (long long)h, (long long)h0, path, (long long)h);
             REFUSE(H, "half-edge %lld is in the cycles of faces %u and %llu", (long long)h,
                    s->he_owner[h], (unsigned long long)f);
+        }
+        if (c == MAX_SIDES)
+            REFUSE(H, "half-edge %lld's cycle does not close in %d steps", (long long)h0,
+                   MAX_SIDES);
         s->he_owner[h] = (uint32_t)f;
-        s->he_pos[h] = (uint8_t)c;
-        tri[c] = (int32_t)to;
+        cyc[c++] = h;
         int64_t next = index_at(s, H, (uint64_t)h, F_NEXT);
         if (next < 0 || (uint64_t)next >= nh)
             REFUSE(H, "half-edge %lld's next is %lld, outside the %llu half-edges in use",
@@ -135,15 +155,14 @@ static emm_status walk_face(session *s, session_array *H, uint64_t nh, uint64_t 
         if (prev && index_at(s, H, (uint64_t)next, F_PREV) != h)
             REFUSE(H, "half-edge %lld's prev is %lld, not %lld whose next it is", (long long)next,
                    (long long)index_at(s, H, (uint64_t)next, F_PREV), (long long)h);
-        path[c + 1] = next;
+        if (next == h0)
+            break;
         h = next;
     }
-    if (h != h0)
-        REFUSE(H,
-               "half-edge %lld's cycle does not close in 3 steps (%lld -> %lld -> %lld -> %lld): "
-               "a broken cycle, or a face of more sides: only triangle faces are simulated",
-               (long long)h0, (long long)path[0], (long long)path[1], (long long)path[2],
-               (long long)path[3]);
+    if (c < 3)
+        REFUSE(H, "face %llu's cycle has %d half-edge%s (a face has 3 or more)",
+               (unsigned long long)f, c, c == 1 ? "" : "s");
+    *n = c;
     return EMM_OK;
 }
 
@@ -171,32 +190,79 @@ emm_status session_halfedge_triangles(session *s, session_array *v, uint64_t *nt
                 nf = (uint64_t)f + 1;
         }
     }
-    if (nf > INT32_MAX / 3 || nf > nh)
-        REFUSE(F ? F : H, "%llu faces for %llu half-edges", (unsigned long long)nf,
-               (unsigned long long)nh);
+    if (nf > nh / 3)
+        REFUSE(F ? F : H, "%llu faces for %llu half-edges (a face has 3 or more)",
+               (unsigned long long)nf, (unsigned long long)nh);
     session_halfedge_free(s);
     s->he_owner = malloc((nh ? nh : 1) * sizeof *s->he_owner);
     s->he_pos = calloc(nh ? nh : 1, 1);
-    s->tri = malloc((nf ? 3 * nf : 1) * sizeof *s->tri);
-    if (!s->he_owner || !s->he_pos || !s->tri)
+    s->face_tri = malloc((nf ? nf : 1) * sizeof *s->face_tri);
+    uint32_t *start = malloc((nf ? nf : 1) * sizeof *start);
+    if (!s->he_owner || !s->he_pos || !s->face_tri || !start) {
+        free(start);
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
+    }
     memset(s->he_owner, 0xff, (nh ? nh : 1) * sizeof *s->he_owner);
-    emm_status st = EMM_OK;
-    if (F) {
-        for (uint64_t f = 0; f < nf && st == EMM_OK; f++) {
-            int64_t h0 = index_at(s, F, f, 0);
-            if (h0 < 0 || (uint64_t)h0 >= nh)
-                REFUSE(F, "face %llu's half-edge is %lld, outside the %llu half-edges in use",
-                       (unsigned long long)f, (long long)h0, (unsigned long long)nh);
-            st = walk_face(s, H, nh, f, h0, v, s->tri + 3 * f, err);
+    /* Each face's first half-edge: its record's, or the first that names it. */
+    memset(start, 0xff, (nf ? nf : 1) * sizeof *start);
+    for (uint64_t f = 0; F && f < nf; f++) {
+        int64_t h0 = index_at(s, F, f, 0);
+        if (h0 < 0 || (uint64_t)h0 >= nh) {
+            free(start);
+            REFUSE(F, "face %llu's half-edge is %lld, outside the %llu half-edges in use",
+                   (unsigned long long)f, (long long)h0, (unsigned long long)nh);
         }
-    } else {
-        for (uint64_t h = 0; h < nh && st == EMM_OK; h++) {
-            int64_t f = index_at(s, H, h, F_FACE);
-            if (f >= 0 && s->he_owner[h] == UINT32_MAX)
-                st = walk_face(s, H, nh, (uint64_t)f, (int64_t)h, v, s->tri + 3 * f, err);
+        start[f] = (uint32_t)h0;
+    }
+    for (uint64_t h = 0; !F && h < nh; h++) {
+        int64_t f = index_at(s, H, h, F_FACE);
+        if (f >= 0 && start[f] == UINT32_MAX)
+            start[f] = (uint32_t)h;
+    }
+    /* The cycles, checked; a face of n sides is n - 2 triangles, a fan
+     * from its first corner. */
+    int64_t cyc[MAX_SIDES];
+    uint64_t nt = 0;
+    emm_status st = EMM_OK;
+    for (uint64_t f = 0; f < nf && st == EMM_OK; f++) {
+        int n = 0;
+        if (start[f] == UINT32_MAX) {
+            free(start);
+            REFUSE(H, "no half-edge names face %llu (of %llu)", (unsigned long long)f,
+                   (unsigned long long)nf);
+        }
+        st = walk_face(s, H, nh, f, start[f], v, cyc, &n, err);
+        s->face_tri[f] = (uint32_t)nt;
+        nt += (uint64_t)n - 2;
+    }
+    if (st == EMM_OK && nt > INT32_MAX / 3)
+        st = emm_fail(err, EMM_ERR_RANGE, "%s: %llu triangles (at most %d)", s->program,
+                      (unsigned long long)nt, INT32_MAX / 3);
+    s->tri = st == EMM_OK ? malloc((nt ? 3 * nt : 1) * sizeof *s->tri) : NULL;
+    if (st == EMM_OK && !s->tri)
+        st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the geometry", s->program);
+    for (uint64_t f = 0; f < nf && st == EMM_OK; f++) {
+        /* Walked once already: the half-edges are the face's. */
+        int64_t h = start[f];
+        int n = 0;
+        do {
+            cyc[n++] = h;
+            h = index_at(s, H, (uint64_t)h, F_NEXT);
+        } while (h != (int64_t)start[f] && n < MAX_SIDES);
+        uint32_t t0 = s->face_tri[f];
+        for (int i = 0; i < n; i++) {
+            s->he_owner[cyc[i]] = t0 + (uint32_t)(i < 3 ? 0 : i - 2);
+            s->he_pos[cyc[i]] = (uint8_t)(i < 3 ? i : 2);
+        }
+        int32_t c0 = (int32_t)index_at(s, H, (uint64_t)cyc[0], F_TO);
+        for (int k = 0; k + 2 < n; k++) {
+            int32_t *t = s->tri + 3 * (t0 + (uint32_t)k);
+            t[0] = c0;
+            t[1] = (int32_t)index_at(s, H, (uint64_t)cyc[k + 1], F_TO);
+            t[2] = (int32_t)index_at(s, H, (uint64_t)cyc[k + 2], F_TO);
         }
     }
+    free(start);
     if (st != EMM_OK)
         return st;
     /* Every half-edge that names a face is in its cycle; a boundary
@@ -233,10 +299,11 @@ emm_status session_halfedge_triangles(session *s, session_array *v, uint64_t *nt
                 REFUSE(C, "vertex %llu's half-edge is %lld, outside the %llu half-edges in use",
                        (unsigned long long)i, (long long)h, (unsigned long long)nh);
         }
-    for (uint64_t i = 0; i < 3 * nf; i++)
+    for (uint64_t i = 0; i < 3 * nt; i++)
         if (s->tri[i] > *highest)
             *highest = s->tri[i];
-    *nt_out = nf;
+    *nt_out = nt;
+    s->nfaces = nf;
     /* The records past those in use are not the mesh's. */
     if (H->count > nh) {
         H->count = nh;
@@ -249,9 +316,12 @@ emm_status session_halfedge_triangles(session *s, session_array *v, uint64_t *nt
     char a[32], b[32], o[512];
     size_t at = strlen(s->pick_note);
     snprintf(s->pick_note + at, sizeof s->pick_note - at,
-             "%sthe triangles are the %s faces of the half-edge mesh of %s (%s half-edges)",
+             "%sthe triangles are the %s faces of the half-edge mesh of %s (%s half-edges)%s",
              at ? "; " : "", emm_grouped(nf, a), session_origin(s, H, o, sizeof o),
-             emm_grouped(nh, b));
+             emm_grouped(nh, b),
+             nt > nf ? ", its polygons cut into fans of triangles, each face's record and "
+                       "first three half-edges with its first triangle"
+                     : "");
     return EMM_OK;
 }
 
@@ -296,8 +366,10 @@ emm_status session_halfedge_freeze(session *s, emm_error *err)
                                       .count = nt,
                                       .base = F ? F->base : H->base};
     s->nparts = 0;
-    if (F)
-        add_part(s, F, t, 0, nt);
+    if (F) {
+        session_part *fp = add_part(s, F, t, 0, s->nfaces);
+        fp->remap = s->face_tri;
+    }
     session_part *hp = add_part(s, H, t, (uint32_t)face_bytes, H->count);
     hp->remap = s->he_owner;
     hp->pos = s->he_pos;

@@ -263,7 +263,9 @@ typedef struct session {
     session_part parts[3];
     int nparts;
     uint32_t *he_owner;  /* per half-edge: its triangle, or UINT32_MAX */
-    uint8_t *he_pos;     /* and its place in the triangle's cycle */
+    uint8_t *he_pos;     /* and its place in the triangle's record (0..2) */
+    uint32_t *face_tri;  /* per face: its first triangle (a polygon is a fan of them) */
+    uint64_t nfaces;
     uint64_t *taccesses; /* per trace array, simulated records */
     unsigned restarts;   /* windows started again: the half-edge mesh was being built */
     uint64_t restart_records; /* the records of those windows, left out */

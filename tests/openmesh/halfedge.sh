@@ -8,7 +8,7 @@
 #   halfedges, faces, vconn), each non-zero, in the parts of its arrays.
 # MODE refused: the mesh is refused in exactly one line of emm's that names
 #   the rule (WANT: its text's start, e.g. "EMM_TAG rule 2 (halfedges:") and
-#   the broken cycle, and the program runs on untouched.
+#   the cycle that does not close, and the program runs on untouched.
 set -u
 MODE=$1 EMM=$2 CAPTURE=$3 RULES=$4 WANT=$5 WORK=$6
 shift 6
@@ -27,7 +27,7 @@ if [ "$MODE" = refused ]; then
   [ "$n" = 1 ] || { cat "$WORK/emm.err" >&2; fail "$n lines refuse the mesh, not 1"; }
   line=$(grep 'the half-edge mesh is refused' "$WORK/emm.err")
   case $line in
-    *"$WANT"*"does not close in 3 steps"*) ;;
+    *"$WANT"*"cycle does not close"*) ;;
     *) fail "the refusal does not name '$WANT' and the cycle: $line" ;;
   esac
   echo "refused in one line: $line"

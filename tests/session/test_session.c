@@ -1245,8 +1245,8 @@ static void test_halfedges(void)
            "%s", report ? report : "(no report)");
     free(report);
 
-    /* Face 1's cycle broken: 6 -> 5 instead of 6 -> 1. */
-    H[6].next = 5;
+    /* Face 1's cycle broken: 6 -> 6 instead of 6 -> 1. */
+    H[6].next = 6;
     s = new_tagged("vertices:stride=12,xyz=0:f32;halfedges:stride=16,to=4:i32,next=8,face=0;"
                    "faces:stride=4,he=0:i32",
                    NULL, NULL);
@@ -1257,8 +1257,8 @@ static void test_halfedges(void)
     emm_session_decide(s, &err);
     CHECK(finish_summary(s, text, sizeof text) != EMM_OK);
     CHECKF(has(text, "EMM_TAG rule 2 (halfedges:stride=16,to=4:i32,next=8,face=0): the "
-                     "half-edge mesh is refused: half-edge 5's cycle does not close in 3 steps "
-                     "(5 -> 6 -> 5 -> 6)"),
+                     "half-edge mesh is refused: half-edge 5's cycle does not close: it comes "
+                     "back to half-edge 6, not to 5 (5 -> 6 -> 6)"),
            "%s", text);
     emm_session_free(s);
     emm_tag_rules_free(&tcfg.tags);
