@@ -5,7 +5,8 @@
 # Both runs in WORK; stdout and the exit status must be identical.
 # MODE simulated: the report has an answer (a strategy) and counts
 #   accesses to each kind of connectivity in WANT (comma-separated:
-#   halfedges, faces, vconn), each non-zero, in the parts of its arrays.
+#   halfedges, faces, vconn), each non-zero, in the parts of its arrays;
+#   "fans" in WANT: more triangles than faces (polygons cut into fans).
 # MODE refused: the mesh is refused in exactly one line of emm's that names
 #   the rule (WANT: its text's start, e.g. "EMM_TAG rule 2 (halfedges:") and
 #   the cycle that does not close, and the program runs on untouched.
@@ -43,10 +44,17 @@ seen = {}
 for a in r['arrays']:
     for p in a.get('parts', []):
         seen[p['kind']] = seen.get(p['kind'], 0) + p['accesses']
-for kind in sys.argv[2].split(','):
+want = sys.argv[2].split(',')
+if 'fans' in want:  # polygons: more triangles than faces
+    want.remove('fans')
+    tris = [a for a in r['arrays'] if a['kind'] == 'triangles']
+    faces = [p for a in tris for p in a.get('parts', []) if p['kind'] == 'faces']
+    if not tris or not faces or tris[0]['records'] <= faces[0]['records']:
+        sys.exit("FAIL: the polygons are not fans of triangles (%s)" % r['arrays'])
+for kind in want:
     if seen.get(kind, 0) <= 0:
         sys.exit("FAIL: no accesses to %s counted (parts: %s)" % (kind, seen))
 print("strategy %s; accesses by array: %s" % (
     r['strategy'], ', '.join('%s %d' % kv for kv in sorted(seen.items()))))
 PY
-grep -E '^emm: answer|^emm:   connectivity' "$WORK/emm.err" | cut -c1-200
+grep -E '^emm: answer|^emm:   connectivity|fans of triangles' "$WORK/emm.err" | cut -c1-200
