@@ -326,7 +326,8 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
         "instead of letting it run without emm",
         {{"--strict", "1", "a bad value stops the program instead of the shim stepping aside"}}},
         parse_strict},
-    [EMM_CONFIG_TAG] = {{"EMM_TAG", "--tag", "RULES", "rules KIND:key=value,...;... (see below)",
+    [EMM_CONFIG_TAG] = {{"EMM_TAG", "--tag", "RULES",
+        "rules KIND:key=value,...;... (see below), or openmesh (the preset for OpenMesh's arrays)",
         "(none)", "tag arrays by rule, e.g. vertices:site=read_mesh,stride=80,xyz=8:f64", {{0}}},
         parse_tag},
     [EMM_CONFIG_CAPTURE] = {{"EMM_CAPTURE", "--capture", "C",
@@ -619,7 +620,12 @@ void emm_config_dump(const emm_config *c, FILE *out)
     for (size_t i = 0; i < c->tags.n; i++) {
         const emm_tag_rule *r = &c->tags.rule[i];
         fprintf(out, "emm:     rule %zu: %s site=%s min=%llu nth=%llu stride=%u offset=%u%s\n",
-                i + 1, r->kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles",
+                i + 1,
+                r->shape == EMM_TAG_HALFEDGES ? "halfedges"
+                : r->shape == EMM_TAG_FACES   ? "faces"
+                : r->shape == EMM_TAG_VCONN   ? "vconn"
+                : r->kind == EMM_ARRAY_VERTICES ? "vertices"
+                                                : "triangles",
                 r->site[0] ? r->site : "(any)", (unsigned long long)r->min,
                 (unsigned long long)r->nth, r->stride, r->offset,
                 r->shape != EMM_TAG_AXIS ? "" : r->axis == 0 ? " (the x block)"

@@ -91,9 +91,48 @@ int emm_tag_rule_fits(const emm_tag_rule *r, uint64_t size)
  * one of a column or of an axis block, a soup's nine. */
 static unsigned rule_scalars(const emm_tag_rule *r)
 {
-    return r->shape == EMM_TAG_SOUP                                 ? 9
-           : r->shape == EMM_TAG_COLUMNS || r->shape == EMM_TAG_AXIS ? 1
-                                                                     : 3;
+    return r->shape == EMM_TAG_SOUP ? 9
+           : r->shape == EMM_TAG_COLUMNS || r->shape == EMM_TAG_AXIS ||
+                   emm_tag_shape_is_connectivity(r->shape)
+               ? 1
+               : 3;
+}
+
+/* A half-edge record's link keys, in emm_tag_rule.link[]'s order. */
+static const char *const link_keys[EMM_TAG_LINKS] = {"next", "prev", "face", "opp"};
+
+static int link_key(const char *p, size_t kl)
+{
+    for (int i = 0; i < EMM_TAG_LINKS; i++)
+        if (is_key(p, kl, link_keys[i]))
+            return i;
+    return -1;
+}
+
+/* A link's value: OFFSET, or OFFSET:TYPE of the rule's type (given by to=,
+ * before or after). */
+static bool parse_link(const char *v, size_t len, uint32_t *offset, emm_scalar *type)
+{
+    const char *colon = memchr(v, ':', len);
+    char buf[32];
+    size_t n = colon ? (size_t)(colon - v) : len;
+    uint64_t off;
+    if (n == 0 || n >= sizeof buf)
+        return false;
+    memcpy(buf, v, n);
+    buf[n] = '\0';
+    if (!emm_parse_u64(buf, &off) || off >= UINT32_MAX)
+        return false;
+    *type = (emm_scalar)-1;
+    if (colon) {
+        uint32_t ignored;
+        char field[48];
+        int w = snprintf(field, sizeof field, "0%.*s", (int)(len - n), colon);
+        if (w < 0 || (size_t)w >= sizeof field || !parse_field(field, strlen(field), false, &ignored, type))
+            return false;
+    }
+    *offset = (uint32_t)off;
+    return true;
 }
 
 /* The key of an axis rule: x=, y= or z=; -1 for another key. */
@@ -135,10 +174,13 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
 {
     char q[EMM_CLIP + 1];
     memset(r, 0, sizeof *r);
+    for (int i = 0; i < EMM_TAG_LINKS; i++)
+        r->link[i] = EMM_TAG_NO_LINK;
     const char *colon = memchr(text, ':', len);
     if (!colon)
         return emm_fail(err, EMM_ERR_INVALID,
-                        "rule '%s' has no KIND: (vertices:, triangles: or soup:)",
+                        "rule '%s' has no KIND: (vertices:, triangles:, soup:, halfedges:, "
+                        "faces: or vconn:)",
                         emm_clip(text, len, q));
     size_t klen = (size_t)(colon - text);
     if (is_key(text, klen, "vertices")) {
@@ -148,16 +190,32 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
     } else if (is_key(text, klen, "soup")) {
         r->kind = EMM_ARRAY_TRIANGLES;
         r->shape = EMM_TAG_SOUP;
+    } else if (is_key(text, klen, "halfedges")) {
+        r->kind = EMM_ARRAY_TRIANGLES;
+        r->shape = EMM_TAG_HALFEDGES;
+    } else if (is_key(text, klen, "faces")) {
+        r->kind = EMM_ARRAY_TRIANGLES;
+        r->shape = EMM_TAG_FACES;
+    } else if (is_key(text, klen, "vconn")) {
+        r->kind = EMM_ARRAY_VERTICES;
+        r->shape = EMM_TAG_VCONN;
     } else {
         return emm_fail(err, EMM_ERR_INVALID,
-                        "unknown kind '%s' (expected vertices, triangles or soup)",
+                        "unknown kind '%s' (expected vertices, triangles, soup, halfedges, "
+                        "faces or vconn)",
                         emm_clip(text, klen, q));
     }
-    bool vertices = r->kind == EMM_ARRAY_VERTICES, soup = r->shape == EMM_TAG_SOUP;
-    const char *field = soup ? "corners" : vertices ? "xyz" : "vidx";
-    const char *field_help = soup ? "corners=OFFSET:f32|f64"
+    bool conn = emm_tag_shape_is_connectivity(r->shape), he = r->shape == EMM_TAG_HALFEDGES;
+    bool vertices = r->kind == EMM_ARRAY_VERTICES && !conn, soup = r->shape == EMM_TAG_SOUP;
+    const char *field = soup ? "corners" : vertices ? "xyz" : he ? "to" : conn ? "he" : "vidx";
+    const char *field_help = soup       ? "corners=OFFSET:f32|f64"
                              : vertices ? "xyz=OFFSET:f32|f64"
+                             : he       ? "to=OFFSET:i32|u32|u16|i64"
+                             : conn     ? "he=OFFSET:i32|u32|u16|i64"
                                         : "vidx=OFFSET:i32|u32|u16|i64";
+    const char *kind_name = soup ? "soup" : vertices ? "vertices" : he ? "halfedges"
+                            : r->shape == EMM_TAG_FACES ? "faces" : conn ? "vconn" : "triangles";
+    emm_scalar link_type[EMM_TAG_LINKS];
     bool have_min = false, have_field = false, have_order = false;
     const char *p = colon + 1, *end = text + len;
     while (p < end) {
@@ -172,7 +230,7 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
         char num[32] = "";
         uint64_t x = 0;
         bool numeric = is_key(p, kl, "min") || is_key(p, kl, "nth") ||
-                       is_key(p, kl, "stride") || (is_key(p, kl, "n") && !soup);
+                       is_key(p, kl, "stride") || (is_key(p, kl, "n") && !soup && !conn);
         if (numeric) {
             if (vl == 0 || vl >= sizeof num)
                 return emm_fail(err, EMM_ERR_INVALID, "'%s' needs a number", emm_clip(p, plen, q));
@@ -207,7 +265,16 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
                 return emm_fail(err, EMM_ERR_INVALID, "'%s' is not a record size in bytes",
                                 emm_clip(p, plen, q));
             r->stride = (uint32_t)x;
-        } else if (is_key(p, kl, "order") && !soup) {
+        } else if (he && link_key(p, kl) >= 0) {
+            int k = link_key(p, kl);
+            if (r->link[k] != EMM_TAG_NO_LINK)
+                return emm_fail(err, EMM_ERR_INVALID, "'%s': %s= is given twice",
+                                emm_clip(p, plen, q), link_keys[k]);
+            if (!parse_link(v, vl, &r->link[k], &link_type[k]))
+                return emm_fail(err, EMM_ERR_INVALID,
+                                "'%s': expected %s=OFFSET or %s=OFFSET:i32|u32|u16|i64",
+                                emm_clip(p, plen, q), link_keys[k], link_keys[k]);
+        } else if (is_key(p, kl, "order") && !soup && !conn) {
             have_order = true;
             if (vl == 7 && memcmp(v, "records", 7) == 0)
                 r->shape = EMM_TAG_RECORDS;
@@ -216,7 +283,7 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
             else
                 return emm_fail(err, EMM_ERR_INVALID, "'%s': expected order=records|columns",
                                 emm_clip(p, plen, q));
-        } else if (is_key(p, kl, "n") && !soup) {
+        } else if (is_key(p, kl, "n") && !soup && !conn) {
             if (!emm_parse_u64(num, &x) || x == 0)
                 return emm_fail(err, EMM_ERR_INVALID, "'%s' is not a count of records from 1",
                                 emm_clip(p, plen, q));
@@ -240,9 +307,11 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
             have_field = true;
         } else {
             return emm_fail(err, EMM_ERR_INVALID, "unknown key in '%s' (%s rules take %s)",
-                            emm_clip(p, plen, q), soup ? "soup" : vertices ? "vertices" : "triangles",
+                            emm_clip(p, plen, q), kind_name,
                             soup       ? "site, min, nth, stride, corners"
                             : vertices ? "site, min, nth, stride, order, n, xyz or x|y|z"
+                            : he       ? "site, min, nth, stride, to, next, prev, face, opp"
+                            : conn     ? "site, min, nth, stride, he"
                                        : "site, min, nth, stride, order, n, vidx");
         }
         p = comma ? comma + 1 : end;
@@ -250,6 +319,24 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
     if (!have_field)
         return emm_fail(err, EMM_ERR_INVALID, "rule '%s' needs %s", emm_clip(text, len, q),
                         field_help);
+    if (he && (r->link[EMM_TAG_LINK_NEXT] == EMM_TAG_NO_LINK ||
+               r->link[EMM_TAG_LINK_FACE] == EMM_TAG_NO_LINK))
+        return emm_fail(err, EMM_ERR_INVALID,
+                        "rule '%s' needs next=OFFSET and face=OFFSET (prev= and opp= are "
+                        "optional: the opposite of half-edge h is then h ^ 1)",
+                        emm_clip(text, len, q));
+    for (int k = 0; he && k < EMM_TAG_LINKS; k++) {
+        if (r->link[k] == EMM_TAG_NO_LINK)
+            continue;
+        if (link_type[k] != (emm_scalar)-1 && link_type[k] != r->type)
+            return emm_fail(err, EMM_ERR_INVALID,
+                            "rule '%s': %s= has another type than to= (a record's indices "
+                            "are of one type)",
+                            emm_clip(text, len, q), link_keys[k]);
+        if (r->stride && (uint64_t)r->link[k] + scalar_size(r->type) > r->stride)
+            return emm_fail(err, EMM_ERR_INVALID, "rule '%s': %s= does not fit in stride bytes",
+                            emm_clip(text, len, q), link_keys[k]);
+    }
     bool columns = r->shape == EMM_TAG_COLUMNS, axis = r->shape == EMM_TAG_AXIS;
     if (axis && have_order)
         return emm_fail(err, EMM_ERR_INVALID,
@@ -271,6 +358,7 @@ static emm_status parse_rule(const char *text, size_t len, emm_tag_rule *r, emm_
                         soup      ? "rule '%s': the nine corner coordinates do not fit in stride bytes"
                         : columns ? "rule '%s': a column's scalar does not fit in stride bytes"
                         : axis    ? "rule '%s': the coordinate does not fit in stride bytes"
+                        : conn    ? "rule '%s': the half-edge index does not fit in stride bytes"
                                   : "rule '%s': the three fields do not fit in stride bytes",
                         emm_clip(text, len, q));
     if (r->n > UINT64_MAX / 3 / r->stride)
@@ -323,8 +411,48 @@ emm_status emm_tag_rule_parse(const char *text, emm_tag_rule *out, emm_error *er
     return parse_rule(text, strlen(text), out, err);
 }
 
+/* OpenMesh's ArrayKernel (OpenMesh 8 and 9, the default TriMesh/PolyMesh
+ * traits: Vec3f points, half-edges with prev): the points property
+ * (12 bytes), vertices_ (one outgoing half-edge), edges_ (two 16-byte
+ * half-edges {face, to, next, prev}, so the block is the half-edge array
+ * with h ^ 1 the opposite) and faces_ (one half-edge). A reader that knows
+ * the counts (OFF, PLY, STL) reserves them in ArrayKernel::reserve, in that
+ * order (vertices_, edges_, faces_, then the properties); one that does not
+ * (OBJ) grows them, the points and vertices_ under the importer's
+ * add_vertex (points first past 4 KiB), the edges under new_edge, the faces
+ * under add_face (after the edges it makes); a program that builds or
+ * refines a mesh (a subdivider) grows them under PolyMeshT::new_vertex
+ * (the points are its first vertex property), new_edge and new_face. Each
+ * site= but that of the growing points is the innermost
+ * frame (^): the properties that grow beside them (under new_edge, under
+ * ArrayKernel::reserve) are other blocks. */
+static const char openmesh_preset[] =
+    "vertices:site=^PropertyT::reserve,stride=12,xyz=0:f32;"
+    "vconn:site=^ArrayKernel::reserve,stride=4,he=0:i32;"
+    "halfedges:site=^ArrayKernel::reserve,stride=16,to=4:i32,next=8,prev=12,face=0;"
+    "faces:site=^ArrayKernel::reserve,stride=4,he=0:i32;"
+    "vertices:site=^ImporterT::add_vertex,stride=12,xyz=0:f32;"
+    "vconn:site=^ImporterT::add_vertex,stride=4,he=0:i32;"
+    "halfedges:site=^ArrayKernel::new_edge,stride=16,to=4:i32,next=8,prev=12,face=0;"
+    "faces:site=^PolyConnectivity::add_face,stride=4,he=0:i32;"
+    "vertices:site=PolyMeshT::new_vertex,stride=12,xyz=0:f32;"
+    "vconn:site=^PolyMeshT::new_vertex,stride=4,he=0:i32;"
+    "faces:site=^ArrayKernel::new_face,stride=4,he=0:i32";
+
+const char *emm_tag_preset(const char *name)
+{
+    return strcmp(name, "openmesh") == 0 ? openmesh_preset : NULL;
+}
+
 emm_status emm_tag_rules_parse(const char *text, emm_tag_rules *out, emm_error *err)
 {
+    const char *preset = emm_tag_preset(text);
+    if (preset) {
+        emm_status st = emm_tag_rules_parse(preset, out, err);
+        for (size_t i = 0; st == EMM_OK && i < out->n; i++)
+            out->rule[i].alternative = 1;
+        return st;
+    }
     emm_tag_rules rs = {0, NULL};
     size_t cap = 0;
     emm_status st = EMM_OK;
@@ -393,6 +521,26 @@ void emm_tag_rule_describe(const emm_tag_rule *r, size_t index, const void *base
                           .type = r->type,
                           .rule = (unsigned)(index + 1),
                           .origin = origin_buf};
+    memcpy(d->link, r->link, sizeof d->link);
+}
+
+/* A connectivity rule as EMM_TAG spells it. */
+static void format_connectivity(const emm_tag_rule *r, const char *selectors, char *out,
+                                size_t cap)
+{
+    bool he = r->shape == EMM_TAG_HALFEDGES;
+    char links[96] = "";
+    size_t used = 0;
+    for (int k = 0; he && k < EMM_TAG_LINKS; k++)
+        if (r->link[k] != EMM_TAG_NO_LINK && used < sizeof links) {
+            int w = snprintf(links + used, sizeof links - used, ",%s=%u", link_keys[k],
+                             r->link[k]);
+            if (w > 0)
+                used += (size_t)w;
+        }
+    snprintf(out, cap, "%s:%sstride=%u,%s=%u:%s%s",
+             he ? "halfedges" : r->shape == EMM_TAG_FACES ? "faces" : "vconn", selectors,
+             r->stride, he ? "to" : "he", r->offset, emm_scalar_name(r->type), links);
 }
 
 void emm_tag_rule_format(const emm_tag_rule *r, char *out, size_t cap)
@@ -409,6 +557,12 @@ void emm_tag_rule_format(const emm_tag_rule *r, char *out, size_t cap)
         snprintf(order, sizeof order, "order=columns,n=%llu,", (unsigned long long)r->n);
     else if (r->shape == EMM_TAG_COLUMNS)
         snprintf(order, sizeof order, "order=columns,");
+    if (emm_tag_shape_is_connectivity(r->shape)) {
+        char sel[EMM_TAG_SITE_MAX + 80];
+        snprintf(sel, sizeof sel, "%s%s%s", site, min, nth);
+        format_connectivity(r, sel, out, cap);
+        return;
+    }
     static const char *const axes[] = {"x", "y", "z"};
     snprintf(out, cap, "%s:%s%s%s%sstride=%u,%s=%u:%s",
              soup ? "soup" : vertices ? "vertices" : "triangles", site, min, nth, order,
@@ -424,11 +578,12 @@ void emm_tag_rules_help(FILE *out)
 {
     fprintf(out,
             "EMM_TAG rules are split by ';', each KIND:key=value,... with KIND vertices,\n"
-            "triangles or soup. Selectors: site=FUNCTION (the function that makes the\n"
-            "allocation, looking past allocator and C++ standard-library frames such as\n"
-            "std::vector's; a function no symbol names, in a stripped binary, is\n"
-            "MODULE+0xOFFSET, as --list-sites prints it: the object's file name and the\n"
-            "function's offset from its load base), min=BYTES (K/M/G; default max(one record, 4K)), nth=N (the Nth\n"
+            "triangles, soup, halfedges, faces or vconn. Selectors: site=FUNCTION (a\n"
+            "function on the allocation's stack, looking past allocator and C++\n"
+            "standard-library frames such as std::vector's; site=^FUNCTION: the innermost\n"
+            "of the program's frames only; a function no symbol names, in a stripped\n"
+            "binary, is MODULE+0xOFFSET, as --list-sites prints it: the object's file name\n"
+            "and the function's offset from its load base), min=BYTES (K/M/G; default max(one record, 4K)), nth=N (the Nth\n"
             "block the other selectors select, from 1). Record: stride=BYTES (required;\n"
             "optional with order=columns or an axis key), xyz=OFFSET:f32|f64 (vertices),\n"
             "vidx=OFFSET:i32|u32|u16|i64 (triangles). Count = block size / stride; a block\n"
@@ -455,7 +610,16 @@ void emm_tag_rules_help(FILE *out)
             "Triangle soup (STL facets): soup:stride=BYTES,corners=OFFSET:f32|f64, each\n"
             "record a triangle whose three corners are nine coordinates in a row at OFFSET\n"
             "(binary STL: soup:stride=50,corners=12:f32); corners at exactly the same\n"
-            "position are one vertex. An access anywhere in a record is its triangle's.\n");
+            "position are one vertex. An access anywhere in a record is its triangle's.\n"
+            "Half-edge meshes (OpenMesh, CGAL Surface_mesh, PMP): halfedges:stride=BYTES,\n"
+            "to=OFFSET:i32|u32|u16|i64,next=OFFSET,face=OFFSET[,prev=OFFSET][,opp=OFFSET],\n"
+            "each record a half-edge (without opp= the opposite of h is h ^ 1, a face of -1\n"
+            "a boundary); faces:stride=BYTES,he=OFFSET:TYPE, a face's half-edge; vconn:\n"
+            "stride=BYTES,he=OFFSET:TYPE, a vertex's half-edge. A face's corners\n"
+            "are the to-vertices of its half-edge cycle, which must close (a polygon is\n"
+            "a fan of triangles); each face and its cycle's half-edges are placed in its\n"
+            "triangles' cells, a vertex's vconn record with its position. --tag openmesh\n"
+            "(EMM_TAG=openmesh) is the set for OpenMesh's ArrayKernel.\n");
 }
 
 /* ---- call sites ------------------------------------------------------------ */

@@ -438,7 +438,10 @@ static void decide_locked(emm_agent *a)
         if (a->cfg.log >= 2)
             emm_agent_say("%s", err.message);
     }
-    a->state = EMM_SESSION_SIMULATING;
+    /* A session whose window started again profiles on. */
+    a->state = emm_session_access(a->session, NULL, 0) == EMM_SESSION_PROFILING
+                   ? EMM_SESSION_PROFILING
+                   : EMM_SESSION_SIMULATING;
     ranges_changed_locked(a);
 }
 
@@ -529,7 +532,8 @@ static void tag_locked(emm_agent *a, const struct tag *nt)
     int idx = -1;
     if (live_locked(a)) {
         emm_array_desc d = {t->kind, EMM_TAG_RECORDS, -1, (const void *)t->base,
-                            t->bytes / t->stride, t->stride, t->offset, t->type, 0, NULL};
+                            t->bytes / t->stride, t->stride, t->offset, t->type, 0, NULL,
+                            {EMM_TAG_NO_LINK, EMM_TAG_NO_LINK, EMM_TAG_NO_LINK, EMM_TAG_NO_LINK}};
         char origin[640];
         if (t->rule >= 0)
             emm_tag_rule_describe(&a->cfg.tags.rule[t->rule], (size_t)t->rule,

@@ -363,9 +363,15 @@ static bool rule_selects(agent_rules *m, size_t i, size_t size, const char **nam
             note_site(m, *nframes > 0 ? name[0] : NULL, size);
         }
         *f = 0;
-        while (*f < *nframes && !(name[*f] && emm_tag_site_matches(r->site, name[*f],
-                                                                   name[*f] + strlen(name[*f]) + 1)))
+        /* site=^FUNCTION: the innermost frame of the program's own only. */
+        bool innermost = r->site[0] == '^';
+        const char *site = r->site + innermost;
+        int frames = innermost && *nframes > 1 ? 1 : *nframes;
+        while (*f < frames && !(name[*f] && emm_tag_site_matches(site, name[*f],
+                                                                 name[*f] + strlen(name[*f]) + 1)))
             (*f)++;
+        if (*f == frames)
+            *f = *nframes;
         if (*f == *nframes)
             return false;
         /* The call path, innermost frame of the program's to the site. */
@@ -515,6 +521,15 @@ void agent_rules_report(agent_rules *m, void (*say)(void *ctx, const char *line)
 {
     for (size_t i = 0; i < m->rs->n; i++) {
         if (__atomic_load_n(&m->selected[i], __ATOMIC_RELAXED))
+            continue;
+        /* A preset's other way to the same array, which tagged it. */
+        const emm_tag_rule *r = &m->rs->rule[i];
+        bool other = false;
+        for (size_t j = 0; j < m->rs->n && r->alternative && !other; j++)
+            other = j != i && m->rs->rule[j].kind == r->kind &&
+                    m->rs->rule[j].shape == r->shape &&
+                    __atomic_load_n(&m->selected[j], __ATOMIC_RELAXED);
+        if (other)
             continue;
         char line[1024];
         uint64_t by = __atomic_load_n(&m->shadow_by[i], __ATOMIC_RELAXED);

@@ -84,6 +84,7 @@ emm_status session_engine_new(const emm_session_config *sc, emm_session **out, e
                     ? (size_t)(s->cfg.window_accesses * SESSION_RECORDS_PER_ELEMENT + 4096)
                     : SESSION_ITERATION_RECORDS;
     s->last = s->last2 = -1;
+    s->he_slot = s->face_slot = s->vconn_slot = s->vertex_slot = -1;
 
     if ((st = emm_machine_new(&s->machine, err)) != EMM_OK)
         goto fail;
@@ -142,6 +143,8 @@ static emm_session_state public_state(const session *s)
 
 static bool valid_field(emm_array_kind kind, emm_tag_shape shape, emm_scalar type)
 {
+    if (emm_tag_shape_is_connectivity(shape))
+        return type == EMM_I32 || type == EMM_U32 || type == EMM_I64 || type == EMM_U16;
     if (kind == EMM_ARRAY_VERTICES || shape == EMM_TAG_SOUP)
         return type == EMM_F32 || type == EMM_F64;
     if (kind == EMM_ARRAY_TRIANGLES)
@@ -255,9 +258,26 @@ static int engine_tag(emm_session *h, const emm_array_desc *d)
     }
     int axis = shape == EMM_TAG_AXIS ? d->axis : -1;
     int rule = (int)d->rule - 1;
-    unsigned field_scalars = shape == EMM_TAG_SOUP                           ? 9
-                             : shape == EMM_TAG_COLUMNS || shape == EMM_TAG_AXIS ? 1
-                                                                               : 3;
+    unsigned field_scalars = shape == EMM_TAG_SOUP ? 9
+                             : shape == EMM_TAG_COLUMNS || shape == EMM_TAG_AXIS ||
+                                     emm_tag_shape_is_connectivity(shape)
+                                 ? 1
+                                 : 3;
+    /* A half-edge record's other fields lie in it too. */
+    uint32_t hoff[1 + EMM_TAG_LINKS] = {(uint32_t)field_offset};
+    unsigned hhas = 1;
+    for (int k = 0; k < EMM_TAG_LINKS; k++) {
+        hoff[1 + k] = (uint32_t)field_offset;
+        if (shape != EMM_TAG_HALFEDGES || d->link[k] == EMM_TAG_NO_LINK)
+            continue;
+        if ((uint64_t)d->link[k] + session_scalar_bytes(type) > stride)
+            return -1;
+        hoff[1 + k] = d->link[k];
+        hhas |= 1u << (1 + k);
+    }
+    if (shape == EMM_TAG_HALFEDGES &&
+        (!(hhas & 1u << (1 + EMM_TAG_LINK_NEXT)) || !(hhas & 1u << (1 + EMM_TAG_LINK_FACE))))
+        return -1;
     if (axis > 2 || d->rule > INT_MAX)
         return -1;
     if (s->phase == PHASE_FAILED || s->phase == PHASE_DONE || !lo || count == 0 ||
@@ -276,6 +296,7 @@ static int engine_tag(emm_session *h, const emm_array_desc *d)
             !s->arrays[i].snap && !leads_others(s, i))
             slot = i;
     int32_t tidx = -1;
+    int part = -1;
     if (s->phase == PHASE_SIMULATING) {
         /* After the decision the trace's arrays are fixed; an array that
          * moved (realloc) keeps feeding its trace array if it is the same
@@ -295,7 +316,9 @@ static int engine_tag(emm_session *h, const emm_array_desc *d)
                     bound = true;
             if (!bound) {
                 tidx = a->trace_index;
+                part = a->part; /* a connectivity array's part goes with it */
                 a->trace_index = -1; /* handed over */
+                a->part = -1;
                 if (slot < 0 && a->refs == 0)
                     slot = i;
             }
@@ -341,6 +364,9 @@ static int engine_tag(emm_session *h, const emm_array_desc *d)
     a->snap = NULL;
     forget_view(a);
     a->trace_index = tidx;
+    a->part = part;
+    memcpy(a->hoff, hoff, sizeof a->hoff);
+    a->hhas = hhas;
     a->rule = rule;
     a->top = 0;
     a->moves = 0;
@@ -356,7 +382,10 @@ static int engine_tag(emm_session *h, const emm_array_desc *d)
         }
         s->late_total++;
     }
-    if (tidx >= 0 && a->count > s->tarrays[tidx].count) {
+    if (part >= 0 && a->count > s->parts[part].count) {
+        a->count = s->parts[part].count; /* later records are not in the trace */
+        a->end = session_array_end(a);
+    } else if (part < 0 && tidx >= 0 && a->count > s->tarrays[tidx].count) {
         a->count = s->tarrays[tidx].count; /* later elements are not in the trace */
         a->end = session_array_end(a);
     }
@@ -386,8 +415,11 @@ static emm_session_state engine_move(emm_session *h, uint64_t from, uint64_t lo,
             a->plane = count * a->stride;
         a->moves++;
         forget_view(a); /* of the old block */
-        if (a->trace_index >= 0 && a->count > s->tarrays[a->trace_index].count)
-            a->count = s->tarrays[a->trace_index].count; /* later elements are not in the trace */
+        uint64_t room = a->part >= 0 ? s->parts[a->part].count
+                        : a->trace_index >= 0 ? s->tarrays[a->trace_index].count
+                                              : UINT64_MAX;
+        if (a->count > room)
+            a->count = room; /* later elements are not in the trace */
         if (a->top > a->count)
             a->top = a->count;
         a->end = session_array_end(a);
@@ -408,9 +440,14 @@ static emm_session_state engine_untag(emm_session *h, uint64_t lo)
          * read ("freeze the data"). A growing std::vector frees its old
          * buffer after the new one is tagged, so it does not end the
          * window. */
-        bool last = s->phase == PHASE_PROFILING;
+        /* Of its kind: a half-edge mesh's faces and vertex connectivity are
+         * beside its half-edges and positions, which decide alone. */
+        bool last = s->phase == PHASE_PROFILING && a->shape != EMM_TAG_FACES &&
+                    a->shape != EMM_TAG_VCONN;
         for (int j = 0; j < s->narrays && last; j++)
-            last = j == i || !s->arrays[j].live || s->arrays[j].kind != a->kind;
+            last = j == i || !s->arrays[j].live || s->arrays[j].kind != a->kind ||
+                   (s->arrays[j].shape == EMM_TAG_HALFEDGES) != (a->shape == EMM_TAG_HALFEDGES) ||
+                   s->arrays[j].shape == EMM_TAG_FACES || s->arrays[j].shape == EMM_TAG_VCONN;
         drop_slot(s, i, last);
         if (last) {
             s->phase = PHASE_DECIDE;
@@ -503,8 +540,12 @@ static inline bool convert(session *s, const emm_raw_access *raw, emm_trace_reco
     r->element = div_stride(a, rel);
     if (r->element >= a->count)
         return false; /* a column's entries past the records in use */
-    if (r->element >= a->top)
+    if (r->element >= a->top) {
+        /* A half-edge mesh that grows in the window is still being built. */
+        s->he_grew += emm_tag_shape_is_connectivity(a->shape) && s->wopen &&
+                      s->phase == PHASE_PROFILING && (raw->bytes_write & EMM_RAW_WRITE);
         a->top = r->element + 1;
+    }
     r->offset = (uint32_t)(rel - r->element * a->stride + column * a->stride);
     r->array = (uint32_t)i;
     /* A trace record stays within one record of its array (trace.h): a
@@ -664,6 +705,8 @@ void session_simulate(session *s, const emm_trace_record *recs, size_t n)
     }
     s->accesses += n;
     for (size_t k = 0; k < n; k++) {
+        if (s->taccesses && recs[k].array < s->ntarrays)
+            s->taccesses[recs[k].array]++;
         s->work += recs[k].work;
         s->elements += !s->eany || recs[k].array != s->elast_array ||
                        recs[k].element != s->elast_element;
@@ -686,6 +729,8 @@ static void flush_chunk(session *s)
 static emm_session_state engine_access(emm_session *h, const emm_raw_access *a, size_t n)
 {
     session *s = (session *)h;
+    if (n == 0) /* a question: the state (after a decision that started a window again) */
+        return public_state(s);
     if (s->phase == PHASE_PROFILING || s->phase == PHASE_DECIDE) {
         session_window_clock(s, n);
         window_add(s, a, n);
@@ -700,8 +745,9 @@ static emm_session_state engine_access(emm_session *h, const emm_raw_access *a, 
         emm_trace_record *r = &s->chunk[m];
         if (!convert(s, &a[k], r))
             continue;
-        int32_t t = s->arrays[r->array].trace_index;
-        if (t < 0) {
+        const session_array *sa = &s->arrays[r->array];
+        int32_t t = sa->trace_index;
+        if (t < 0 || (sa->part >= 0 && !session_part_map(s, sa, r))) {
             s->dropped++;
             continue;
         }
@@ -745,6 +791,56 @@ static emm_status decide_done(session *s, emm_status st, emm_error *err)
     return EMM_OK;
 }
 
+/* A half-edge mesh that did not check out when its window filled, or that
+ * grew in it while hardly a position was read, is one still being built:
+ * OpenMesh's add_face reads the half-edges it links, and those reads opened
+ * the window. The window so far was the loader's: its records are left out (its writes counted as the loader's),
+ * and a window starts again at the next read, up to
+ * SESSION_HALFEDGE_RESTARTS times; then the decision waits for the end of
+ * the run as for any mesh (PHASE_DEFERRED). */
+static bool window_restart(session *s)
+{
+    bool connectivity = false;
+    for (int i = 0; i < s->narrays && !connectivity; i++)
+        connectivity = s->arrays[i].live && emm_tag_shape_is_connectivity(s->arrays[i].shape);
+    if (!connectivity || s->restarts >= SESSION_HALFEDGE_RESTARTS ||
+        !(emm_capture_caps(s->capture) & EMM_CAP_WHOLE_RUN) ||
+        (s->wend != WINDOW_FULL && s->wend != WINDOW_RECORDS && s->wend != WINDOW_WRITES))
+        return false;
+    s->restarts++;
+    s->restart_records += s->wn;
+    s->he_grew = 0;
+    s->loader_writes += s->wwrites;
+    for (int i = 0; i < s->narrays; i++) {
+        s->arrays[i].refs = 0;
+        forget_view(&s->arrays[i]); /* read again at the next decision */
+        if (!s->arrays[i].live) { /* a block the loader freed: its window's, gone with it */
+            free(s->arrays[i].snap);
+            s->arrays[i].snap = NULL;
+        }
+    }
+    free(s->tri);
+    free(s->xyz);
+    s->tri = NULL;
+    s->xyz = NULL;
+    session_halfedge_free(s);
+    memset(&s->info.geometry, 0, sizeof s->info.geometry);
+    s->vertex_only = s->soup = false;
+    s->pick_note[0] = '\0';
+    s->wn = 0;
+    s->welements = s->iterations = s->wreads = s->wwrites = s->wactivity = 0;
+    s->wopen = s->wany = s->wwany = false;
+    s->wend = WINDOW_OPEN;
+    s->waited = 0;
+    memset(&s->sweep, 0, sizeof s->sweep);
+    s->wskip = s->wfill = 0;
+    s->wlimit = s->cfg.window_accesses
+                    ? (size_t)(s->cfg.window_accesses * SESSION_RECORDS_PER_ELEMENT + 4096)
+                    : SESSION_ITERATION_RECORDS;
+    s->phase = PHASE_PROFILING;
+    return true;
+}
+
 /* Reads (or defers the decision, or fails); when it leaves s->deciding
  * set, engine_decide_rest completes it. */
 static emm_status engine_decide_read(emm_session *h, emm_error *err)
@@ -758,7 +854,21 @@ static emm_status engine_decide_read(emm_session *h, emm_error *err)
             *err = s->failure;
         return s->failure.status;
     }
+    /* The loader's window: its half-edge mesh grew while it filled, and
+     * hardly a record of the positions it keeps was accessed (a loader's
+     * growing vector copies its old blocks; a subdivider grows its mesh
+     * too, but reads the positions it averages: its window is its
+     * traversal's). */
+    uint64_t positions = 0;
+    for (int i = 0; i < s->narrays; i++)
+        if (s->arrays[i].live && s->arrays[i].kind == EMM_ARRAY_VERTICES &&
+            !emm_tag_shape_is_connectivity(s->arrays[i].shape))
+            positions += s->arrays[i].refs;
+    if (s->he_grew && positions * 100 < s->wn && !s->deferred && window_restart(s))
+        return EMM_OK;
     emm_status st = session_decide_read(s, &s->failure);
+    if (st == EMM_ERR_MESH && s->geometry_failed && !s->deferred && window_restart(s))
+        return EMM_OK;
     if (st == EMM_ERR_MESH && s->geometry_failed && !s->deferred) {
         /* The arrays do not hold a mesh yet (a loader that renumbers its
          * faces after the first reads, a block still being filled): keep
@@ -769,6 +879,7 @@ static emm_status engine_decide_read(emm_session *h, emm_error *err)
         free(s->xyz);
         s->tri = NULL;
         s->xyz = NULL;
+        session_halfedge_free(s);
         memset(&s->info.geometry, 0, sizeof s->info.geometry);
         s->vertex_only = false;
         for (int i = 0; i < s->narrays; i++) /* copies of now: read again later */
@@ -990,6 +1101,7 @@ static void engine_free(emm_session *h)
     free(s->merr);
     free(s->xyz);
     free(s->tri);
+    session_halfedge_free(s);
     free(s->D);
     free(s->program);
     free(s);

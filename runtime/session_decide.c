@@ -68,13 +68,15 @@ static int mesh_array(session *s, emm_array_kind kind)
     int best = -1, same_rule = 0;
     for (int i = 0; i < s->narrays; i++) {
         const session_array *a = &s->arrays[i];
-        if (session_usable(a) && a->kind == kind && (best < 0 || better_mesh(a, &s->arrays[best])))
+        if (session_usable(a) && a->kind == kind && !emm_tag_shape_is_connectivity(a->shape) &&
+            (best < 0 || better_mesh(a, &s->arrays[best])))
             best = i;
     }
     if (best < 0 || s->arrays[best].rule < 0)
         return best;
     for (int i = 0; i < s->narrays; i++)
         same_rule += s->arrays[i].live && s->arrays[best].live && s->arrays[i].kind == kind &&
+                     !emm_tag_shape_is_connectivity(s->arrays[i].shape) &&
                      s->arrays[i].rule == s->arrays[best].rule;
     if (same_rule > 1) {
         char o[512];
@@ -347,8 +349,9 @@ static void pair_mesh(session *s, int *gv, int *gt)
     int nv = 0, nt = 0, bv = -1, bt = -1;
     for (int i = 0; i < s->narrays; i++) {
         const session_array *a = &s->arrays[i];
-        nv += session_usable(a) && a->live && a->kind == EMM_ARRAY_VERTICES;
-        nt += session_usable(a) && a->live && a->kind == EMM_ARRAY_TRIANGLES;
+        bool plain = !emm_tag_shape_is_connectivity(a->shape);
+        nv += session_usable(a) && a->live && plain && a->kind == EMM_ARRAY_VERTICES;
+        nt += session_usable(a) && a->live && plain && a->kind == EMM_ARRAY_TRIANGLES;
     }
     /* One mesh (beside per-element data of one kind): the arrays apart are
      * it, and read_geometry checks them. */
@@ -357,7 +360,8 @@ static void pair_mesh(session *s, int *gv, int *gt)
         return;
     for (int t = 0; t < s->narrays; t++) {
         session_array *ta = &s->arrays[t];
-        if (!session_usable(ta) || ta->kind != EMM_ARRAY_TRIANGLES || ta->shape == EMM_TAG_SOUP)
+        if (!session_usable(ta) || ta->kind != EMM_ARRAY_TRIANGLES ||
+            ta->shape == EMM_TAG_SOUP || emm_tag_shape_is_connectivity(ta->shape))
             continue;
         /* A block written to its end before one still being filled (its
          * thread was loading when the window closed), then better_mesh. */
@@ -374,6 +378,7 @@ static void pair_mesh(session *s, int *gv, int *gt)
             session_array *va = &s->arrays[v];
             const session_array *f = fv >= 0 ? &s->arrays[fv] : NULL;
             if (session_usable(va) && va->kind == EMM_ARRAY_VERTICES && va->axis < 0 &&
+                !emm_tag_shape_is_connectivity(va->shape) &&
                 session_readable(s, va) &&
                 (!f || va->count < f->count || (va->count == f->count && better_mesh(va, f))) &&
                 indices_fit(s, ta, va))
@@ -406,12 +411,16 @@ static emm_status read_geometry(session *s, emm_error *err)
     char vo[512], to[512];
     if (gt >= 0 && s->arrays[gt].shape == EMM_TAG_SOUP)
         return read_soup(s, &s->arrays[gt], err);
+    /* A half-edge mesh's triangles are its faces (beside a triangle array:
+     * the triangle array is the mesh, the connectivity not simulated). */
+    bool halfedges = gt < 0 && session_halfedge_pick(s);
     pair_mesh(s, &gv, &gt);
     if (gv < 0)
         return emm_fail(err, EMM_ERR_INVALID,
                         "%s: no vertex array was tagged (emm_tag_vertices or an EMM_TAG "
                         "'vertices:' rule), so there is no geometry to lay out",
                         s->program);
+    s->vertex_slot = gv;
     session_array *v = &s->arrays[gv];
     /* Where each coordinate is read from: the array, or its axis blocks. */
     session_array *src[3] = {v, v, v};
@@ -471,6 +480,14 @@ static emm_status read_geometry(session *s, emm_error *err)
             nv = (uint64_t)(highest + 1);
         s->info.geometry.nt = nt;
         s->info.geometry.tri = s->tri;
+    } else if (halfedges) {
+        emm_status st = session_halfedge_triangles(s, v, &nt, &highest, err);
+        if (st != EMM_OK)
+            return st;
+        if (v->rule >= 0 && (uint64_t)(highest + 1) > nv)
+            nv = (uint64_t)(highest + 1);
+        s->info.geometry.nt = nt;
+        s->info.geometry.tri = s->tri;
     }
     if (nv > INT32_MAX)
         return emm_fail(err, EMM_ERR_RANGE, "%s: the vertex array has %llu records (at most %d)",
@@ -490,7 +507,7 @@ static emm_status read_geometry(session *s, emm_error *err)
         note_axis_blocks(s, src, nv);
     s->info.geometry.nv = nv;
     s->info.geometry.xyz = s->xyz;
-    if (gt < 0) {
+    if (gt < 0 && !halfedges) {
         /* Vertex positions only (a half-edge mesh, a point set): each vertex
          * is its own degenerate triangle, so the layouts cut cells of
          * vertices and every strategy runs on them. */
@@ -541,7 +558,8 @@ static emm_status freeze_arrays(session *s, emm_error *err)
                          : s->vertex_only           ? 0
                                                     : s->info.geometry.nt;
         a->trace_index = -1;
-        if (!session_usable(a) || a->count > limit)
+        a->part = -1;
+        if (!session_usable(a) || a->count > limit || emm_tag_shape_is_connectivity(a->shape))
             continue;
         if (a->axis >= 0 && group_trace[a->lead] >= 0) {
             a->trace_index = group_trace[a->lead];
@@ -560,13 +578,23 @@ static emm_status freeze_arrays(session *s, emm_error *err)
     s->info.version = 1;
     s->info.narrays = s->ntarrays;
     s->info.arrays = s->tarrays;
+    emm_status st = session_halfedge_freeze(s, err);
+    if (st != EMM_OK)
+        return st;
     size_t m = 0;
     uint64_t work = 0;
     for (size_t k = 0; k < s->wn; k++) {
         if (k == s->wfill)
             s->wunit = m;
         emm_trace_record r = s->window[k];
-        int32_t t = s->arrays[r.array].trace_index;
+        const session_array *sa = &s->arrays[r.array];
+        int32_t t = sa->trace_index;
+        if (t >= 0 && sa->part >= 0) {
+            if (session_part_map(s, sa, &r))
+                t = (int32_t)r.array;
+            else
+                t = -1;
+        }
         if (t < 0) {
             work += r.work;
             s->dropped++;

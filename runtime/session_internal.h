@@ -82,6 +82,11 @@ enum window_end {
     WINDOW_CAPTURE   /* a window-only capture's bound on element accesses */
 };
 
+/* The most times a window starts again because its half-edge mesh did not
+ * check out (session.c, window_restart): a loader's reads are a few
+ * windows' worth per 10,000 faces. */
+#define SESSION_HALFEDGE_RESTARTS 1024u
+
 /* Arrays tagged after the decision that the run's trace has no place for
  * (docs/profile.md "Arrays tagged late"): the summary and the report name
  * the first SESSION_LATE_KEPT. */
@@ -152,7 +157,30 @@ typedef struct session_array {
     unsigned moves;      /* reallocations since it was tagged */
     unsigned char *view; /* a program in another process (emm_session_config.memory): a
                             copy of [base, end) as it was last read, owned; else NULL */
+    uint32_t hoff[1 + EMM_TAG_LINKS]; /* EMM_TAG_HALFEDGES: the offsets of to, next, prev,
+                            face, opp in a record (an absent field: the to field's offset) */
+    unsigned hhas;       /* of them, bit k: field k is in the record */
+    int part;            /* connectivity after the decision: its part of a trace array
+                            (session.parts), or -1 */
 } session_array;
+
+/* Half-edge connectivity in the trace (session_halfedge.c): a program's
+ * faces, half-edges or vertex connectivity records are a part of another
+ * trace array's records — a face's record and its cycle's three half-edges
+ * are the derived triangle's record, a vertex's connectivity record follows
+ * its position — so the layouts place them in their triangle's (vertex's)
+ * cell. An access to element e of the program's array is one to element
+ * remap[e] (e without remap; UINT32_MAX: none, not simulated) of the trace
+ * array, at `base` + pos[e] * stride (pos NULL: 0) + its own offset. */
+typedef struct session_part {
+    emm_tag_shape shape;
+    int32_t trace;       /* the trace array */
+    uint32_t base, stride;
+    uint64_t count;      /* the program's records in it */
+    uint32_t *remap;     /* count of them, or NULL */
+    uint8_t *pos;        /* count of them, or NULL */
+    uint64_t accesses;   /* simulated */
+} session_part;
 
 /* The engine behind an emm_session handle in this process. */
 typedef struct session {
@@ -228,6 +256,20 @@ typedef struct session {
     uint32_t ntarrays;
     double *xyz;
     int32_t *tri;
+    /* a half-edge mesh (session_halfedge.c): the slots read for it at the
+     * decision (-1: none), the parts they feed, the accesses of each trace
+     * array */
+    int he_slot, face_slot, vconn_slot, vertex_slot;
+    session_part parts[3];
+    int nparts;
+    uint32_t *he_owner;  /* per half-edge: its triangle, or UINT32_MAX */
+    uint8_t *he_pos;     /* and its place in the triangle's record (0..2) */
+    uint32_t *face_tri;  /* per face: its first triangle (a polygon is a fan of them) */
+    uint64_t nfaces;
+    uint64_t *taccesses; /* per trace array, simulated records */
+    unsigned restarts;   /* windows started again: the half-edge mesh was being built */
+    uint64_t restart_records; /* the records of those windows, left out */
+    uint64_t he_grew;    /* connectivity records appended since the window opened */
     char pick_note[1024]; /* which of a rule's several arrays is the mesh, what a soup's
                              corners made, or "" */
     bool soup;           /* the triangles are a soup's: the vertices are their corners */
@@ -362,7 +404,10 @@ static inline size_t session_scalar_bytes(emm_scalar t)
  * a soup's nine corner coordinates, or an axis block's one. */
 static inline unsigned session_scalars(const session_array *a)
 {
-    return a->shape == EMM_TAG_SOUP ? 9 : a->axis >= 0 ? 1 : 3;
+    return a->shape == EMM_TAG_SOUP        ? 9
+           : a->shape == EMM_TAG_HALFEDGES ? 1 + EMM_TAG_LINKS
+           : a->axis >= 0 || emm_tag_shape_is_connectivity(a->shape) ? 1
+                                                                     : 3;
 }
 
 /* The window's name for the array of slot i: its group's lead, so that
@@ -414,6 +459,8 @@ static inline const unsigned char *session_field_at(session *s, session_array *a
 static inline const unsigned char *session_scalar_at(session *s, session_array *a,
                                                      uint64_t i, unsigned c)
 {
+    if (a->shape == EMM_TAG_HALFEDGES && !a->snap)
+        return session_bytes(s, a) + i * a->stride + a->hoff[c];
     uint64_t step = a->plane && !a->snap ? a->plane : session_scalar_bytes(a->type);
     return session_field_at(s, a, i) + c * step;
 }
@@ -508,6 +555,41 @@ void session_lines_free(session *s);
 
 /* session.c: runs records through the models and the trace writer. */
 void session_simulate(session *s, const emm_trace_record *recs, size_t n);
+
+/* session_halfedge.c. session_halfedge_pick: the half-edge, faces and vconn
+ * slots of the mesh (the best of each: live, most read), into s->he_slot,
+ * face_slot, vconn_slot; whether there is a half-edge slot.
+ * session_halfedge_triangles: the triangles of that mesh from its
+ * half-edge cycles, validated against vertex array v (indices in range,
+ * each face's cycle closing in 3 steps), into s->tri (nt of them), the
+ * highest vertex index into *highest; a bad mesh is refused in one line
+ * naming the rule and the problem. session_halfedge_freeze: the parts of
+ * the trace arrays the connectivity feeds (after freeze_arrays made the
+ * others): the vertices' record grows by the vconn record, and the derived
+ * triangles get a trace array of their own. */
+bool session_halfedge_pick(session *s);
+emm_status session_halfedge_triangles(session *s, session_array *v, uint64_t *nt,
+                                      int64_t *highest, emm_error *err);
+emm_status session_halfedge_freeze(session *s, emm_error *err);
+void session_halfedge_free(session *s);
+
+/* An access of a slot that feeds a part: renumbered into its trace array's
+ * element and offset; false when its element is not simulated. */
+static inline bool session_part_map(session *s, const session_array *a, emm_trace_record *r)
+{
+    session_part *p = &s->parts[a->part];
+    uint64_t e = r->element;
+    if (e >= p->count)
+        return false;
+    uint32_t t = p->remap ? p->remap[e] : (uint32_t)e;
+    if (t == UINT32_MAX)
+        return false;
+    r->offset += p->base + (p->pos ? p->pos[e] * p->stride : 0);
+    r->element = t;
+    r->array = (uint32_t)p->trace;
+    p->accesses++;
+    return true;
+}
 
 /* session_report.c: the summary on `out`, with the results of the models
  * that ran (res[0..nres), the chosen strategy first when there is one;

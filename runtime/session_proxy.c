@@ -322,6 +322,12 @@ static emm_status proxy_decide_read(emm_session *h, emm_error *err)
     size_t len = 0;
     int64_t n = 0;
     emm_status st = status_call(r, WIRE_DECIDE, NULL, 0, &payload, &len, &n, err);
+    if (st == EMM_OK && n < 0) {
+        /* The session profiles again (its window started again). */
+        free(payload);
+        r->state = EMM_SESSION_PROFILING;
+        return EMM_OK;
+    }
     if (st == EMM_OK)
         take_ranges(r, n, payload, len);
     r->decided = true;

@@ -303,6 +303,63 @@ static const char *window_end_name(enum window_end e)
     }
 }
 
+static const char *part_name(emm_tag_shape shape)
+{
+    return shape == EMM_TAG_HALFEDGES ? "halfedges" : shape == EMM_TAG_FACES ? "faces" : "vconn";
+}
+
+/* A trace array's records as the program's arrays make them up: its own
+ * (positions, or nothing for the triangles of a half-edge mesh) and the
+ * connectivity placed with them (docs/report.md "arrays"). */
+static void write_parts(json_writer *w, const session *s, uint32_t a)
+{
+    uint64_t own = s->taccesses ? s->taccesses[a] : 0;
+    uint32_t bytes = s->tarrays[a].record_size;
+    int n = 0;
+    for (int k = 0; k < s->nparts; k++)
+        if (s->parts[k].trace == (int32_t)a) {
+            own -= s->parts[k].accesses <= own ? s->parts[k].accesses : own;
+            n++;
+        }
+    if (n == 0)
+        return;
+    json_key(w, "parts");
+    json_begin_array(w);
+    bool derived = s->he_slot >= 0 && s->tarrays[a].kind == EMM_ARRAY_TRIANGLES;
+    if (!derived) {
+        uint32_t first = bytes;
+        for (int k = 0; k < s->nparts; k++)
+            if (s->parts[k].trace == (int32_t)a && s->parts[k].base < first)
+                first = s->parts[k].base;
+        json_begin_object(w);
+        json_key(w, "kind");
+        json_string(w, s->tarrays[a].kind == EMM_ARRAY_VERTICES ? "vertices" : "triangles");
+        json_key(w, "records");
+        json_u64(w, s->tarrays[a].count);
+        json_key(w, "record_bytes");
+        json_u64(w, first);
+        json_key(w, "accesses");
+        json_u64(w, own);
+        json_end_object(w);
+    }
+    for (int k = 0; k < s->nparts; k++) {
+        const session_part *p = &s->parts[k];
+        if (p->trace != (int32_t)a)
+            continue;
+        json_begin_object(w);
+        json_key(w, "kind");
+        json_string(w, part_name(p->shape));
+        json_key(w, "records");
+        json_u64(w, p->count);
+        json_key(w, "record_bytes");
+        json_u64(w, p->stride);
+        json_key(w, "accesses");
+        json_u64(w, p->accesses);
+        json_end_object(w);
+    }
+    json_end_array(w);
+}
+
 /* The arrays simulated, and those tagged after the decision that were not
  * (docs/report.md "arrays"). */
 static void write_arrays(json_writer *w, const session *s)
@@ -317,6 +374,9 @@ static void write_arrays(json_writer *w, const session *s)
         json_u64(w, s->tarrays[a].count);
         json_key(w, "record_bytes");
         json_u64(w, s->tarrays[a].record_size);
+        json_key(w, "accesses");
+        json_u64(w, s->taccesses ? s->taccesses[a] : 0);
+        write_parts(w, s, a);
         json_end_object(w);
     }
     json_end_array(w);
@@ -560,6 +620,10 @@ static void report_extra(json_writer *w, void *ctx)
     json_bool(w, s->sweep_profiled);
     json_key(w, "waited");
     json_u64(w, s->waited);
+    json_key(w, "restarts");
+    json_u64(w, s->restarts);
+    json_key(w, "restart_records");
+    json_u64(w, s->restart_records);
     json_end_object(w);
     write_arrays(w, s);
     write_profile(w, s);
@@ -732,6 +796,29 @@ static void print_mesh_arrays(const session *s, FILE *out)
     snprintf(line, sizeof line, "%s%s%s", part[0], nparts > 1 ? " and " : "",
              nparts > 1 ? part[1] : "");
     fprintf(out, "emm:   simulated arrays: %s\n", line);
+    if (s->nparts == 0)
+        return;
+    /* Half-edge connectivity, placed with the triangles and vertices. */
+    size_t used = 0;
+    char n1[32], n2[32];
+    for (int k = 0; k < s->nparts && used < sizeof line; k++) {
+        const session_part *p = &s->parts[k];
+        int w = snprintf(line + used, sizeof line - used, "%s%s %s records (%u bytes, %s accesses)",
+                         k ? ", " : "", emm_grouped(p->count, n1),
+                         p->shape == EMM_TAG_HALFEDGES ? "half-edge"
+                         : p->shape == EMM_TAG_FACES   ? "face"
+                                                       : "vertex connectivity",
+                         p->stride, emm_grouped(p->accesses, n2));
+        if (w > 0)
+            used += (size_t)w;
+    }
+    fprintf(out, "emm:   connectivity: %s, each placed in its triangle's (vertex's) record\n",
+            line);
+    if (s->restarts)
+        fprintf(out,
+                "emm:   the window started again %u time%s: the half-edge mesh was still being "
+                "built (%s records of the loader's left out)\n",
+                s->restarts, s->restarts == 1 ? "" : "s", emm_grouped(s->restart_records, n1));
 }
 
 /* What the window was: short of its length, waiting for an array, a

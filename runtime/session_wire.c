@@ -243,6 +243,8 @@ bool wire_tag_encode(const emm_array_desc *d, unsigned char **out, size_t *len)
     put_u64(&b, d->offset);
     put_u64(&b, (uint64_t)d->type);
     put_u64(&b, d->rule);
+    for (int k = 0; k < EMM_TAG_LINKS; k++)
+        put_u64(&b, d->link[k]);
     put_u64(&b, d->origin != NULL);
     put_str(&b, d->origin);
     return done(&b, out, len);
@@ -253,13 +255,16 @@ bool wire_tag_decode(const unsigned char *data, size_t len, emm_array_desc *d)
     if (!data)
         return false;
     struct cursor c = {data, data + len};
-    uint64_t v[10];
+    uint64_t v[10 + EMM_TAG_LINKS];
     const char *origin;
-    for (int i = 0; i < 10; i++)
+    for (int i = 0; i < 10 + EMM_TAG_LINKS; i++)
         if (!get_u64(&c, &v[i]))
             return false;
     if (!get_str(&c, &origin) || c.p != c.end || v[8] > UINT32_MAX || v[2] + 1 > 3)
         return false;
+    for (int k = 0; k < EMM_TAG_LINKS; k++)
+        if (v[9 + k] > UINT32_MAX)
+            return false;
     /* The session checks the rest of the description, as it does a call's
      * in the program. */
     *d = (emm_array_desc){.kind = (emm_array_kind)v[0],
@@ -271,7 +276,9 @@ bool wire_tag_decode(const unsigned char *data, size_t len, emm_array_desc *d)
                           .offset = v[6],
                           .type = (emm_scalar)v[7],
                           .rule = (unsigned)v[8],
-                          .origin = v[9] ? origin : NULL};
+                          .origin = v[9 + EMM_TAG_LINKS] ? origin : NULL};
+    for (int k = 0; k < EMM_TAG_LINKS; k++)
+        d->link[k] = (uint32_t)v[9 + k];
     return true;
 }
 

@@ -636,6 +636,65 @@ static void rule_line(FILE *out, const emm_sites *t, const struct site *s, const
                               "of another call path (tag it with emm_tag_* calls)");
 }
 
+/* The preset rules (of emm_tag_preset(preset)) that may tag a site's
+ * blocks, a bit per rule: its site= names the stack's innermost frame
+ * (^NAME) or any of its frames, and its largest block is whole records.
+ * The stack is --list-sites' "A < B < C", qualified names innermost
+ * first. */
+static uint64_t preset_rules(const emm_tag_rules *rs, const char *stack, uint64_t largest)
+{
+    uint64_t bits = 0;
+    for (size_t i = 0; i < rs->n && i < 64; i++) {
+        const emm_tag_rule *r = &rs->rule[i];
+        bool innermost = r->site[0] == '^';
+        const char *site = r->site + innermost, *p = stack;
+        if (!emm_tag_rule_fits(r, largest))
+            continue;
+        while (*p) {
+            const char *end = strstr(p, " < ");
+            size_t len = end ? (size_t)(end - p) : strlen(p);
+            char q[512];
+            snprintf(q, sizeof q, "%.*s", (int)(len < sizeof q ? len : sizeof q - 1), p);
+            const char *name = q, *sep;
+            while ((sep = strstr(name, "::")))
+                name = sep + 2;
+            if (emm_tag_site_matches(site, name, q)) {
+                bits |= 1ull << i;
+                break;
+            }
+            if (innermost || !end)
+                break;
+            p = end + 3;
+        }
+    }
+    return bits;
+}
+
+/* What OpenMesh array a site is, from the preset rules that may tag it and
+ * its records: "" when none. Half-edge-like records are edges_; the
+ * 4-byte records of a function that allocates both vertices_ and faces_
+ * (ArrayKernel::reserve, in the order vertices_, edges_, faces_) are
+ * either. */
+static const char *openmesh_array(const emm_tag_rules *rs, uint64_t bits, bool halfedge_like,
+                                  bool coordinates)
+{
+    unsigned shapes = 0;
+    for (size_t i = 0; i < rs->n && i < 64; i++)
+        if (bits >> i & 1)
+            shapes |= 1u << rs->rule[i].shape;
+    if (halfedge_like)
+        return shapes & 1u << EMM_TAG_HALFEDGES ? "edges_ (its half-edges)" : "";
+    shapes &= ~(1u << EMM_TAG_HALFEDGES);
+    if (coordinates)
+        return shapes & 1u << EMM_TAG_RECORDS ? "points" : "";
+    shapes &= ~(1u << EMM_TAG_RECORDS);
+    if (shapes == (1u << EMM_TAG_FACES | 1u << EMM_TAG_VCONN))
+        return "vertices_ or faces_ (one half-edge index a record)";
+    return shapes & 1u << EMM_TAG_FACES   ? "faces_"
+           : shapes & 1u << EMM_TAG_VCONN ? "vertices_"
+                                          : "";
+}
+
 void emm_sites_print(emm_sites *t, const char *program, FILE *out)
 {
     char b1[32], b2[32], b3[32];
@@ -674,6 +733,32 @@ void emm_sites_print(emm_sites *t, const char *program, FILE *out)
     int32_t *owner = malloc(((size_t)t->nlog + 1) * sizeof *owner);
     if (!owner)
         t->log_full = true;
+    /* A program of OpenMesh's: its ArrayKernel's arrays are the preset's. */
+    emm_tag_rules openmesh = {0, NULL};
+    emm_error perr;
+    bool om = false;
+    for (int i = 0; i < t->nsites && !om; i++)
+        om = strstr(t->site[i].stack, "OpenMesh::") != NULL;
+    if (om && emm_tag_rules_parse("openmesh", &openmesh, &perr) != EMM_OK)
+        om = false;
+    /* A rule follows the first call path it selects: of the sites of one
+     * OpenMesh array, the one allocated first. */
+    const char *preset_of[MAX_SITES];
+    for (int i = 0; i < t->nsites; i++) {
+        const struct site *s = &t->site[i];
+        preset_of[i] = om ? openmesh_array(&openmesh,
+                                           preset_rules(&openmesh, s->stack, s->largest),
+                                           s->sh.found && s->sh.kind == SHAPE_HALFEDGE,
+                                           s->sh.found && s->sh.kind == SHAPE_VERTICES)
+                          : "";
+        for (int j = 0; j < i && preset_of[i][0]; j++)
+            if (strcmp(preset_of[j], preset_of[i]) == 0) {
+                if (t->site[j].order > t->site[i].order)
+                    preset_of[j] = "";
+                else
+                    preset_of[i] = "";
+            }
+    }
     fprintf(out, "emm: %s: %d candidate array site%s (blocks of %s bytes or more, by call path, "
                  "largest first)%s\n",
             program, t->nsites, t->nsites == 1 ? "" : "s", emm_grouped(t->min, b1),
@@ -684,6 +769,9 @@ void emm_sites_print(emm_sites *t, const char *program, FILE *out)
                 s->name, emm_grouped(s->count, b1), s->count == 1 ? "" : "s",
                 emm_grouped(s->largest, b2), emm_grouped(s->live, b3));
         fprintf(out, "emm:      stack: %s\n", s->stack);
+        if (preset_of[i][0])
+            fprintf(out, "emm:      preset: OpenMesh's %s, which --tag openmesh tags\n",
+                    preset_of[i]);
         char what[1024], body[64];
         const char *kind;
         if (!s->sh.found) {
@@ -716,9 +804,17 @@ void emm_sites_print(emm_sites *t, const char *program, FILE *out)
         else
             fprintf(out, "emm:      rule: none: %s\n",
                     s->sh.kind == SHAPE_HALFEDGE
-                        ? "half-edge-like records are no vertices or triangles array"
+                        ? "half-edge-like records are no vertices or triangles array: a "
+                          "halfedges: rule with the program's field offsets tags them "
+                          "(to=, next=, face=; see emm run --help)"
                         : "the fields fit no vertices:, triangles: or soup: rule");
     }
+    if (om)
+        fprintf(out, "emm: %s uses OpenMesh: --tag openmesh (EMM_TAG=openmesh) tags its "
+                     "points and its half-edge connectivity (vertices_, edges_, faces_), "
+                     "whichever way its reader allocated them\n",
+                program);
+    emm_tag_rules_free(&openmesh);
     free(owner);
     fflush(out);
 }

@@ -44,4 +44,14 @@ run region region_growing "$mesh"
 heading "random access (thesis 4.3.3): emm run -- random_access"
 run random random_access "$mesh"
 
+# A program on OpenMesh's half-edge mesh (built when libopenmesh-dev is
+# there), tagged by the preset: its points and connectivity.
+if [ -x "$bin/openmesh_regions" ]; then
+  capture=fault # the window only; emm's Valgrind tool, when built, sees the whole run
+  [ -x "$build/lib/emm/valgrind/emm-amd64-linux" ] && capture=valgrind
+  heading "OpenMesh: emm run --capture $capture --tag openmesh -- openmesh_regions"
+  "$bin/emm" run --capture "$capture" --tag openmesh --report "$reports/openmesh.json" -- \
+    "$bin/openmesh_regions" "$mesh"
+fi
+
 printf '\nJSON reports: %s/*.json (docs/report.md)\n' "$reports"

@@ -19,6 +19,9 @@ packages=(
                                         # libraries build emm's tool; its launcher runs it
   libopenmesh-apps                      # OpenMesh's command-line apps: tests on programs
                                         # nobody here wrote
+  libopenmesh-dev                       # OpenMesh's headers: examples/openmesh_regions, a
+                                        # traversal of our own over its half-edge mesh
+                                        # (the examples only; emm's readers are its own)
   openctm-tools admesh                  # ctmconv (stripped) and admesh: mesh converters and a
                                         # repair tool under emm run (tests/shim/ctmconv.sh,
                                         # tests/sites)

@@ -264,6 +264,10 @@ static bool serve_one(struct server *v, const struct message *m, bool *quiet)
         emm_status st = emm_session_decide_read(s, &e);
         if (st != EMM_OK)
             return reply_status(v, st, &e);
+        /* No decision: the window starts again (a half-edge mesh still
+         * being built), and the program's accesses are awaited again. */
+        if (emm_session_access(s, NULL, 0) == EMM_SESSION_PROFILING)
+            return reply(v, -1, EMM_OK, NULL, 0);
         if (!reply_ranges(v))
             return false;
         emm_session_decide_rest(s, &e);

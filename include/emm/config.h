@@ -100,16 +100,38 @@ typedef enum emm_tag_shape {
                             entry */
     EMM_TAG_SOUP,        /* soup: triangle records of `stride` bytes holding their three
                             corners inline, nine coordinates in a row at `offset` (STL facets) */
-    EMM_TAG_AXIS         /* x=, y= or z=: one coordinate of every vertex, an entry of `stride`
+    EMM_TAG_AXIS,        /* x=, y= or z=: one coordinate of every vertex, an entry of `stride`
                             bytes each with its scalar at `offset` (structure of arrays: x at
                             one base, y at another); the session joins a mesh's x, y (and z)
                             blocks of one count, same stride and type, into its vertices */
+    EMM_TAG_HALFEDGES,   /* halfedges: half-edge records of `stride` bytes (kind TRIANGLES):
+                            the to-vertex index at `offset`, next, prev, face and opposite
+                            half-edge indices at link[] (prev and opp may be absent: opp is
+                            then h ^ 1, OpenMesh's, CGAL's and PMP's pairing) */
+    EMM_TAG_FACES,       /* faces: a face's records (kind TRIANGLES) holding one half-edge of
+                            its cycle at `offset` */
+    EMM_TAG_VCONN        /* vconn: a vertex's connectivity records (kind VERTICES) holding one
+                            outgoing half-edge at `offset` */
 } emm_tag_shape;
+
+/* A half-edge record's fields besides its to-vertex: emm_tag_rule.link[]
+ * and emm_array_desc.link[], byte offsets in the record, EMM_TAG_NO_LINK
+ * for a field the record does not have. */
+enum { EMM_TAG_LINK_NEXT = 0, EMM_TAG_LINK_PREV, EMM_TAG_LINK_FACE, EMM_TAG_LINK_OPP, EMM_TAG_LINKS };
+#define EMM_TAG_NO_LINK UINT32_MAX
+
+/* Whether a shape is half-edge connectivity (halfedges:, faces:, vconn:). */
+static inline int emm_tag_shape_is_connectivity(emm_tag_shape s)
+{
+    return s == EMM_TAG_HALFEDGES || s == EMM_TAG_FACES || s == EMM_TAG_VCONN;
+}
 
 /* One rule: which allocations are a mesh array (site, min, nth) and where
  * the coordinates or vertex indices sit in each record. */
 typedef struct emm_tag_rule {
-    emm_array_kind kind;          /* VERTICES or TRIANGLES (a soup's records are triangles) */
+    emm_array_kind kind;          /* VERTICES or TRIANGLES (a soup's records are triangles; a
+                                     half-edge rule's and a faces rule's are the triangles'
+                                     connectivity, a vconn rule's the vertices') */
     emm_tag_shape shape;
     char site[EMM_TAG_SITE_MAX];  /* a function on the allocation's stack; "" for any */
     uint64_t min;                 /* the smallest block selected, in bytes (>= one record) */
@@ -121,7 +143,13 @@ typedef struct emm_tag_rule {
     uint32_t axis;                /* EMM_TAG_AXIS: the coordinate, 0 x, 1 y, 2 z; else 0 */
     uint32_t offset;              /* where the scalars start in a record (an entry) */
     emm_scalar type;              /* f32|f64 for vertices and soups, i32|u32|u16|i64 for
-                                     triangles */
+                                     triangles and the half-edge kinds */
+    uint32_t link[EMM_TAG_LINKS]; /* EMM_TAG_HALFEDGES: next, prev, face, opp offsets (of
+                                     `type`), EMM_TAG_NO_LINK when absent; else all absent */
+    uint8_t alternative;          /* a preset's rule (--tag openmesh): one of several ways a
+                                     library allocates an array (reserve or growth); it says
+                                     nothing at exit for matching nothing when a rule of its
+                                     kind and shape tagged */
 } emm_tag_rule;
 
 /* The rules, as many as EMM_TAG has: rule[0..n), malloc'ed (NULL when n is
@@ -131,8 +159,11 @@ typedef struct emm_tag_rules {
     emm_tag_rule *rule;
 } emm_tag_rules;
 
+/* The rules of EMM_TAG's presets ("openmesh"), as EMM_TAG spells them, or
+ * NULL for another name. */
+EMM_API const char *emm_tag_preset(const char *name);
 /* Parses EMM_TAG's grammar: rules split by ';', each KIND:key=value,...
- * (docs in emm_tag_rules_help). On failure err says what is wrong in one
+ * (docs in emm_tag_rules_help), or a preset's name (emm_tag_preset). On failure err says what is wrong in one
  * line that quotes at most a bounded part of the text. Axis rules (x=, y=,
  * z=) come in sets: every axis rule needs an x rule and a y rule of its
  * stride and type (z is optional: the layouts work in the plane). */
@@ -197,6 +228,8 @@ typedef struct emm_array_desc {
                              0: an emm_tag_* call, `count` records exactly */
     const char *origin;   /* who described it, for messages: "EMM_TAG rule 2 (triangles:...)"
                              (copied); NULL: "the emm_tag_vertices call" or its triangles' */
+    uint32_t link[EMM_TAG_LINKS]; /* EMM_TAG_HALFEDGES: the rule's link[] (next, prev, face,
+                                     opp offsets); EMM_TAG_NO_LINK otherwise */
 } emm_array_desc;
 
 /* The description of a block of `bytes` bytes at `base` that rule r (the

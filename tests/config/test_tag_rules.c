@@ -97,7 +97,7 @@ static void shapes(void)
     refused("soup:corners=12:f32", "needs stride=");
     refused("triangles:order=columns,corners=0:f32", "unknown key");
     refused("triangles:order=columns", "needs vidx=");
-    refused("points:stride=12,xyz=0:f32", "vertices, triangles or soup");
+    refused("points:stride=12,xyz=0:f32", "vertices, triangles, soup, halfedges, faces or vconn");
 
     /* The line for a column-major rule that matched nothing names the
      * blocks that are not its three columns. */
@@ -118,6 +118,55 @@ static void shapes(void)
 
 /* Structure of arrays: x=, y=, z= rules, each one block holding one
  * coordinate of every vertex; a set needs x and y of one stride and type. */
+/* Issue 30: half-edge connectivity (halfedges:, faces:, vconn:), its links
+ * written back and parsed again, the checks on them, and the OpenMesh
+ * preset. */
+static void halfedges(void)
+{
+    emm_tag_rule r = {0};
+    round_trip("halfedges:site=^ArrayKernel::reserve,stride=16,to=4:i32,next=8,prev=12,face=0",
+               NULL, &r);
+    CHECK(r.kind == EMM_ARRAY_TRIANGLES && r.shape == EMM_TAG_HALFEDGES && r.offset == 4 &&
+          r.type == EMM_I32);
+    CHECK(r.link[EMM_TAG_LINK_NEXT] == 8 && r.link[EMM_TAG_LINK_PREV] == 12 &&
+          r.link[EMM_TAG_LINK_FACE] == 0 && r.link[EMM_TAG_LINK_OPP] == EMM_TAG_NO_LINK);
+    CHECK(strcmp(r.site, "^ArrayKernel::reserve") == 0);
+    /* A link may repeat the type; opp= is a field of its own. */
+    round_trip("halfedges:stride=20,next=2:u16,to=0:u16,face=4,opp=6",
+               "halfedges:stride=20,to=0:u16,next=2,face=4,opp=6", &r);
+    CHECK(r.link[EMM_TAG_LINK_OPP] == 6 && r.link[EMM_TAG_LINK_PREV] == EMM_TAG_NO_LINK);
+    round_trip("faces:site=load,stride=4,he=0:u32", NULL, &r);
+    CHECK(r.kind == EMM_ARRAY_TRIANGLES && r.shape == EMM_TAG_FACES);
+    round_trip("vconn:stride=8,he=0:i64", NULL, &r);
+    CHECK(r.kind == EMM_ARRAY_VERTICES && r.shape == EMM_TAG_VCONN && r.type == EMM_I64);
+    refused("halfedges:stride=16,to=4:i32,face=0", "needs next=OFFSET and face=OFFSET");
+    refused("halfedges:stride=16,to=4:i32,next=8", "needs next=OFFSET and face=OFFSET");
+    refused("halfedges:stride=16,next=8,face=0", "needs to=OFFSET");
+    refused("halfedges:stride=16,to=4:i32,next=8:u32,face=0", "another type than to=");
+    refused("halfedges:stride=16,to=4:i32,next=14,face=0", "next= does not fit");
+    refused("halfedges:stride=16,to=4:i32,next=8,next=12,face=0", "given twice");
+    refused("halfedges:stride=16,to=4:f32,next=8,face=0", "to=OFFSET:i32|u32|u16|i64");
+    refused("halfedges:stride=16,to=4:i32,next=x,face=0", "expected next=OFFSET");
+    refused("halfedges:stride=16,to=4:i32,next=8,face=0,order=columns", "unknown key");
+    refused("faces:stride=4,vidx=0:i32", "faces rules take site, min, nth, stride, he");
+    refused("vconn:stride=2,he=0:i32", "does not fit in stride");
+    refused("faces:stride=4,he=0:i32,next=0", "unknown key");
+
+    /* The preset: OpenMesh's arrays, each rule an alternative of its kind. */
+    emm_tag_rules rs;
+    emm_error err;
+    REQUIRE(emm_tag_rules_parse("openmesh", &rs, &err) == EMM_OK);
+    unsigned shapes_seen = 0;
+    for (size_t i = 0; i < rs.n; i++) {
+        CHECK(rs.rule[i].alternative);
+        shapes_seen |= 1u << rs.rule[i].shape;
+    }
+    CHECK(shapes_seen == (1u << EMM_TAG_RECORDS | 1u << EMM_TAG_HALFEDGES |
+                          1u << EMM_TAG_FACES | 1u << EMM_TAG_VCONN));
+    CHECK(emm_tag_preset("openmesh") && !emm_tag_preset("cgal"));
+    emm_tag_rules_free(&rs);
+}
+
 static void axes(void)
 {
     emm_tag_rules rs, again;
@@ -234,5 +283,6 @@ int main(void)
 
     shapes();
     axes();
+    halfedges();
     return check_done();
 }

@@ -15,7 +15,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (st == EMM_OK) {
         /* Each rule as EMM_TAG spells it reads back as the same rule (a
          * site=MODULE+0xHEX already in its spelling: lower-case hex, no
-         * leading zeros). */
+         * leading zeros), a half-edge rule's links included. */
         for (size_t i = 0; i < rules.n; i++) {
             char text[1024];
             emm_tag_rule again;
@@ -24,7 +24,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 (emm_tag_rule_parse(text, &again, &err) != EMM_OK ||
                  strcmp(again.site, rules.rule[i].site) != 0 || again.min != rules.rule[i].min ||
                  again.nth != rules.rule[i].nth || again.stride != rules.rule[i].stride ||
-                 again.offset != rules.rule[i].offset))
+                 again.offset != rules.rule[i].offset || again.kind != rules.rule[i].kind ||
+                 again.shape != rules.rule[i].shape || again.type != rules.rule[i].type ||
+                 memcmp(again.link, rules.rule[i].link, sizeof again.link) != 0))
                 abort();
         }
         emm_tag_rules_free(&rules);

@@ -53,7 +53,7 @@ want=window
 [ "$CAPTURE" = valgrind ] && want=run
 # The report read once, by Python's own JSON parser: the checks, then the
 # summary line's numbers.
-summary=$(python3 - "$WORK/report.json" "$want" <<'PY'
+summary=$(python3 - "$WORK/report.json" "$want" "$RULES" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 if r['coverage']['simulated'] != sys.argv[2]:
@@ -62,8 +62,18 @@ if r['pattern'] is None:
     sys.exit("FAIL: no pattern")
 if r['strategy'] is None:
     sys.exit("FAIL: no strategy decided")
-print("%s accesses simulated (%s), pattern %s, %s" % (
-    r['coverage']['accesses'], r['coverage']['simulated'], r['pattern'], r['strategy']))
+# The preset tags the connectivity too: each of its arrays counted.
+parts = {}
+for a in r['arrays']:
+    for p in a.get('parts', []):
+        parts[p['kind']] = parts.get(p['kind'], 0) + p['accesses']
+if sys.argv[3] == 'openmesh':
+    for kind in ('halfedges', 'faces', 'vconn'):
+        if parts.get(kind, 0) <= 0:
+            sys.exit("FAIL: no accesses to %s counted (%s)" % (kind, parts))
+print("%s accesses simulated (%s), pattern %s, %s%s" % (
+    r['coverage']['accesses'], r['coverage']['simulated'], r['pattern'], r['strategy'],
+    ''.join(', %s %d' % kv for kv in sorted(parts.items()))))
 PY
 ) || exit 1
 grep '^emm: ' "$WORK/emm.err" | head -3

@@ -172,7 +172,8 @@ static emm_session_config base_config(void)
 static int tag_call(emm_session *s, emm_array_kind kind, const void *base, size_t count,
                     size_t stride, size_t offset, emm_scalar type)
 {
-    emm_array_desc d = {kind, EMM_TAG_RECORDS, -1, base, count, stride, offset, type, 0, NULL};
+    emm_array_desc d = {kind, EMM_TAG_RECORDS, -1, base, count, stride, offset, type, 0, NULL,
+                        {EMM_TAG_NO_LINK, EMM_TAG_NO_LINK, EMM_TAG_NO_LINK, EMM_TAG_NO_LINK}};
     return emm_session_tag(s, &d);
 }
 
@@ -1161,6 +1162,108 @@ static void test_shapes(void)
 }
 
 /* finish's summary into text (cap bytes); returns finish's status. */
+static emm_status finish_summary(emm_session *s, char *text, size_t cap);
+
+/* Issue 30 through the API: a half-edge mesh (a square of two triangles,
+ * OpenMesh's 16-byte half-edges {face, to, next, prev}, a face's
+ * half-edge, a vertex's) whose faces are the triangles read through their
+ * cycles; an access to a half-edge is one to its face's triangle, at its
+ * place in the cycle after the face's record, a vertex's vconn record one
+ * to the vertex after its position; a boundary half-edge travels with its
+ * opposite. A broken cycle is refused in one line naming the rule. */
+static void test_halfedges(void)
+{
+    struct he {
+        int32_t face, to, next, prev;
+    };
+    /* Triangles 0 (0 1 2) and 1 (0 2 3): half-edges 0..2 and 4..6 their
+     * cycles, 3 and 7 the boundary opposites of 2 (2 -> 0) and 6 (3 -> 0):
+     * edge e holds 2e and 2e + 1. */
+    static struct he H[8] = {
+        {0, 1, 1, 2}, {1, 0, 7, 3},  /* 0: 0->1 (face 0); 1: boundary 1->0 */
+        {0, 2, 2, 0}, {1, 1, 0, 1},  /* 2: 1->2; 3: ... */
+        {0, 0, 0, 1}, {1, 2, 6, 5},  /* placeholder, fixed below */
+        {1, 3, 4, 6}, {-1, 0, 3, 1},
+    };
+    static int32_t F[2];
+    static int32_t C[4] = {0, 2, 4, 6};
+    static float P[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    /* Face 0: 0 -> 2 -> 4 -> 0 with to-vertices 1, 2, 0; face 1: 5 -> 6 ->
+     * 1 -> 5 with to-vertices 2, 3, 0; 3 and 7 are boundary (-1). */
+    struct he fix[8] = {{0, 1, 2, 4}, {1, 0, 5, 6}, {0, 2, 4, 0}, {-1, 1, 7, 7},
+                        {0, 0, 0, 2}, {1, 2, 6, 1}, {1, 3, 1, 5}, {-1, 3, 3, 3}};
+    memcpy(H, fix, sizeof H);
+    F[0] = 0;
+    F[1] = 5;
+    const char *rules = "vertices:stride=12,xyz=0:f32;vconn:stride=4,he=0:i32;"
+                        "halfedges:stride=16,to=4:i32,next=8,prev=12,face=0;"
+                        "faces:stride=4,he=0:i32";
+    emm_error err;
+    emm_trace_record rec[16];
+    emm_trace_array arr[2];
+    uint32_t narr;
+    double xyz[24];
+    int32_t tri[24];
+    uint64_t gnv, gnt;
+    emm_session *s = new_tagged(rules, "halfedges.emmt", "halfedges.json");
+    CHECK(tag_rule(s, P, 4, 0) >= 0);
+    CHECK(tag_rule(s, C, 4, 1) >= 0);
+    CHECK(tag_rule(s, H, 8, 2) >= 0);
+    CHECK(tag_rule(s, F, 2, 3) >= 0);
+    emm_raw_access a[] = {
+        {(uintptr_t)&F[1], 4, 0, 0},        /* face 1: triangle 1, offset 0 */
+        {(uintptr_t)&H[6].next, 4, 0, 0},   /* half-edge 6, face 1's second: 4 + 16 + 8 */
+        {(uintptr_t)&H[3].to, 4, 0, 0},     /* boundary 3, with its opposite 2 (face 0's 2nd) */
+        {(uintptr_t)&C[2], 4, 0, 0},        /* vertex 2's half-edge: after its position */
+        {(uintptr_t)&P[3 * 2 + 1], 4, 0, 0} /* vertex 2's y */
+    };
+    emm_session_access(s, a, 5);
+    CHECKF(emm_session_decide(s, &err) == EMM_OK, "%s", err.message);
+    char text[8192];
+    CHECKF(finish_summary(s, text, sizeof text) == EMM_OK, "%s", text);
+    /* The records in use: up to the highest accessed (half-edge 6). */
+    CHECKF(has(text, "connectivity: 2 face records (4 bytes, 1 accesses), 7 half-edge records "
+                     "(16 bytes, 2 accesses), 3 vertex connectivity records (4 bytes, 1 "
+                     "accesses)"),
+           "%s", text);
+    emm_session_free(s);
+    size_t n = read_records("halfedges.emmt", rec, 16, arr, &narr, xyz, tri, &gnv, &gnt);
+    REQUIRE(n == 5 && narr == 2);
+    CHECK(arr[0].kind == EMM_ARRAY_VERTICES && arr[0].record_size == 16 && arr[0].count == 4);
+    CHECK(arr[1].kind == EMM_ARRAY_TRIANGLES && arr[1].record_size == 4 + 3 * 16 &&
+          arr[1].count == 2);
+    CHECK(rec[0].array == 1 && rec[0].element == 1 && rec[0].offset == 0);
+    CHECK(rec[1].array == 1 && rec[1].element == 1 && rec[1].offset == 4 + 16 + 8);
+    CHECK(rec[2].array == 1 && rec[2].element == 0 && rec[2].offset == 4 + 16 + 4);
+    CHECK(rec[3].array == 0 && rec[3].element == 2 && rec[3].offset == 12);
+    CHECK(rec[4].array == 0 && rec[4].element == 2 && rec[4].offset == 4);
+    REQUIRE(gnv == 4 && gnt == 2);
+    CHECK(tri[0] == 1 && tri[1] == 2 && tri[2] == 0 && tri[3] == 2 && tri[4] == 3 && tri[5] == 0);
+    char *report = slurp("halfedges.json");
+    CHECKF(report && has(report, "\"kind\": \"halfedges\"") &&
+               has(report, "\"record_bytes\": 52"),
+           "%s", report ? report : "(no report)");
+    free(report);
+
+    /* Face 1's cycle broken: 6 -> 6 instead of 6 -> 1. */
+    H[6].next = 6;
+    s = new_tagged("vertices:stride=12,xyz=0:f32;halfedges:stride=16,to=4:i32,next=8,face=0;"
+                   "faces:stride=4,he=0:i32",
+                   NULL, NULL);
+    CHECK(tag_rule(s, P, 4, 0) >= 0);
+    CHECK(tag_rule(s, H, 8, 1) >= 0);
+    CHECK(tag_rule(s, F, 2, 2) >= 0);
+    emm_session_access(s, a, 2);
+    emm_session_decide(s, &err);
+    CHECK(finish_summary(s, text, sizeof text) != EMM_OK);
+    CHECKF(has(text, "EMM_TAG rule 2 (halfedges:stride=16,to=4:i32,next=8,face=0): the "
+                     "half-edge mesh is refused: half-edge 5's cycle does not close: it comes "
+                     "back to half-edge 6, not to 5 (5 -> 6 -> 6)"),
+           "%s", text);
+    emm_session_free(s);
+    emm_tag_rules_free(&tcfg.tags);
+}
+
 static emm_status finish_summary(emm_session *s, char *text, size_t cap)
 {
     emm_error err;
@@ -1322,6 +1425,7 @@ int main(void)
     test_tags();
     test_shapes();
     test_axes();
+    test_halfedges();
     free(recs);
     free(vmem);
     free(tmem);

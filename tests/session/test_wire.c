@@ -76,7 +76,9 @@ static void tag(void)
 {
     static double v[30];
     emm_array_desc d = {EMM_ARRAY_VERTICES, EMM_TAG_AXIS, 2, v, 10, 24, 8, EMM_F64, 3,
-                        "EMM_TAG rule 3 (vertices:stride=24,z=8:f64)"}, e;
+                        "EMM_TAG rule 3 (vertices:stride=24,z=8:f64)",
+                        {EMM_TAG_NO_LINK, EMM_TAG_NO_LINK, EMM_TAG_NO_LINK, EMM_TAG_NO_LINK}},
+                   e;
     unsigned char *b;
     size_t n;
     REQUIRE(wire_tag_encode(&d, &b, &n));
@@ -92,6 +94,18 @@ static void tag(void)
     REQUIRE(wire_tag_encode(&d, &b, &n));
     REQUIRE(wire_tag_decode(b, n, &e));
     CHECK(e.origin == NULL && e.axis == -1);
+    free(b);
+    /* A half-edge block's links travel with it. */
+    d.kind = EMM_ARRAY_TRIANGLES;
+    d.shape = EMM_TAG_HALFEDGES;
+    d.type = EMM_I32;
+    d.offset = 4;
+    d.link[EMM_TAG_LINK_NEXT] = 8;
+    d.link[EMM_TAG_LINK_PREV] = 12;
+    d.link[EMM_TAG_LINK_FACE] = 0;
+    REQUIRE(wire_tag_encode(&d, &b, &n));
+    REQUIRE(wire_tag_decode(b, n, &e));
+    CHECK(e.shape == EMM_TAG_HALFEDGES && memcmp(e.link, d.link, sizeof e.link) == 0);
     free(b);
 }
 

@@ -152,6 +152,21 @@ if "ctmconv" in listed:
 else:
     print("skipped the stripped-binary check: ctmconv is not installed")
 
+# ---- OpenMesh's arrays named for what they are (issue 30) -----------------
+for name in ("OpenMesh-Smoothing", "OpenMesh-mconvert"):
+    if name not in listed:
+        continue
+    text = listed[name][0]
+    blocks = text.split("\nemm: ")
+    wrong = [b for b in blocks if "half-edge-like" in b and "rule: triangles:" in b]
+    if wrong:
+        fail("%s: a half-edge block listed with a triangles: rule:\n%s" % (name, wrong[0]))
+    elif "--tag openmesh" not in text or "preset: OpenMesh's edges_" not in text:
+        fail("%s: the listing does not name --tag openmesh and OpenMesh's edges_:\n%s" %
+             (name, text))
+    else:
+        print("%s: OpenMesh's arrays named, the preset too, no triangles: for half-edges" % name)
+
 # ---- every printed rule, used as printed ------------------------------------
 site_re = re.compile(r"^emm: +\d+\. (.*): [\d,]+ blocks?, the largest ([\d,]+) bytes")
 checks = []  # name, argv, stdin, rules text, [(largest, stride)]
