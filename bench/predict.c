@@ -301,7 +301,7 @@ int main(int argc, char **argv)
             snprintf(rl, sizeof rl, "%7.2f%%", 100 * lab[nlab++]);
         }
         printf("%-36s %-8.8s %-8s %-24s %-24s %8s %-24s %8s %6.3f %s\n", name, mname,
-               emm_decided_name(d.how), pred, bestname, rp, label, rl,
+               d.neighbours ? "costs" : emm_decided_name(d.how), pred, bestname, rp, label, rl,
                d.has_table ? d.table.distance : 0.0, d.has_table ? d.table.nearest : "-");
         fflush(stdout);
         emm_machine_free(m);
