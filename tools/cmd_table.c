@@ -524,8 +524,10 @@ static int table_build_with(struct build_args *a, struct program_trace *progs)
                             (unsigned long long)build_meshes[g].seed, g + 1 < nmesh ? "," : ";");
         if (len > 0 && (size_t)len < sizeof comment && nprog)
             len += snprintf(comment + len, sizeof comment - (size_t)len,
-                            "\nand %zu traces of programs (the prog-* samples; scripts/table.sh);",
-                            nprog);
+                            "\nand %zu traces of programs (the prog-* samples; scripts/table.sh),"
+                            "\nwith their runs' costs on this machine%s%s;",
+                            nprog, a->also.n ? " and on " : "",
+                            a->also.n ? "each --program-machine (the @ samples)" : "");
         if (len > 0 && (size_t)len < sizeof comment)
             snprintf(comment + len, sizeof comment - (size_t)len,
                      "\nwindows of %s element accesses; each strategy is the fewest cycles of\n"

@@ -127,9 +127,28 @@ has learn-again out.txt "nearest: *"
 check learn-contest 0 "$EMM" profile walk.emmt --table learn2.txt --learn w2
 has learn-contest out.txt "learnt: *w2 (user, .*, the contest's answer over the run) added"
 answer=$(sed -n 's/^strategy: *//p' out.txt)
-has learn-contest-file learn2.txt "^w2 *user *- *$answer "
+# ... measured on this machine (its fingerprint), with the answer's cost 1.
+has learn-contest-file learn2.txt "^w2 *user *- *[0-9a-f]\{16\} *$answer .* $answer=1"
 check learn-none 0 "$EMM" profile walk.emmt --table learn3.txt --finalists 0 --learn w3
 has learn-none out.txt "learnt: *nothing"
+
+# The neighbours' costs: a walk over a mesh, recorded under emm run, is far
+# from every canonical sample; the table's walks measured on this machine
+# decide its prediction. On a machine that differs in one key they are not
+# trusted, and the class check decides.
+BIN=$(dirname "$EMM")
+if [ -x "$BIN/predict_traversals.sancov" ]; then
+    "$EMM" mesh gen --faces 4000 --seed 77 -o walk4k.off >/dev/null &&
+        "$EMM" run --quiet --capture sancov --trace walk4k.emmt -- \
+            "$BIN/predict_traversals.sancov" walk walk4k.off >/dev/null || exit 1
+    check costs 0 "$EMM" profile walk4k.emmt --finalists 0
+    has costs out.txt "^measured: *the 5 nearest runs measured on this machine"
+    check costs-other-machine 0 "$EMM" profile walk4k.emmt --finalists 0 --set local.bytes=128K
+    has costs-other-machine out.txt "^checked: "
+    if grep -q "^measured:" out.txt; then echo "FAIL costs-other-machine: decided by costs"; fail=1; fi
+else
+    echo "costs: $BIN/predict_traversals.sancov not built (no clang): not checked"
+fi
 
 # emm table build: deterministic, with a header saying how it was made.
 check build-1 0 "$EMM" table build --quick -o built1.txt
