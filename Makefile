@@ -7,7 +7,7 @@ FUZZ_SECONDS ?= 300
 FUZZ ?=
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build demo check check-asan asan-build fuzz bench thesis table install clean
+.PHONY: all deps configure build demo check check-asan asan-build fuzz bench thesis table predict install clean
 
 all: build
 
@@ -64,6 +64,13 @@ thesis: build
 # defaults or the generator change.
 table: build
 	@scripts/table.sh $(BUILD) data/table.txt
+
+# The prediction benchmark (docs/profile.md "The prediction benchmark"): the
+# window's prediction against the whole run's best over a corpus of program
+# traces, leave-one-program-out. The traces and replay listings are kept in
+# $(BUILD)/bench/predict, so a rerun takes only the decisions. A report, not a test.
+predict: build
+	@bench/predict.sh $(BUILD)
 
 install: build
 	@cmake --install $(BUILD)

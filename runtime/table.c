@@ -74,6 +74,36 @@ static bool name_ok(const char *s)
     return true;
 }
 
+/* "-", or a fingerprint: 16 lowercase hex digits (emm_table_machine_id). */
+static bool machine_ok(const char *s)
+{
+    if (!*s || strcmp(s, "-") == 0)
+        return true;
+    if (strlen(s) != 16)
+        return false;
+    for (; *s; s++)
+        if (!isdigit((unsigned char)*s) && !(*s >= 'a' && *s <= 'f'))
+            return false;
+    return true;
+}
+
+void emm_table_machine_id(const emm_machine *m, char out[17])
+{
+    uint64_t h = 0xcbf29ce484222325ull; /* FNV-1a over "key=value\n" of every key */
+    char buf[256];
+    for (size_t i = 0; i < emm_machine_key_count(); i++) {
+        const emm_machine_key *k = emm_machine_key_at(i);
+        int w = snprintf(buf, sizeof buf, "%s=", k->name);
+        if (w < 0 || (size_t)w >= sizeof buf)
+            continue;
+        emm_machine_format(m, k->name, buf + w, sizeof buf - (size_t)w);
+        for (const char *p = buf; *p; p++)
+            h = (h ^ (unsigned char)*p) * 0x100000001b3ull;
+        h = (h ^ '\n') * 0x100000001b3ull;
+    }
+    snprintf(out, 17, "%016llx", (unsigned long long)h);
+}
+
 static ptrdiff_t find(const emm_table *t, const char *name)
 {
     for (size_t i = 0; i < t->n; i++)
@@ -120,6 +150,16 @@ emm_status emm_table_add(emm_table *t, const emm_table_sample *s, emm_error *err
         if (!isfinite(s->f[k]))
             return emm_fail(err, EMM_ERR_INVALID, "sample '%s': feature %d is not finite",
                             s->name, k + 1);
+    if (!machine_ok(s->machine))
+        return emm_fail(err, EMM_ERR_INVALID, "sample '%s': machine '%s' is not '-' or a "
+                        "fingerprint", s->name, s->machine);
+    if (s->ncosts > EMM_TABLE_COSTS)
+        return emm_fail(err, EMM_ERR_INVALID, "sample '%s': more than %d costs", s->name,
+                        EMM_TABLE_COSTS);
+    for (uint32_t c = 0; c < s->ncosts; c++)
+        if (!(s->cost[c] >= 1) || !isfinite(s->cost[c]))
+            return emm_fail(err, EMM_ERR_INVALID, "sample '%s': cost %u is not a ratio of at "
+                            "least 1", s->name, c + 1);
     emm_synth_options so;
     if (s->synth[0] && strcmp(s->synth, "-") != 0) {
         if (!name_ok(s->synth))
@@ -157,6 +197,9 @@ static int split(char *line, char **field, int cap)
     return n;
 }
 
+#define EMM_TABLE_COSTS_TEXT "24"
+_Static_assert(EMM_TABLE_COSTS == 24, "EMM_TABLE_COSTS_TEXT is EMM_TABLE_COSTS");
+
 /* A table of a few thousand samples is a few hundred KiB. */
 #define EMM_TABLE_FILE_MAX ((size_t)64 << 20)
 
@@ -172,8 +215,8 @@ emm_status emm_table_load(emm_table *t, const char *path, emm_error *err)
     char *next = text;
     long lineno = 0;
     bool header = false;
-    enum { MAXF = EMM_FEATURES + 4 };
-    int version = EMM_TABLE_VERSION, fixed = 4; /* fields before the features */
+    enum { MAXF = EMM_FEATURES + 5 + EMM_TABLE_COSTS };
+    int version = EMM_TABLE_VERSION, fixed = 5; /* fields before the features */
     char *field[MAXF];
     while (st == EMM_OK && next < end) {
         char *line = next;
@@ -208,18 +251,20 @@ emm_status emm_table_load(emm_table *t, const char *path, emm_error *err)
             }
             if (st == EMM_OK) {
                 version = t->version = (int)ver;
-                fixed = version >= 3 ? 4 : 3;
+                fixed = version >= 4 ? 5 : version >= 3 ? 4 : 3;
             }
             header = true;
             continue;
         }
-        if (nf != EMM_FEATURES + fixed) {
+        int most = EMM_FEATURES + fixed + (fixed == 5 ? EMM_TABLE_COSTS : 0);
+        if (nf < EMM_FEATURES + fixed || nf > most) {
             st = emm_fail(err, EMM_ERR_FORMAT,
-                          "%s:%ld: expected name, pattern, %sstrategy and %d features, found "
+                          "%s:%ld: expected name, pattern, %s%sstrategy and %d features%s, found "
                           "%s%d fields",
-                          path, lineno, fixed == 4 ? "synth, " : "", EMM_FEATURES,
-                          nf > EMM_FEATURES + fixed ? "more than " : "",
-                          nf > EMM_FEATURES + fixed ? EMM_FEATURES + fixed : nf);
+                          path, lineno, fixed >= 4 ? "synth, " : "",
+                          fixed == 5 ? "machine, " : "", EMM_FEATURES,
+                          fixed == 5 ? " (then at most " EMM_TABLE_COSTS_TEXT " costs)" : "",
+                          nf > most ? "more than " : "", nf > most ? most : nf);
             break;
         }
         emm_table_sample s;
@@ -238,7 +283,14 @@ emm_status emm_table_load(emm_table *t, const char *path, emm_error *err)
         }
         snprintf(s.name, sizeof s.name, "%s", field[0]);
         snprintf(s.pattern, sizeof s.pattern, "%s", field[1]);
-        snprintf(s.synth, sizeof s.synth, "%s", fixed == 4 ? field[2] : "-");
+        snprintf(s.synth, sizeof s.synth, "%s", fixed >= 4 ? field[2] : "-");
+        snprintf(s.machine, sizeof s.machine, "%s", fixed == 5 ? field[3] : "-");
+        if (!machine_ok(s.machine)) {
+            st = emm_fail(err, EMM_ERR_FORMAT,
+                          "%s:%ld: machine '%s' is not '-' or 16 hex digits (a fingerprint)",
+                          path, lineno, s.machine);
+            break;
+        }
         emm_error serr;
         emm_synth_options so;
         if (strcmp(s.synth, "-") != 0 &&
@@ -255,6 +307,20 @@ emm_status emm_table_load(emm_table *t, const char *path, emm_error *err)
             if (!emm_parse_double(field[fixed + k], &s.f[k]))
                 st = emm_fail(err, EMM_ERR_FORMAT, "%s:%ld: feature %d: '%s' is not a number",
                               path, lineno, k + 1, field[fixed + k]);
+        for (int k = EMM_FEATURES + fixed; k < nf && st == EMM_OK; k++) {
+            char *eq = strrchr(field[k], '=');
+            uint32_t c = s.ncosts;
+            if (eq)
+                *eq = '\0';
+            if (!eq || emm_strategy_parse(field[k], &s.cost_strategy[c], &serr) != EMM_OK ||
+                !emm_parse_double(eq + 1, &s.cost[c]) || !(s.cost[c] >= 1) ||
+                !isfinite(s.cost[c]))
+                st = emm_fail(err, EMM_ERR_FORMAT,
+                              "%s:%ld: cost %d: '%s%s%s' is not STRATEGY=RATIO (a ratio of at "
+                              "least 1)",
+                              path, lineno, c + 1, field[k], eq ? "=" : "", eq ? eq + 1 : "");
+            s.ncosts++;
+        }
         if (st != EMM_OK)
             break;
         ptrdiff_t dup = find(t, s.name);
@@ -284,10 +350,14 @@ static void write_sample(FILE *fp, const emm_table_sample *s)
 {
     char strat[96];
     emm_strategy_format(&s->strategy, strat, sizeof strat);
-    fprintf(fp, "%-24s %-9s %-13s %-24s", s->name, s->pattern, s->synth[0] ? s->synth : "-",
-            strat);
+    fprintf(fp, "%-24s %-9s %-13s %-16s %-24s", s->name, s->pattern,
+            s->synth[0] ? s->synth : "-", s->machine[0] ? s->machine : "-", strat);
     for (int k = 0; k < EMM_FEATURES; k++)
         fprintf(fp, " %.9g", s->f[k]);
+    for (uint32_t c = 0; c < s->ncosts && c < EMM_TABLE_COSTS; c++) {
+        emm_strategy_format(&s->cost_strategy[c], strat, sizeof strat);
+        fprintf(fp, " %s=%.6g", strat, s->cost[c]);
+    }
     fputc('\n', fp);
 }
 
@@ -306,8 +376,8 @@ static void write_header(FILE *fp, const char *comment)
             p += len + (nl ? 1 : 0);
         }
     }
-    fprintf(fp, "# name                   pattern   synth         strategy                 "
-                "features 1..%d\n",
+    fprintf(fp, "# name                   pattern   synth         machine          strategy"
+                "                 features 1..%d, then costs (STRATEGY=RATIO)\n",
             EMM_FEATURES);
 }
 
@@ -1238,6 +1308,167 @@ done:
     return st;
 }
 
+/* The neighbours' costs (docs/profile.md "The neighbours' costs"): the
+ * EMM_DECIDE_NEIGHBOURS samples nearest the window's features among those
+ * measured on this machine (their machine column is its fingerprint) that
+ * list their run's costs. Each strategy's score is the geometric mean of
+ * its cost in each neighbour's run (a strategy a neighbour does not list
+ * counts as 1.25 times its last listed one: it was slower than all of
+ * them), times (W/W_best)^EMM_DECIDE_WINDOW_WEIGHT, W the window's cold
+ * cycles: the neighbours say what the run rewards, the window what this
+ * program's accesses cost. A strategy no neighbour lists is no candidate.
+ * Leaves *out alone when no sample qualifies; errors are out of memory
+ * only. */
+static bool same_strategy(const emm_strategy *a, const emm_strategy *b)
+{
+    return a->kind == b->kind && a->layout == b->layout && a->fetch == b->fetch &&
+           a->cell == b->cell && a->indexed == b->indexed;
+}
+
+static int by_distance(const void *a, const void *b)
+{
+    const struct {
+        double d;
+        size_t i;
+    } *x = a, *y = b;
+    return x->d < y->d ? -1 : x->d > y->d ? 1 : (x->i > y->i) - (x->i < y->i);
+}
+
+/* Two samples of one run: their names equal but for the window, "-wN". */
+static bool same_run(const char *a, const char *b)
+{
+    const char *wa = strstr(a, "-w"), *wb = strstr(b, "-w");
+    while (wa && strstr(wa + 2, "-w"))
+        wa = strstr(wa + 2, "-w");
+    while (wb && strstr(wb + 2, "-w"))
+        wb = strstr(wb + 2, "-w");
+    if (!wa || !wb || wa - a != wb - b || strncmp(a, b, (size_t)(wa - a)) != 0)
+        return strcmp(a, b) == 0;
+    wa += 2 + strspn(wa + 2, "0123456789");
+    wb += 2 + strspn(wb + 2, "0123456789");
+    return strcmp(wa, wb) == 0;
+}
+
+/* Whether a layout in space is among the strategies (a mesh with depth). */
+static bool any_in_space(const emm_strategy *s, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (s[i].layout != EMM_LAYOUT_ORIGINAL && emm_layout_kind_dims(s[i].layout) == 3)
+            return true;
+    return false;
+}
+
+static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
+                                  const emm_trace_info *info, const emm_trace_record *recs,
+                                  size_t n, const double f[EMM_FEATURES],
+                                  const emm_threads *threads, emm_model_share *share,
+                                  emm_window_decision *out, emm_error *err)
+{
+    char id[17];
+    emm_table_machine_id(m, id);
+    size_t near[EMM_DECIDE_NEIGHBOURS], k = 0;
+    double dist[EMM_DECIDE_NEIGHBOURS];
+    /* A run over a mesh with depth tried the layouts in space, and its
+     * fastest include some: such samples serve such meshes, the others the
+     * planar ones (their costs rank different candidates). */
+    bool depth = info->geometry.nt > 0 &&
+                 emm_geometry_has_depth(info->geometry.xyz, (size_t)info->geometry.nv,
+                                        info->geometry.tri, (size_t)info->geometry.nt);
+    struct cand {
+        double d;
+        size_t i;
+    } *c = malloc((t->n ? t->n : 1) * sizeof *c);
+    if (!c)
+        return emm_fail(err, EMM_ERR_NOMEM, "out of memory");
+    size_t nc = 0;
+    double canonical = INFINITY; /* the nearest sample without costs */
+    for (size_t i = 0; i < t->n; i++) {
+        const emm_table_sample *x = &t->s[i];
+        double d = emm_feature_distance(f, x->f);
+        if (x->ncosts == 0) {
+            if (d < canonical)
+                canonical = d;
+            continue;
+        }
+        if (strcmp(x->machine, id) == 0 && any_in_space(x->cost_strategy, x->ncosts) == depth)
+            c[nc++] = (struct cand){d, i};
+    }
+    qsort(c, nc, sizeof *c, by_distance);
+    /* The nearest runs, one window each, and only when the window is no
+     * canonical pattern's (farther than EMM_DECIDE_CANONICAL_NEAR from
+     * every sample without costs: those traversals the check predicts
+     * nearly exactly) and its nearest run is within
+     * EMM_DECIDE_NEIGHBOUR_GATE times the nearest such sample's distance. */
+    for (size_t j = 0; j < nc && k < EMM_DECIDE_NEIGHBOURS; j++) {
+        if (k == 0 && !(c[j].d <= EMM_DECIDE_NEIGHBOUR_GATE * canonical &&
+                        canonical > EMM_DECIDE_CANONICAL_NEAR))
+            break;
+        bool seen = false;
+        for (size_t q = 0; q < k && !seen; q++)
+            seen = same_run(t->s[near[q]].name, t->s[c[j].i].name);
+        if (seen)
+            continue;
+        near[k] = c[j].i;
+        dist[k++] = c[j].d;
+    }
+    free(c);
+    if (k == 0)
+        return EMM_OK;
+    emm_sweep *W = NULL;
+    emm_error e;
+    if (sweep_records_shared(m, info, recs, n, threads, share, true, &W, &e) != EMM_OK)
+        return e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
+    double wb = INFINITY;
+    for (size_t i = 0; i < W->count; i++)
+        if (W->ran[i] && emm_machine_offers(m, &W->result[i].strategy) &&
+            (double)W->result[i].total < wb)
+            wb = (double)W->result[i].total;
+    size_t pick = SIZE_MAX, second = SIZE_MAX, scored = 0;
+    double score = INFINITY, score2 = INFINITY;
+    for (size_t i = 0; i < W->count && wb > 0 && isfinite(wb); i++) {
+        const emm_strategy *st = &W->result[i].strategy;
+        if (!W->ran[i] || !emm_machine_offers(m, st))
+            continue;
+        double logsum = 0;
+        size_t listed = 0;
+        for (size_t j = 0; j < k; j++) {
+            const emm_table_sample *nb = &t->s[near[j]];
+            double cost = 1.25 * nb->cost[nb->ncosts - 1];
+            for (uint32_t q = 0; q < nb->ncosts; q++)
+                if (same_strategy(&nb->cost_strategy[q], st)) {
+                    cost = nb->cost[q];
+                    listed++;
+                    break;
+                }
+            logsum += log(cost);
+        }
+        if (listed == 0)
+            continue;
+        scored++;
+        double v = exp(logsum / (double)k) *
+                   pow((double)W->result[i].total / wb, EMM_DECIDE_WINDOW_WEIGHT);
+        if (v < score) {
+            score2 = score;
+            second = pick;
+            score = v;
+            pick = i;
+        } else if (v < score2) {
+            score2 = v;
+            second = i;
+        }
+    }
+    if (pick != SIZE_MAX) {
+        out->strategy = W->result[pick].strategy;
+        out->cycles = W->result[pick].total;
+        out->candidates = scored;
+        out->neighbours = k;
+        out->neighbour_distance = dist[k - 1];
+        set_runner_up(out, second == SIZE_MAX ? NULL : &W->result[second], score2 / score - 1);
+    }
+    emm_sweep_free(W);
+    return EMM_OK;
+}
+
 emm_status emm_decide_features(const emm_table *t, const emm_machine *m,
                                const emm_trace_info *info, const emm_trace_record *recs, size_t n,
                                const double f[EMM_FEATURES], size_t accesses, const char *name,
@@ -1300,6 +1531,11 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
         }
         if (own_mesh)
             emm_mesh_free(mesh);
+        /* The pattern was checked: runs measured on this machine, when the
+         * table has some, decide among the candidates (a sample of the
+         * user's own class, without a recipe, stands as in the thesis). */
+        if (st == EMM_OK && out->how == EMM_DECIDED_CHECKED)
+            st = neighbour_costs(t, m, info, recs, n, f, threads, share, out, err);
         /* A sample's strategy the machine does not have (a cache label on a
          * machine without one) is no answer: the window decides. */
         if (st != EMM_OK || out->how == EMM_DECIDED_CHECKED ||

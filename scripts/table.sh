@@ -1,10 +1,13 @@
 #!/bin/sh
 # Rebuilds the shipped strategy table, data/table.txt (docs/profile.md):
 # the canonical patterns of `emm table build`, and the example workloads'
-# own traces — region growing, long and short curves, random access,
-# recorded under `emm run` on three generated meshes that neither the tests
-# nor the demo use (seeds 5–7; the default mesh is seed 1) — as the thesis'
-# Table 5.1 holds profiles of its applications.
+# own traces — region growing, long and short curves, random access, and
+# the traversal programs of bench/predict_traversals.c (walks, flood fill,
+# 8-seed growth, scans in three orders, smoothing) — recorded under
+# `emm run` on three generated planar meshes (one randomly numbered) and a
+# sphere that neither the tests, the demo nor `make predict` use (seeds 5–8;
+# the default mesh is seed 1), as the thesis' Table 5.1 holds profiles of
+# its applications.
 #
 # usage: scripts/table.sh [BUILD_DIR] [OUTPUT]   (defaults: build data/table.txt)
 set -eu
@@ -16,20 +19,38 @@ work=$(mktemp -d "${TMPDIR:-/tmp}/emm-table-XXXXXX")
 trap 'rm -rf "$work"' EXIT INT TERM
 
 set --
-for mesh in 12000:5:clustered 24000:6:uniform 16000:7:clustered; do
+# faces:seed:density:order (density - : a sphere)
+for mesh in 12000:5:clustered:made 24000:6:uniform:random 16000:7:clustered:made \
+            16000:8:-:made; do
     faces=${mesh%%:*}
     rest=${mesh#*:}
     seed=${rest%%:*}
-    density=${rest#*:}
-    "$bin/emm" mesh gen --faces "$faces" --seed "$seed" --density "$density" \
-        -o "$work/mesh-$seed.off" >/dev/null
-    # program:arguments:class:recipe
+    rest=${rest#*:}
+    density=${rest%%:*}
+    order=${rest#*:}
+    if [ "$density" = - ]; then
+        "$bin/emm" mesh gen --surface sphere --faces "$faces" --seed "$seed" --order "$order" \
+            -o "$work/mesh-$seed.off" >/dev/null
+    else
+        "$bin/emm" mesh gen --faces "$faces" --seed "$seed" --density "$density" \
+            --order "$order" -o "$work/mesh-$seed.off" >/dev/null
+    fi
+    # program:arguments:class:recipe (the traversal programs of
+    # bench/predict_traversals.c take their mode as the argument and are
+    # named by it: prog-walk-5-w4096)
     for w in region_growing::region:- curve_tracing:--long:curve:- \
-             curve_tracing:--short:curve:- random_access::random:-; do
+             curve_tracing:--short:curve:- random_access::random:- \
+             predict_traversals:walk:curve:- predict_traversals:flood:region:- \
+             predict_traversals:seeds:region:- predict_traversals:scan-index:scanline:- \
+             predict_traversals:scan-rows:scanline:- predict_traversals:scan-hilbert:hilbert:- \
+             predict_traversals:smooth:scanline:-; do
         prog=${w%%:*}; rest=${w#*:}
         arg=${rest%%:*}; rest=${rest#*:}
         class=${rest%%:*}; recipe=${rest#*:}
-        name=$prog${arg:+$arg}-$seed
+        case $prog in
+            predict_traversals) name=$arg-$seed ;;
+            *) name=$prog${arg:+$arg}-$seed ;;
+        esac
         if [ -x "$bin/$prog.sancov" ]; then
             exe=$bin/$prog.sancov capture=sancov
         else
@@ -41,4 +62,8 @@ for mesh in 12000:5:clustered 24000:6:uniform 16000:7:clustered; do
         set -- "$@" --program "$work/$name.emmt:$class:$recipe"
     done
 done
-"$bin/emm" table build -o "$out" "$@"
+# The programs' runs are measured on the default machine and on the second
+# machine of the prediction benchmark (bench/predict_machines): each sample
+# carries its machine's fingerprint and its run's costs.
+"$bin/emm" table build -o "$out" "$@" \
+    --program-machine "$(dirname "$0")/../bench/predict_machines/small_store.ini"

@@ -169,6 +169,8 @@ static int profile(void *p)
     unsigned finalists = a->finalists;
     emm_strategy answer;
     int has_answer = 0;
+    emm_table_sample costs; /* the contest's measured costs, for --learn */
+    memset(&costs, 0, sizeof costs);
     /* The user table: --table, else $EMM_TABLE; one to learn into may be new. */
     char env[EMM_CONFIG_PATH_MAX];
     const char *user = table;
@@ -254,6 +256,10 @@ static int profile(void *p)
     if (w.simulated)
         printf("simulated: %zu strategies on the window; best %llu cycles\n", w.candidates,
                (unsigned long long)w.cycles);
+    else if (w.neighbours)
+        printf("measured:  the %zu nearest runs measured on this machine (within %.3f), their "
+               "costs\n           with the window's, %zu strategies\n",
+               w.neighbours, w.neighbour_distance, w.candidates);
     else if (w.how == EMM_DECIDED_CHECKED)
         printf("checked:   %s over this mesh (%zu visits) and the window, %zu strategies\n",
                w.table.synth, w.synth_visits, w.candidates);
@@ -301,6 +307,23 @@ static int profile(void *p)
                    (double)cr.predicted.total / (double)cr.answer.total);
         answer = cr.answer.strategy;
         has_answer = 1;
+        /* What the run measured, for --learn: the answer, the runner-up and
+         * the prediction, each one's cycles over the answer's. */
+        const emm_result *ran[3] = {&cr.answer, cr.has_runner_up ? &cr.runner_up : NULL,
+                                    cr.has_predicted ? &cr.predicted : NULL};
+        for (int q = 0; q < 3 && cr.answer.total; q++) {
+            bool dup = !ran[q];
+            for (uint32_t c = 0; c < costs.ncosts && !dup; c++) {
+                char x[96], y[96];
+                emm_strategy_format(&costs.cost_strategy[c], x, sizeof x);
+                emm_strategy_format(&ran[q]->strategy, y, sizeof y);
+                dup = strcmp(x, y) == 0;
+            }
+            if (dup)
+                continue;
+            costs.cost_strategy[costs.ncosts] = ran[q]->strategy;
+            costs.cost[costs.ncosts++] = (double)ran[q]->total / (double)cr.answer.total;
+        }
     } else if (w.has_runner_up && m) {
         /* The choice and the runner-up over the whole trace, as emm run's
          * summary weighs them: within the tie margin, either will do. */
@@ -323,20 +346,36 @@ static int profile(void *p)
         emm_result_release(&res[1]);
     }
     rc = EMM_EXIT_OK;
-    if (learn && w.simulated) {
+    /* What is learnt: the run's answer when the contest held it (the best
+     * measured over the whole trace, the table's "table expanded to cover
+     * more applications"), else the window's sweep when it ran. */
+    if (learn && (has_answer || w.simulated)) {
         emm_table_sample s;
         memset(&s, 0, sizeof s);
         snprintf(s.name, sizeof s.name, "%s", learn);
         snprintf(s.pattern, sizeof s.pattern, "%s", pattern);
-        s.strategy = w.strategy;
+        s.strategy = has_answer ? answer : w.strategy;
         memcpy(s.f, w.f, sizeof s.f);
+        snprintf(s.machine, sizeof s.machine, "-");
+        if (has_answer && costs.ncosts) {
+            /* Measured over the whole run on this machine: it decides there
+             * (docs/profile.md "The neighbours' costs"). */
+            emm_table_machine_id(m, s.machine);
+            s.ncosts = costs.ncosts;
+            memcpy(s.cost_strategy, costs.cost_strategy, sizeof s.cost_strategy);
+            memcpy(s.cost, costs.cost, sizeof s.cost);
+        }
         if (emm_table_append(user, &s, &err) != EMM_OK) {
             rc = cli_fail(&err);
             goto done;
         }
-        printf("learnt:    %s (%s, %s) added to %s\n", s.name, s.pattern, strat, user);
+        char learnt[96];
+        emm_strategy_format(&s.strategy, learnt, sizeof learnt);
+        printf("learnt:    %s (%s, %s, %s) added to %s\n", s.name, s.pattern, learnt,
+               has_answer ? "the contest's answer over the run" : "the window's sweep", user);
     } else if (learn) {
-        printf("learnt:    nothing (not novel; --simulate learns anyway)\n");
+        printf("learnt:    nothing (--finalists 0 and not novel; --simulate learns the "
+               "window's sweep)\n");
     }
     if (json)
         rc = write_json(json, trace, exact, &w, has_answer ? &answer : NULL);
@@ -387,8 +426,9 @@ int emm_cmd_profile(int argc, char **argv)
                  "fastest of those that ran to the end is the answer; all: none is dropped; 0: "
                  "the window's prediction stands (default 4)"},
         {.name = "--learn", .metavar = "NAME", .kind = OPT_TEXT, .dst = &a.learn,
-         .help = "when the sweep ran, append the profile as sample NAME with the sweep's best "
-                 "strategy to the user table (--table or $EMM_TABLE, created when missing)"},
+         .help = "append the profile as sample NAME to the user table (--table or $EMM_TABLE, "
+                 "created when missing) with the contest's answer over the whole trace, or, "
+                 "with --finalists 0, the window sweep's best when the sweep ran"},
         {.name = "--pattern", .metavar = "CLASS", .kind = OPT_TEXT, .dst = &a.pattern,
          .show_default = true, .help = "the pattern class of a learnt sample"},
         MACHINE_CLI_OPTS(&a.mc),

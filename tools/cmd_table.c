@@ -27,7 +27,7 @@ static void usage_head(FILE *out)
             "       emm table add PROFILE --name NAME [--strategy S] [--pattern CLASS]\n"
             "                     [--window N] [--table FILE] [--machine FILE] [--set K=V]...\n"
             "       emm table build [-o FILE] [--quick] [--program TRACE:CLASS:RECIPE]...\n"
-            "                       [--machine FILE] [--set K=V]...\n"
+            "                       [--program-machine FILE]... [--machine FILE] [--set K=V]...\n"
             "\n"
             "The strategy table maps distance-profile samples to strategies. The default\n"
             "table is %s; a user table\n"
@@ -50,7 +50,11 @@ static void usage_head(FILE *out)
             "         prog-<file name>-wN, of pattern CLASS and synthetic recipe RECIPE (a\n"
             "         pattern of emm trace synth, PATTERN@corner, PATTERN@N, or -), labelled\n"
             "         as the canonical ones (scripts/table.sh makes the shipped table so,\n"
-            "         from the example workloads' traces on meshes the tests do not use)\n",
+            "         from the example workloads' traces on meshes the tests do not use);\n"
+            "         a program's sample also carries the machine's fingerprint and its\n"
+            "         run's costs (the fastest strategies' cycles over the best's), which\n"
+            "         decide on that machine; --program-machine FILE measures the programs\n"
+            "         again on another machine\n",
             def, EMM_PROFILE_DEFAULT_WINDOW);
 }
 
@@ -290,9 +294,42 @@ static const uint64_t build_windows[] = {4096, 16384, 65536};
  * dropped), named PREFIX-wN, of class `cls` and recipe `recipe`, each with
  * the strategy that serves the whole traversal best — the run a decision
  * made on the window is for. */
+/* A program's sample (recipe "-") carries the machine it was measured on
+ * and its run's costs: the fastest EMM_TABLE_COSTS strategies the machine
+ * offers, each one's cycles over the fastest's (docs/profile.md "The
+ * neighbours' costs"). */
+static void set_costs(emm_table_sample *smp, const emm_machine *m, const emm_sweep *sw)
+{
+    emm_table_machine_id(m, smp->machine);
+    uint64_t best = 0;
+    for (uint32_t c = 0; c < EMM_TABLE_COSTS; c++) {
+        size_t pick = SIZE_MAX;
+        for (size_t i = 0; i < sw->count; i++) {
+            if (!sw->ran[i] || !emm_machine_offers(m, &sw->result[i].strategy))
+                continue;
+            bool taken = false;
+            for (uint32_t q = 0; q < c && !taken; q++) {
+                char a[96], b[96];
+                emm_strategy_format(&smp->cost_strategy[q], a, sizeof a);
+                emm_strategy_format(&sw->result[i].strategy, b, sizeof b);
+                taken = strcmp(a, b) == 0;
+            }
+            if (!taken && (pick == SIZE_MAX || sw->result[i].total < sw->result[pick].total))
+                pick = i;
+        }
+        if (pick == SIZE_MAX || (c == 0 && sw->result[pick].total == 0))
+            break;
+        if (c == 0)
+            best = sw->result[pick].total;
+        smp->cost_strategy[c] = sw->result[pick].strategy;
+        smp->cost[c] = (double)sw->result[pick].total / (double)best;
+        smp->ncosts = c + 1;
+    }
+}
+
 static int add_trace_samples(emm_table *t, const emm_machine *m, const char *trace,
-                             const char *prefix, const char *cls, const char *recipe,
-                             size_t nwin)
+                             const char *prefix, const char *suffix, const char *cls,
+                             const char *recipe, size_t nwin)
 {
     emm_error err;
     emm_trace_reader *r;
@@ -319,10 +356,13 @@ static int add_trace_samples(emm_table *t, const emm_machine *m, const char *tra
         if (np <= covered)
             break;
         covered = np;
-        snprintf(smp.name, sizeof smp.name, "%s-w%zu", prefix, np);
+        snprintf(smp.name, sizeof smp.name, "%s-w%zu%s", prefix, np, suffix);
         snprintf(smp.pattern, sizeof smp.pattern, "%s", cls);
         snprintf(smp.synth, sizeof smp.synth, "%s", recipe);
+        snprintf(smp.machine, sizeof smp.machine, "-");
         smp.strategy = sw->result[sw->best].strategy;
+        if (strcmp(recipe, "-") == 0)
+            set_costs(&smp, m, sw);
         if (emm_table_add(t, &smp, &err) != EMM_OK) {
             rc = cli_fail(&err);
             break;
@@ -381,6 +421,7 @@ struct build_args {
     const char *out;
     int quick;
     opts_list programs; /* --program values */
+    opts_list also;     /* --program-machine values */
 };
 
 static int table_build_with(struct build_args *a, struct program_trace *progs)
@@ -438,7 +479,7 @@ static int table_build_with(struct build_args *a, struct program_trace *progs)
             snprintf(prefix, sizeof prefix, "%s-%zuk%c", build_patterns[p].name,
                      build_meshes[g].faces / 1000,
                      build_meshes[g].density == EMM_DENSITY_UNIFORM ? 'u' : 'c');
-            rc = add_trace_samples(t, m, trace, prefix, build_patterns[p].cls,
+            rc = add_trace_samples(t, m, trace, prefix, "", build_patterns[p].cls,
                                    build_patterns[p].recipe, nwin);
             remove(trace);
             if (rc != EMM_EXIT_OK)
@@ -448,8 +489,25 @@ static int table_build_with(struct build_args *a, struct program_trace *progs)
     }
     rmdir(dir);
     for (size_t k = 0; k < nprog && rc == EMM_EXIT_OK; k++)
-        rc = add_trace_samples(t, m, progs[k].path, progs[k].prefix, progs[k].cls,
+        rc = add_trace_samples(t, m, progs[k].path, progs[k].prefix, "", progs[k].cls,
                                progs[k].recipe, nwin);
+    /* The programs again on each --program-machine, named ...@FILE-BASE. */
+    for (size_t x = 0; x < a->also.n && rc == EMM_EXIT_OK; x++) {
+        const char *path = a->also.v[x];
+        emm_machine *m2 = NULL;
+        if (emm_machine_new(&m2, &err) != EMM_OK || emm_machine_load(m2, path, &err) != EMM_OK) {
+            emm_machine_free(m2);
+            rc = cli_fail(&err);
+            break;
+        }
+        const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+        char suffix[24];
+        snprintf(suffix, sizeof suffix, "@%.*s", (int)strcspn(base, "."), base);
+        for (size_t k = 0; k < nprog && rc == EMM_EXIT_OK; k++)
+            rc = add_trace_samples(t, m2, progs[k].path, progs[k].prefix, suffix, progs[k].cls,
+                                   progs[k].recipe, nwin);
+        emm_machine_free(m2);
+    }
     if (rc == EMM_EXIT_OK) {
         char comment[1024];
         int len = snprintf(comment, sizeof comment,
@@ -466,8 +524,10 @@ static int table_build_with(struct build_args *a, struct program_trace *progs)
                             (unsigned long long)build_meshes[g].seed, g + 1 < nmesh ? "," : ";");
         if (len > 0 && (size_t)len < sizeof comment && nprog)
             len += snprintf(comment + len, sizeof comment - (size_t)len,
-                            "\nand %zu traces of programs (the prog-* samples; scripts/table.sh);",
-                            nprog);
+                            "\nand %zu traces of programs (the prog-* samples; scripts/table.sh),"
+                            "\nwith their runs' costs on this machine%s%s;",
+                            nprog, a->also.n ? " and on " : "",
+                            a->also.n ? "each --program-machine (the @ samples)" : "");
         if (len > 0 && (size_t)len < sizeof comment)
             snprintf(comment + len, sizeof comment - (size_t)len,
                      "\nwindows of %s element accesses; each strategy is the fewest cycles of\n"
@@ -513,6 +573,10 @@ static int table_build(int argc, char **argv)
          .dst = &a.programs,
          .help = "add the samples of a program's trace, of pattern CLASS and synthetic recipe "
                  "RECIPE; may be repeated"},
+        {.name = "--program-machine", .metavar = "FILE", .kind = OPT_TEXT, .repeat = true,
+         .dst = &a.also,
+         .help = "also measure the --program traces' runs on the machine of FILE, as samples "
+                 "named ...@FILE's base name; may be repeated"},
         MACHINE_CLI_OPTS(&a.mc),
         OPTS_END,
     };

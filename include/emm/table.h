@@ -5,14 +5,20 @@
  * synthetic recipe, a strategy and a feature vector (emm_profile_features):
  *
  *     # comments start with '#', anywhere on a line
- *     emm-table 3 features=19
- *     # name          pattern  synth          strategy               f1 ... f19
- *     region-20k-a    region   region@corner  tiles+convolution@64   -0.90 -0.56 ...
+ *     emm-table 4 features=19
+ *     # name        pattern synth         machine          strategy             f1 ... f19 [costs]
+ *     region-20k-a  region  region@corner -                tiles+convolution@64 -0.90 ...
+ *     prog-rg-5-w4096 region -            5f0c2a9d41e7b3c8 tiles+naive@16       -0.82 ... tiles+naive@16=1 ...
  *
  * The recipe names the canonical traversal the sample was made from
  * (`emm trace synth`: a pattern, "@corner" for a region grown from the
  * corner, "@N" for curves of N triangles), or "-" for a sample taken from a
- * real program. Version 2 files (no synth column) are still read, as "-".
+ * real program. The machine column is the fingerprint of the machine a
+ * program's whole run was measured on (emm_table_machine_id), or "-"; after
+ * the features, such a sample may list its run's costs: STRATEGY=RATIO, the
+ * whole run's cycles under that strategy over the best's, for up to
+ * EMM_TABLE_COSTS of the fastest. Version 3 files (no machine column, no
+ * costs) and version 2 files (no synth column either) are still read.
  *
  * The first non-comment line is the header: the format version and the
  * feature count, both checked. Parsing is strict: every problem is an error
@@ -33,9 +39,24 @@ extern "C" {
 #endif
 
 /* Version 2: the features 17–19 (locality across scales) were added.
- * Version 3: the synth column. */
-#define EMM_TABLE_VERSION 3
+ * Version 3: the synth column. Version 4: the machine column and the costs. */
+#define EMM_TABLE_VERSION 4
 #define EMM_TABLE_NAME_MAX 64
+/* The most costs a sample lists (its run's fastest strategies). */
+#define EMM_TABLE_COSTS 24
+/* The neighbours' costs decide (docs/profile.md "The neighbours' costs"):
+ * the nearest runs measured on this machine, this many (one window each),
+ * ... */
+#define EMM_DECIDE_NEIGHBOURS 5
+/* ... each strategy's score their costs' geometric mean times the window's
+ * cold cycles over its best, to this power; ... */
+#define EMM_DECIDE_WINDOW_WEIGHT 0.25
+/* ... when the nearest of them lies within this factor of the nearest
+ * sample without costs (a canonical pattern's). */
+#define EMM_DECIDE_NEIGHBOUR_GATE 2.0
+/* A window this near a sample without costs (a canonical pattern's) is that
+ * pattern: the check decides, not the neighbours. */
+#define EMM_DECIDE_CANONICAL_NEAR 0.35
 /* A profile whose nearest sample is farther than this (Euclidean, in
  * feature space) is novel. See docs/profile.md for how it was chosen. */
 #define EMM_NOVELTY_THRESHOLD 1.0
@@ -49,7 +70,15 @@ typedef struct emm_table_sample {
     char synth[EMM_TABLE_NAME_MAX];   /* the recipe it was made from, or "-" (or "": "-") */
     emm_strategy strategy;
     double f[EMM_FEATURES];
+    char machine[EMM_TABLE_NAME_MAX]; /* the measuring machine's fingerprint, or "-" ("": "-") */
+    uint32_t ncosts;                  /* costs listed, at most EMM_TABLE_COSTS */
+    emm_strategy cost_strategy[EMM_TABLE_COSTS];
+    double cost[EMM_TABLE_COSTS];     /* its whole run's cycles over the best's (>= 1) */
 } emm_table_sample;
+
+/* The machine's fingerprint: 16 hex digits of a hash of every key's value
+ * (emm machine show's), so two machines that differ in any key differ. */
+EMM_API void emm_table_machine_id(const emm_machine *m, char out[17]);
 
 typedef struct emm_table emm_table;
 
@@ -202,6 +231,10 @@ typedef struct emm_window_decision {
     emm_decide_class *classes;
     size_t nclasses;
     int reclassified;
+    /* The neighbours' costs decided (docs/profile.md): the nearest samples
+     * measured on this machine, their count, and the farthest's distance. */
+    size_t neighbours;
+    double neighbour_distance;
 } emm_window_decision;
 
 /* Frees what a decision holds (its classes) and leaves them empty; a

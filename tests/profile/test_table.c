@@ -23,7 +23,7 @@ static char *line(const char *name, const char *pattern, const char *strategy, c
                   int nfeat)
 {
     static char buf[4096];
-    int n = snprintf(buf, sizeof buf, "%s %s - %s", name, pattern, strategy);
+    int n = snprintf(buf, sizeof buf, "%s %s - - %s", name, pattern, strategy);
     for (int k = 0; k < nfeat; k++)
         n += snprintf(buf + n, sizeof buf - (size_t)n, " %s", v);
     snprintf(buf + n, sizeof buf - (size_t)n, "\n");
@@ -74,15 +74,16 @@ static void test_parse(void)
     /* Errors name the file and the line. */
     /* Version 1 had 16 features; its tables are refused, not misread. */
     expect_error("emm-table 1 features=16\n", "table_test.txt:1: table version '1'");
-    expect_error("emm-table 4 features=19\n", "table_test.txt:1: table version '4'");
+    expect_error("emm-table 5 features=19\n", "table_test.txt:1: table version '5'");
     snprintf(text, sizeof text, "emm-table %d features=%d\n", EMM_TABLE_VERSION, EMM_FEATURES + 1);
     expect_error(text, "table_test.txt:1: the table has");
     expect_error("emm-tables 1\n", "table_test.txt:1: expected the header");
     expect_error("# only comments\n", "table_test.txt: empty file");
     snprintf(text, sizeof text, "%s%s", header, line("x", "random", "cache", "1", EMM_FEATURES - 1));
-    expect_error(text, "table_test.txt:2: expected name, pattern, synth, strategy");
+    expect_error(text, "table_test.txt:2: expected name, pattern, synth, machine, strategy");
+    /* One field more than the features is a cost, and it is no STRATEGY=RATIO. */
     snprintf(text, sizeof text, "%s%s", header, line("x", "random", "cache", "1", EMM_FEATURES + 1));
-    expect_error(text, "table_test.txt:2: expected name, pattern, synth, strategy");
+    expect_error(text, "table_test.txt:2: cost 1: '1' is not STRATEGY=RATIO");
     snprintf(text, sizeof text, "%s\n%s", header, line("x", "random", "tiles+warp", "1", EMM_FEATURES));
     expect_error(text, "table_test.txt:3: ");
     snprintf(text, sizeof text, "%s%s", header, line("x", "random", "cache", "1.5x", EMM_FEATURES));
@@ -108,6 +109,45 @@ static void test_parse(void)
     expect_error(good, "table_test.txt:2: synth 'spiral@corner'");
     snprintf(good, sizeof good, "%.*s warp %s", (int)(dash - text), text, dash + 3);
     expect_error(good, "table_test.txt:2: synth 'warp': pattern 'warp' is unknown");
+    /* The machine column: '-' or a fingerprint of 16 hex digits; then the
+     * run's costs, STRATEGY=RATIO (at least 1), at most EMM_TABLE_COSTS. */
+    snprintf(good, sizeof good, "%.*s - 0123456789abcdef %s", (int)(dash - text), text,
+             dash + 5);
+    good[strlen(good) - 1] = '\0';
+    char costs[16384];
+    snprintf(costs, sizeof costs, "%s tiles+naive@16=1 direct=2.5\n", good);
+    emm_table *ct = emm_table_new();
+    write_file("table_test.txt", costs);
+    REQUIRE(emm_table_load(ct, "table_test.txt", &err) == EMM_OK);
+    const emm_table_sample *cs = emm_table_at(ct, 0);
+    CHECK(strcmp(cs->machine, "0123456789abcdef") == 0 && cs->ncosts == 2 &&
+          cs->cost[1] == 2.5 && cs->cost_strategy[1].kind == EMM_STRATEGY_DIRECT);
+    /* Written back and read again, the same. */
+    remove("table_costs.txt");
+    REQUIRE(emm_table_write(ct, "table_costs.txt", NULL, &err) == EMM_OK);
+    emm_table *ct2 = emm_table_new();
+    REQUIRE(emm_table_load(ct2, "table_costs.txt", &err) == EMM_OK);
+    CHECK(emm_table_at(ct2, 0)->ncosts == 2 && emm_table_at(ct2, 0)->cost[1] == 2.5 &&
+          strcmp(emm_table_at(ct2, 0)->machine, "0123456789abcdef") == 0);
+    emm_table_free(ct2);
+    emm_table_free(ct);
+    snprintf(costs, sizeof costs, "%s direct=0.5\n", good);
+    expect_error(costs, "table_test.txt:2: cost 1: 'direct=0.5' is not STRATEGY=RATIO");
+    snprintf(costs, sizeof costs, "%s warp=1\n", good);
+    expect_error(costs, "table_test.txt:2: cost 1: 'warp=1'");
+    snprintf(costs, sizeof costs, "%s", good);
+    for (int c = 0; c <= EMM_TABLE_COSTS; c++)
+        strcat(costs, " direct=1");
+    strcat(costs, "\n");
+    expect_error(costs, "(then at most 24 costs), found more than");
+    snprintf(good, sizeof good, "%.*s - 0123456789ABCDEF %s", (int)(dash - text), text, dash + 5);
+    expect_error(good, "table_test.txt:2: machine '0123456789ABCDEF' is not '-' or 16 hex digits");
+    /* Version 3 tables (no machine column) are still read. */
+    snprintf(good, sizeof good, "emm-table 3 features=%d\nold3 random - cache", EMM_FEATURES);
+    for (int k = 0; k < EMM_FEATURES; k++)
+        strcat(good, " 0.5");
+    strcat(good, "\n");
+    CHECK(load_text(good, &err, &n) == EMM_OK && n == 1);
     /* Version 2 tables (no synth column) are still read. */
     snprintf(good, sizeof good, "emm-table 2 features=%d\nold random cache", EMM_FEATURES);
     for (int k = 0; k < EMM_FEATURES; k++)

@@ -129,12 +129,12 @@ static void write_table_synth(const char *path, const char *near, const char *sy
     REQUIRE(f);
     fprintf(f, "emm-table %d features=%d\n", EMM_TABLE_VERSION, EMM_FEATURES);
     if (!only_far) {
-        fprintf(f, "mine %s %s %s", strcmp(synth, "-") == 0 ? "grown" : "region", synth, near);
+        fprintf(f, "mine %s %s - %s", strcmp(synth, "-") == 0 ? "grown" : "region", synth, near);
         for (int k = 0; k < EMM_FEATURES; k++)
             fprintf(f, " %.17g", feat[k]);
         fputc('\n', f);
     }
-    fprintf(f, "far random - cache");
+    fprintf(f, "far random - - cache");
     for (int k = 0; k < EMM_FEATURES; k++)
         fprintf(f, " %.17g", feat[k] + 5.0);
     fputc('\n', f);
