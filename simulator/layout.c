@@ -620,7 +620,7 @@ void emm_layout_get_stats(const emm_layout *l, emm_layout_stats *out)
 {
     memset(out, 0, sizeof *out);
     out->cells = l->ncells;
-    out->dropped_cells = l->cell_of ? l->nraw - l->ncells : 0;
+    out->dropped_cells = l->nraw > l->ncells ? l->nraw - l->ncells : 0;
     uint64_t *v = malloc((size_t)l->ncells * sizeof *v);
     /* Without memory for the medians, report them as 0 rather than fail a
      * query. */

@@ -27,15 +27,18 @@
 
 #include "error.h"
 
-/* Most boxes tried: empty boxes still take a header in the image and 8
- * bytes of look-ups each. */
-#define MAX_BOXES (1u << 21)
+/* Most boxes tried. Only the boxes that hold triangles become cells; the
+ * others cost a bit each while the layout is cut (128 MiB at the most). */
+#define MAX_BOXES (1u << 30)
 
+/* Boxes are numbered layer by layer, row by row ("raw" numbers, of every
+ * box); the cells are the boxes that hold triangles, in that order. */
 struct boxes {
     uint32_t n[3];   /* boxes along each axis of an even row of an even layer */
     double w[3];     /* a box's extent along each axis */
     int shift;
-    uint32_t layer_cells[2]; /* cells in an even, an odd layer */
+    uint32_t layer_cells[2]; /* boxes in an even, an odd layer */
+    uint32_t *occ;   /* ncells: each cell's box, ascending */
 };
 
 static const struct boxes *B(const emm_layout *l)
@@ -113,7 +116,60 @@ uint32_t emm_boxes_cell_at(const emm_layout *l, const double *p, uint32_t *level
 {
     if (levels)
         *levels = 0;
-    return box_at(l, B(l), p);
+    const struct boxes *b = B(l);
+    uint32_t box = box_at(l, b, p), lo = 0, hi = l->ncells;
+    while (lo < hi) { /* the cell of that box, if it holds triangles */
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (b->occ[mid] < box)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < l->ncells && b->occ[lo] == box ? lo : EMM_LAYOUT_NONE;
+}
+
+/* A bit per box: set for those that hold triangles, and the cells before
+ * each 64 boxes, which number the cells. */
+typedef struct held {
+    uint64_t *bits;
+    uint32_t *before;
+} held;
+
+static int is_held(const held *h, uint32_t box)
+{
+    return (int)((h->bits[box >> 6] >> (box & 63)) & 1u);
+}
+
+static uint32_t cell_of_box(const held *h, uint32_t box)
+{
+    uint64_t below = h->bits[box >> 6] & ((UINT64_C(1) << (box & 63)) - 1);
+    return h->before[box >> 6] + (uint32_t)__builtin_popcountll(below);
+}
+
+/* The box at raw number `box`: its layer, row and place. */
+static void box_coord(const struct boxes *b, uint32_t box, int32_t co[3])
+{
+    uint32_t pair = b->layer_cells[0] + b->layer_cells[1];
+    uint32_t k = 2 * (box / pair), r = box % pair;
+    if (r >= b->layer_cells[0]) {
+        k++;
+        r -= b->layer_cells[0];
+    }
+    uint32_t n0 = b->n[0], i, j;
+    if (!b->shift) {
+        j = r / n0;
+        i = r % n0;
+    } else if (k & 1u) { /* every row of an odd layer holds n0 + 1 */
+        j = r / (n0 + 1);
+        i = r % (n0 + 1);
+    } else { /* rows of n0 and n0 + 1 in turn */
+        uint32_t two = 2 * n0 + 1, rr = r % two;
+        j = 2 * (r / two) + (rr >= n0);
+        i = rr >= n0 ? rr - n0 : rr;
+    }
+    co[0] = (int32_t)i;
+    co[1] = (int32_t)j;
+    co[2] = (int32_t)k;
 }
 
 /* About `want` boxes, as n[0] x n[1] x n[2] following the bounding box's
@@ -146,15 +202,16 @@ static void size_boxes(const emm_layout *l, struct boxes *b, double want)
 /* Boxes that hold a centroid, for the sizing. */
 static int64_t occupied(const emm_layout *l, struct boxes *b, const double *const *c)
 {
-    uint8_t *mark = calloc(count_cells(b), 1);
+    uint64_t *mark = calloc(count_cells(b) / 64 + 1, sizeof *mark);
     if (!mark)
         return -1;
     int64_t n = 0;
     for (size_t t = 0; t < l->nt; t++) {
         double p[3] = {c[0][t], c[1][t], c[2][t]};
         uint32_t x = box_at(l, b, p);
-        n += !mark[x];
-        mark[x] = 1;
+        uint64_t bit = UINT64_C(1) << (x & 63);
+        n += !(mark[x >> 6] & bit);
+        mark[x >> 6] |= bit;
     }
     free(mark);
     return n;
@@ -226,18 +283,17 @@ uint32_t emm_boxes_per_axis(const emm_layout *l, uint32_t n[EMM_MAX_DIMS])
     return l->dims;
 }
 
-/* The boxes that touch each box by a face, an edge or a corner: those of
- * the layers, rows and places around it whose closed boxes meet its own.
- * Only between boxes that hold triangles (held[box] nonzero): the others
- * are dropped once the layout is cut (layout.c), and on a surface they are
- * most of the boxes. */
-static emm_status neighbors(emm_layout *l, const uint8_t *held, const char *name, emm_error *err)
+/* The cells that touch each cell by a face, an edge or a corner: those of
+ * the layers, rows and places around its box whose closed boxes meet its
+ * own and hold triangles. Ascending: boxes come in raw order, and cells
+ * number the held boxes in that order. */
+static emm_status neighbors(emm_layout *l, const held *h, const char *name, emm_error *err)
 {
     const struct boxes *b = B(l);
-    size_t nheld = 0;
-    for (uint32_t c = 0; c < l->ncells; c++)
-        nheld += held[c] != 0;
-    size_t cap = nheld * (b->shift ? 14u : 26u) + 1;
+    size_t cap = (size_t)l->ncells * (b->shift ? 14u : 26u) + 1;
+    if (cap > UINT32_MAX) /* neighbour lists are 32-bit indexed */
+        return emm_fail(err, EMM_ERR_RANGE, "%s: %u cells are too many; use a larger CELL", name,
+                        l->ncells);
     l->nb_start = malloc(((size_t)l->ncells + 1) * sizeof *l->nb_start);
     l->nb = malloc(cap * sizeof *l->nb);
     if (!l->nb_start || !l->nb)
@@ -245,8 +301,6 @@ static emm_status neighbors(emm_layout *l, const uint8_t *held, const char *name
     uint32_t n = 0;
     for (uint32_t c = 0; c < l->ncells; c++) {
         l->nb_start[c] = n;
-        if (!held[c])
-            continue;
         const int32_t *co = l->cells[c].coord;
         int64_t me[3];
         box4(b, co, me);
@@ -269,9 +323,9 @@ static emm_status neighbors(emm_layout *l, const uint8_t *held, const char *name
                     }
                     uint32_t o = layer_start(b, (uint32_t)k) +
                                  row_start(b, (uint32_t)j, (uint32_t)k) + (uint32_t)i;
-                    if (touch && !same && held[o]) {
+                    if (touch && !same && is_held(h, o)) {
                         assert(n < cap);
-                        l->nb[n++] = o;
+                        l->nb[n++] = cell_of_box(h, o);
                     }
                 }
             }
@@ -279,6 +333,42 @@ static emm_status neighbors(emm_layout *l, const uint8_t *held, const char *name
     }
     l->nb_start[l->ncells] = n;
     return emm_layout_fill_sides(l, name, err);
+}
+
+/* The cells: the boxes that hold triangles (h), in raw order, their
+ * geometry, and each triangle's cell (l->tri_cell holds its box before). */
+static emm_status cut_cells(emm_layout *l, struct boxes *b, uint64_t nboxes, held *h,
+                            const char *name, emm_error *err)
+{
+    size_t words = (size_t)(nboxes / 64 + 1);
+    uint32_t n = 0;
+    for (size_t w = 0; w < words; w++) {
+        h->before[w] = n;
+        n += (uint32_t)__builtin_popcountll(h->bits[w]);
+    }
+    l->ncells = n;
+    l->nraw = (uint32_t)nboxes;
+    l->cells = calloc((size_t)n + 1, sizeof *l->cells);
+    b->occ = malloc(((size_t)n + 1) * sizeof *b->occ);
+    if (!l->cells || !b->occ)
+        return emm_layout_nomem(err, name);
+    uint32_t c = 0;
+    for (size_t w = 0; w < words; w++)
+        for (uint64_t bits = h->bits[w]; bits; bits &= bits - 1)
+            b->occ[c++] = (uint32_t)(w * 64 + (size_t)__builtin_ctzll(bits));
+    for (c = 0; c < n; c++) {
+        emm_layout_cell *cell = &l->cells[c];
+        box_coord(b, b->occ[c], cell->coord);
+        int64_t q[3];
+        box4(b, cell->coord, q);
+        for (int a = 0; a < 3; a++) {
+            cell->lo[a] = l->lo[a] + (double)q[a] / 4 * b->w[a];
+            cell->hi[a] = l->lo[a] + (double)(q[a] + 4) / 4 * b->w[a];
+        }
+    }
+    for (size_t t = 0; t < l->nt; t++)
+        l->tri_cell[t] = cell_of_box(h, l->tri_cell[t]);
+    return EMM_OK;
 }
 
 emm_status emm_boxes_build(emm_layout *l, const double *const *c, int shift, const char *name,
@@ -292,37 +382,32 @@ emm_status emm_boxes_build(emm_layout *l, const double *const *c, int shift, con
     b->shift = shift;
     if (choose_boxes(l, b, c) < 0)
         return emm_layout_nomem(err, name);
-    uint64_t ncells = count_cells(b);
-    if (ncells * 26 > UINT32_MAX) /* neighbour lists are 32-bit indexed */
-        return emm_fail(err, EMM_ERR_RANGE, "%s: %llu cells are too many; use a larger CELL",
-                        name, (unsigned long long)ncells);
-    l->ncells = (uint32_t)ncells;
-    l->cells = calloc(ncells, sizeof *l->cells);
-    if (!l->cells)
+    uint64_t nboxes = count_cells(b);
+    size_t words = (size_t)(nboxes / 64 + 1);
+    held h = {calloc(words, sizeof *h.bits), malloc(words * sizeof *h.before)};
+    if (!h.bits || !h.before) {
+        free(h.bits);
+        free(h.before);
         return emm_layout_nomem(err, name);
-    for (uint32_t k = 0; k < b->n[2]; k++)
-        for (uint32_t j = 0; j < rows_in(b, k); j++)
-            for (uint32_t i = 0; i < row_len(b, j, k); i++) {
-                emm_layout_cell *cell = &l->cells[layer_start(b, k) + row_start(b, j, k) + i];
-                cell->coord[0] = (int32_t)i;
-                cell->coord[1] = (int32_t)j;
-                cell->coord[2] = (int32_t)k;
-                int64_t q[3];
-                box4(b, cell->coord, q);
-                for (int a = 0; a < 3; a++) {
-                    cell->lo[a] = l->lo[a] + (double)q[a] / 4 * b->w[a];
-                    cell->hi[a] = l->lo[a] + (double)(q[a] + 4) / 4 * b->w[a];
-                }
-            }
-    uint8_t *held = calloc(ncells, 1);
-    if (!held)
-        return emm_layout_nomem(err, name);
+    }
     for (size_t t = 0; t < l->nt; t++) {
         double p[3] = {c[0][t], c[1][t], c[2][t]};
-        l->tri_cell[t] = box_at(l, b, p);
-        held[l->tri_cell[t]] = 1;
+        uint32_t box = box_at(l, b, p);
+        l->tri_cell[t] = box;
+        h.bits[box >> 6] |= UINT64_C(1) << (box & 63);
     }
-    emm_status st = neighbors(l, held, name, err);
-    free(held);
+    emm_status st = cut_cells(l, b, nboxes, &h, name, err);
+    if (st == EMM_OK)
+        st = neighbors(l, &h, name, err);
+    free(h.bits);
+    free(h.before);
     return st;
+}
+
+void emm_boxes_destroy(emm_layout *l)
+{
+    struct boxes *b = l->priv;
+    if (b)
+        free(b->occ);
+    free(b);
 }

@@ -12,9 +12,9 @@ static emm_status build(emm_layout *l, const double *const *c, const char *name,
 
 const struct emm_layout_ops emm_layout_grid3d_ops = {
     .dims = 3,
-    .compact = 1,
     .build = build,
     .move_side = emm_boxes_move_side,
     .cell_at = emm_boxes_cell_at,
     .per_axis = emm_boxes_per_axis,
+    .destroy = emm_boxes_destroy,
 };

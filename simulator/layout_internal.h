@@ -46,7 +46,9 @@ struct emm_layout_ops {
      * splits until it does); used to suggest a layout in messages. */
     int bounded;
     /* Nonzero: the cells build cuts that hold no triangle are dropped
-     * (layout.c, drop_empty): in space a surface meets few of the boxes or
+     * (layout.c, drop_empty; the octree's — the boxes of grid3d and tiles3d
+     * make cells of the boxes that hold triangles only, themselves): in
+     * space a surface meets few of the boxes or
      * octants that fill its bounding box, and an empty cell would still
      * take a header in the image, an entry in every per-cell table and
      * state in every model. The kind's own data keeps its numbering (its
@@ -87,7 +89,10 @@ struct emm_layout {
     uint32_t *nb_start;        /* ncells + 1 */
     uint32_t *nb;
     uint8_t *nb_side;
-    /* ops->compact: the kind's cells (nraw of them) against the layout's */
+    /* Layouts in space: the boxes or leaves cut (nraw), of which the
+     * ncells that hold triangles are cells (0 in the plane); with
+     * ops->compact, cell_of maps the kind's own numbers to cells (the boxes
+     * number their cells themselves) */
     uint32_t nraw;
     uint32_t *cell_of;         /* nraw: the cell of each of the kind's, or EMM_LAYOUT_NONE */
 };
@@ -127,5 +132,6 @@ emm_status emm_boxes_build(emm_layout *l, const double *const *c, int shift, con
 unsigned emm_boxes_move_side(const emm_layout *l, uint32_t from, uint32_t to);
 uint32_t emm_boxes_cell_at(const emm_layout *l, const double *p, uint32_t *levels);
 uint32_t emm_boxes_per_axis(const emm_layout *l, uint32_t n[EMM_MAX_DIMS]);
+void emm_boxes_destroy(emm_layout *l);
 
 #endif
