@@ -18,7 +18,9 @@
  *   comparison per window: cheaper than Cachegrind, which calls a helper
  *   for every access.
  * - Each superblock of code that is not emm's adds one to `work`, the
- *   record's count of work since the previous one (sancov counts edges).
+ *   record's count of work since the previous one (sancov counts edges),
+ *   in the program's threads only: the threads the session starts while
+ *   the shim feeds it are emm's (thread_created).
  * - Code of emm's own libraries (libemm, libemmshim) is not instrumented:
  *   the session runs at Valgrind's base speed, and its own reads of the
  *   arrays are never records.
@@ -63,6 +65,17 @@ static ULong need_drain;
 static ULong work;
 /* `work` when the shim began feeding the session (BUSY). */
 static ULong work_before_busy;
+static Bool busy;
+/* What a superblock adds to `work`: 1 in the program's threads, 0 in
+ * emm's, the threads started while the shim fed the session (the session's
+ * helper threads, which run rounds of its simulation): they wake and wait
+ * in the C library on their own schedule, after BUSY(0) as often as
+ * before, and their superblocks are not the program's work. */
+static ULong work_step = 1;
+/* Thread ids Valgrind hands out (its --max-threads, 500 by default); a
+ * thread beyond counts as the program's. */
+#define MAX_THREAD_IDS 4096
+static Bool emm_thread[MAX_THREAD_IDS];
 
 /* The channel (client memory), the records in it, and those that did not
  * fit yet. */
@@ -208,7 +221,8 @@ static Bool client_request(ThreadId tid, UWord *arg, UWord *ret)
         need_drain = 0;
         break;
     case EMM_VG_BUSY:
-        if (arg[1])
+        busy = arg[1] != 0;
+        if (busy)
             work_before_busy = work;
         else
             work = work_before_busy;
@@ -316,11 +330,11 @@ static void record_access(IRSB *sb, struct sb_state *s, IRExpr *addr, Int bytes,
     addStmtToIRSB(sb, IRStmt_Dirty(di));
 }
 
-/* work += 1 */
+/* work += work_step */
 static void count_work(IRSB *sb)
 {
-    IRTemp w = load64(sb, &work);
-    IRTemp w1 = assign(sb, Ity_I64, IRExpr_Binop(Iop_Add64, IRExpr_RdTmp(w), u64(1)));
+    IRTemp w = load64(sb, &work), step = load64(sb, &work_step);
+    IRTemp w1 = assign(sb, Ity_I64, IRExpr_Binop(Iop_Add64, IRExpr_RdTmp(w), IRExpr_RdTmp(step)));
     addStmtToIRSB(sb, IRStmt_Store(Iend_LE, u64((ULong)(HWord)&work), IRExpr_RdTmp(w1)));
 }
 
@@ -449,6 +463,20 @@ static void post_clo_init(void)
 {
 }
 
+/* A thread started while the shim feeds the session, or by one of emm's
+ * threads, is emm's. */
+static void thread_created(ThreadId parent, ThreadId child)
+{
+    if (child < MAX_THREAD_IDS)
+        emm_thread[child] = busy || (parent < MAX_THREAD_IDS && emm_thread[parent]);
+}
+
+static void thread_runs(ThreadId tid, ULong blocks_done)
+{
+    (void)blocks_done;
+    work_step = tid < MAX_THREAD_IDS && emm_thread[tid] ? 0 : 1;
+}
+
 static Bool command_line_option(const HChar *arg)
 {
     if VG_BOOL_CLO(arg, "--emm-stats", show_stats) {
@@ -483,6 +511,8 @@ static void pre_clo_init(void)
     VG_(basic_tool_funcs)(post_clo_init, instrument, fini);
     VG_(needs_client_requests)(client_request);
     VG_(needs_command_line_options)(command_line_option, usage, usage);
+    VG_(track_pre_thread_ll_create)(thread_created);
+    VG_(track_start_client_code)(thread_runs);
 }
 
 VG_DETERMINE_INTERFACE_VERSION(pre_clo_init)
