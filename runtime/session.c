@@ -166,6 +166,19 @@ static void forget_view(session_array *a)
  * copied first — a program that frees its mesh before exit still gets its
  * short run decided at finish; without memory for that, those records are
  * dropped at the decision. */
+/* The mesh a decision read from the arrays (its triangles, coordinates,
+ * half-edge connectivity): gone, to be read again at the next decision. */
+static void forget_geometry(session *s)
+{
+    free(s->tri);
+    free(s->xyz);
+    s->tri = NULL;
+    s->xyz = NULL;
+    session_halfedge_free(s);
+    memset(&s->info.geometry, 0, sizeof s->info.geometry);
+    s->vertex_only = false;
+}
+
 static void drop_slot(session *s, int i, bool keep)
 {
     session_array *a = &s->arrays[i];
@@ -819,13 +832,8 @@ static bool window_restart(session *s)
             s->arrays[i].snap = NULL;
         }
     }
-    free(s->tri);
-    free(s->xyz);
-    s->tri = NULL;
-    s->xyz = NULL;
-    session_halfedge_free(s);
-    memset(&s->info.geometry, 0, sizeof s->info.geometry);
-    s->vertex_only = s->soup = false;
+    forget_geometry(s);
+    s->soup = false;
     s->pick_note[0] = '\0';
     s->wn = 0;
     s->welements = s->iterations = s->wreads = s->wwrites = s->wactivity = 0;
@@ -875,13 +883,7 @@ static emm_status engine_decide_read(emm_session *h, emm_error *err)
          * the window and read them again at the end. */
         s->deferred = true;
         s->deferred_why = s->failure;
-        free(s->tri);
-        free(s->xyz);
-        s->tri = NULL;
-        s->xyz = NULL;
-        session_halfedge_free(s);
-        memset(&s->info.geometry, 0, sizeof s->info.geometry);
-        s->vertex_only = false;
+        forget_geometry(s);
         for (int i = 0; i < s->narrays; i++) /* copies of now: read again later */
             forget_view(&s->arrays[i]);
         s->phase = PHASE_DEFERRED;
