@@ -263,8 +263,8 @@ int main(int argc, char **argv)
         struct listing l;
         read_listing(all, &l);
         emm_trace_reader *r;
-        emm_trace_record *recs;
-        size_t n;
+        emm_trace_record *recs = NULL;
+        size_t n = 0;
         if (emm_trace_reader_open(trace, &r, &err) != EMM_OK ||
             emm_profile_trace_window(r, window, trace, &recs, &n, &err) != EMM_OK)
             die(trace, err.message);
