@@ -33,7 +33,8 @@ static const char *const fetch_words[EMM_FETCH_COUNT] = {"", EMM_FETCH_LIST(WORD
 #define LAYOUTS (&(EMM_LAYOUT_LIST(LLIST_))[2])
 #define FETCHES (&(EMM_FETCH_LIST(LIST_))[2])
 
-#define ACCEPTED "direct, cache, cache@LAYOUT or LAYOUT+FETCH[@CELL][" EMM_INDEXED_SUFFIX "]"
+#define ACCEPTED \
+    "direct, cache, cache@LAYOUT[@CELL] or LAYOUT+FETCH[@CELL][" EMM_INDEXED_SUFFIX "]"
 
 /* The standard sweep's cell sizes (thesis §6.3: "small cells" win). */
 static const uint32_t sweep_cells[] = {4, 8, 16, 32, 64, 128, 256};
@@ -127,12 +128,21 @@ emm_status emm_strategy_parse(const char *text, emm_strategy *out, emm_error *er
     if (strncmp(text, "cache", 5) == 0 && (text[5] == '\0' || text[5] == '@')) {
         s.kind = EMM_STRATEGY_CACHE;
         if (text[5] == '@') {
-            const char *l = text + 6;
-            if (!match_layout(l, strlen(l), &s.layout))
+            /* cache@LAYOUT[@CELL]: the cache on the layout the EMM strategy
+             * at that cell uses (thesis §6.3: "Cache(Grid) runs on the grid
+             * layout same as in EMM(Grid)"). */
+            const char *l = text + 6, *at = strchr(l, '@');
+            size_t ln = at ? (size_t)(at - l) : strlen(l);
+            if (!match_layout(l, ln, &s.layout))
                 return emm_fail(err, EMM_ERR_INVALID,
                                 "strategy '%s': unknown layout '%s'; accepted: %s", q,
-                                emm_clip(l, strlen(l), part), LAYOUTS);
+                                emm_clip(l, ln, part), LAYOUTS);
             s.cell = EMM_DEFAULT_CELL;
+            if (at) {
+                emm_status st = parse_cell(q, at + 1, &s.cell, err);
+                if (st != EMM_OK)
+                    return st;
+            }
         }
         *out = s;
         return EMM_OK;
@@ -180,8 +190,10 @@ size_t emm_strategy_format(const emm_strategy *s, char *buf, size_t cap)
     case EMM_STRATEGY_CACHE:
         if (s->layout == EMM_LAYOUT_ORIGINAL)
             n = snprintf(buf, cap, "cache");
-        else
+        else if (s->cell == EMM_DEFAULT_CELL || s->cell == 0)
             n = snprintf(buf, cap, "cache@%s", emm_layout_name(s->layout));
+        else
+            n = snprintf(buf, cap, "cache@%s@%u", emm_layout_name(s->layout), s->cell);
         break;
     default:
         n = snprintf(buf, cap, "%s+%s@%u%s", emm_layout_name(s->layout), emm_fetch_name(s->fetch),

@@ -379,8 +379,8 @@ int emm_cmd_replay(int argc, char **argv)
         {.name = "--strategy", .alias = "-s", .metavar = "S", .kind = OPT_STRATEGY,
          .repeat = true, .dst = &a.strategies,
          .help = "direct (word-by-word remote reads), cache (the hardware cache on the original "
-                 "addresses), cache@LAYOUT (the cache on the addresses of a reordered layout: "
-                 "grid, tiles, quadtree, grid3d, tiles3d, octree) or LAYOUT+FETCH[@CELL] (an "
+                 "addresses), cache@LAYOUT[@CELL] (the cache on the addresses of a reordered "
+                 "layout: grid, tiles, quadtree, grid3d, tiles3d, octree; CELL as below) or LAYOUT+FETCH[@CELL] (an "
                  "EMM strategy), with :indexed after it for the program renumbered by the layout "
                  "(emm layout --write); may be "
                  "repeated; default: direct and cache"},

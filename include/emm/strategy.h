@@ -70,8 +70,8 @@ typedef enum emm_fetch_kind {
 #undef EMM_LAYOUT_ENUM_
 #undef EMM_FETCH_ENUM_
 
-/* Triangles per cell when an EMM strategy string gives no @CELL, and for
- * cache@LAYOUT. */
+/* Triangles per cell when an EMM strategy or cache@LAYOUT string gives no
+ * @CELL. */
 #define EMM_DEFAULT_CELL 64u
 /* Largest accepted CELL. */
 #define EMM_MAX_CELL 1048576u

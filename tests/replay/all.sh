@@ -79,6 +79,17 @@ for s in cache@tiles tiles+naive@32; do
     b=$(grep -A3 "\"strategy\": \"$s\"" "$W/j1.json" | grep '"total"')
     [ -n "$a" ] && [ "$a" = "$b" ] || no "$s: total '$a' alone, '$b' in the sweep"
 done
+# The cache on the layout at another cell (cache@LAYOUT@CELL): the cell-by-cell
+# image of grid+naive@4's cells, not of the default 64's, so other lines miss.
+expect 0 "$EMM" replay "$W/t.emmt" --strategy cache@grid@4 --strategy cache@grid@64 \
+    --json "$W/cell.json"
+has 'cache@grid@4 '
+a=$(grep -A3 '"strategy": "cache@grid@4"' "$W/cell.json" | grep '"total"')
+b=$(grep -A3 '"strategy": "cache@grid"' "$W/cell.json" | grep '"total"')
+c=$(grep -A3 '"strategy": "cache@grid"' "$W/j1.json" | grep '"total"')
+[ -n "$a" ] && [ -n "$b" ] && [ "$a" != "$b" ] && [ "$b" = "$c" ] ||
+  no "cache@grid@4 '$a', cache@grid@64 '$b', cache@grid in the sweep '$c'"
+expect 2 "$EMM" replay "$W/t.emmt" --strategy cache@grid@0; has "cell size '0'"
 
 # Strategies that cannot run are skipped, with the reason, and the sweep goes
 # on: a local store of 8 KiB pages the look-up tables into 4 KiB and leaves

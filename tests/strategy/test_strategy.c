@@ -45,6 +45,12 @@ int main(void)
                EMM_FETCH_EXTRAPOLATED, 16, "tiles3d+extrapolated@16");
     round_trip("cache@octree", EMM_STRATEGY_CACHE, EMM_LAYOUT_OCTREE, EMM_FETCH_NONE, 64,
                "cache@octree");
+    /* The cache on the layout of an EMM strategy at another cell; @64 is
+     * the default and is not written. */
+    round_trip("cache@grid@4", EMM_STRATEGY_CACHE, EMM_LAYOUT_GRID, EMM_FETCH_NONE, 4,
+               "cache@grid@4");
+    round_trip("cache@tiles@64", EMM_STRATEGY_CACHE, EMM_LAYOUT_TILES, EMM_FETCH_NONE, 64,
+               "cache@tiles");
     refused("octree3d+naive", "accepted: grid, tiles, quadtree, grid3d, tiles3d, octree");
     round_trip("quadtree+extrapolated", EMM_STRATEGY_EMM, EMM_LAYOUT_QUADTREE,
                EMM_FETCH_EXTRAPOLATED, EMM_DEFAULT_CELL, "quadtree+extrapolated@64");
@@ -83,6 +89,8 @@ int main(void)
     refused("", "empty");
     refused("cahce", "cahce");
     refused("cache@hex", "'hex'");
+    refused("cache@hex@4", "'hex'");
+    refused("cache@grid@0", "'0'");
     refused("grid", "needs a fetch scheme");
     refused("grid+magic@16", "'magic'");
     refused("hexes+naive", "'hexes'");
