@@ -452,7 +452,7 @@ static void claims(report *reps, double tol)
         bool d = rc >= 1 && rc - 1 <= tol;
         printf("\n");
         reproduced += verdict(3, "short curves: grid+naive with small cells best of EMM, ahead "
-                                 "of cache@grid, a little behind cache", a && b && c && d);
+                                 "of Cache(Grid), a little behind cache", a && b && c && d);
         sub(a, "best EMM strategy: %s (%.0f cycles); grid+naive: %s (%.0f cycles)",
             w ? w->name : "-", w ? w->total : 0, gn ? gn->name : "-", gn ? gn->total : 0);
         sub(b, "grid+naive's best cell (Fig 6.2): %u triangles (small: 32 or fewer)",
