@@ -49,3 +49,19 @@ skipped=$(grep -c '"error":' "$W/report.json" || true)
 paged=$(grep -c '"lookup_paged": 1' "$W/report.json" || true)
 echo "strategies skipped: $skipped; EMM strategies with paged look-up tables: $paged"
 grep -o '"error": "[^"]*look-up tables take[^"]*"' "$W/report.json" | head -3 || true
+# The fastest EMM strategy against direct reads, and how much of its DMA
+# refetched cells evicted before (docs/layouts.md "The indexed variant":
+# a breadth-first front larger than the local store is fetched again on
+# every pass).
+python3 - "$W/report.json" <<'PY'
+import json, sys
+res = [r for r in json.load(open(sys.argv[1]))["results"] if "cycles" in r]
+direct = next(r["cycles"]["total"] for r in res if r["strategy"] == "direct")
+emm = min((r for r in res if "emm" in r), key=lambda r: r["cycles"]["total"])
+e = emm["emm"]
+moved = e["demand_fetches"] + e["prefetches"]
+print("fastest EMM strategy: %s, %.2fx direct reads; %d of its %d cell transfers (%.0f%%) "
+      "refetch a cell, %.1f cells held on average"
+      % (emm["strategy"], direct / emm["cycles"]["total"], e["refetches"], moved,
+         100.0 * e["refetches"] / max(moved, 1), e["resident_cells"] / max(e["cell_changes"], 1)))
+PY

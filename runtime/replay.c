@@ -360,6 +360,11 @@ static void write_result(json_writer *w, const emm_machine *m, const emm_result 
             {"lookup_paged", (uint64_t)res->emm.lookup_paged},
             {"lookup_pages", res->emm.lookup_pages},
             {"lookup_page_bytes", res->emm.lookup_page_bytes},
+            {"refetches", res->emm.refetches},
+            {"refetch_bytes", res->emm.refetch_bytes},
+            {"unused_prefetches", res->emm.unused_prefetches},
+            {"prefetch_checks", res->emm.prefetch_checks},
+            {"resident_cells", res->emm.resident_cells},
         };
         json_key(w, "emm");
         json_begin_object(w);

@@ -127,6 +127,9 @@ struct fetch_model {
     uint64_t cell_changes, demand_fetches, demand_bytes, prefetches, prefetch_bytes;
     uint64_t useful_prefetches, dropped_prefetches, filtered_prefetches, evictions;
     uint64_t other_accesses;
+    uint64_t refetches, refetch_bytes, unused_prefetches, prefetch_checks;
+    uint32_t present;         /* cells present (resident or in flight) */
+    uint64_t resident_sum;    /* present, summed at every cell change */
 
     emm_fetch_evict_hook hook;
     void *hook_ctx;
@@ -171,8 +174,10 @@ static void evict(fetch_model *m, uint32_t c)
     if (m->hook)
         m->hook(m->hook_ctx, c, m->now, m->ready[c]);
     lru_unlink(m, c);
+    m->unused_prefetches += (m->flags[c] & CELL_PREFETCHED) != 0;
     m->flags[c] = m->flags[c] & CELL_PREFETCHED ? CELL_USELESS : 0;
     m->used -= m->cells[c].bytes;
+    m->present--;
     m->evictions++;
 }
 
@@ -333,8 +338,13 @@ static void issue(fetch_model *m, uint32_t c, emm_transfer_kind kind)
 {
     uint64_t bytes = m->cells[c].bytes;
     m->ready[c] = start_dma(m, bytes, kind, c);
+    if (m->cell_dma[c]) {
+        m->refetches++;
+        m->refetch_bytes += bytes;
+    }
     m->cell_dma[c] += bytes;
     m->used += bytes;
+    m->present++;
     lru_push_front(m, c);
 }
 
@@ -369,6 +379,7 @@ static void demand_fetch(fetch_model *m, uint32_t c)
  * the core for a guess. */
 void emm_fetcher_prefetch(fetch_model *m, uint32_t c, uint32_t entered)
 {
+    m->prefetch_checks++;
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->find[c]);
     if (m->paged) {
         if (!m->indexed)
@@ -486,6 +497,7 @@ static void access_one(fetch_model *m, const emm_trace_record *r)
     if (c != m->cur) {
         uint32_t from = m->cur;
         m->cell_changes++;
+        m->resident_sum += m->present;
         m->cur = c;
         if (m->observed && m->obs.enter)
             m->obs.enter(m->obs_ctx, m->now, c);
@@ -550,6 +562,7 @@ static void fetch_reset(emm_model *model)
     memset(m->cell_dma, 0, m->ncells * sizeof *m->cell_dma);
     m->head = m->tail = NONE;
     m->used = 0;
+    m->present = 0;
     m->cur = m->last_tri = m->last_cell = NONE;
     m->last_tri_id = -1;
     m->any = false;
@@ -570,6 +583,8 @@ static void fetch_reset(emm_model *model)
     m->prefetches = m->prefetch_bytes = 0;
     m->useful_prefetches = m->dropped_prefetches = m->filtered_prefetches = 0;
     m->evictions = m->other_accesses = 0;
+    m->refetches = m->refetch_bytes = m->unused_prefetches = m->prefetch_checks = 0;
+    m->resident_sum = 0;
 }
 
 static void fetch_result(const emm_model *model, emm_result *out)
@@ -604,6 +619,11 @@ static void fetch_result(const emm_model *model, emm_result *out)
     out->emm.lookup_paged = m->paged;
     out->emm.lookup_pages = m->paged ? m->pg.fetches : 0;
     out->emm.lookup_page_bytes = m->paged ? m->pg.bytes : 0;
+    out->emm.refetches = m->refetches;
+    out->emm.refetch_bytes = m->refetch_bytes;
+    out->emm.unused_prefetches = m->unused_prefetches;
+    out->emm.prefetch_checks = m->prefetch_checks;
+    out->emm.resident_cells = m->resident_sum;
 }
 
 static void fetch_costs(const emm_model *model, emm_record_cost *out)

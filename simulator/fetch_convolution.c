@@ -8,7 +8,7 @@ static void enter(emm_fetcher *f, void *state, uint32_t from, uint32_t to)
     (void)state;
     (void)from;
     const uint32_t *nb;
-    uint32_t n = emm_layout_neighbors(emm_fetcher_layout(f), to, &nb, NULL);
+    uint32_t n = emm_layout_ring(emm_fetcher_layout(f), to, &nb, NULL);
     for (uint32_t i = 0; i < n; i++)
         emm_fetcher_prefetch(f, nb[i], to);
 }

@@ -65,7 +65,7 @@ static void enter(emm_fetcher *f, void *state, uint32_t from, uint32_t to)
         return;
     const uint32_t *nb;
     const uint8_t *sides;
-    uint32_t n = emm_layout_neighbors(l, to, &nb, &sides);
+    uint32_t n = emm_layout_ring(l, to, &nb, &sides);
     for (uint32_t i = 0; i < n; i++)
         if (sides[i] & side)
             emm_fetcher_prefetch(f, nb[i], to);

@@ -89,6 +89,12 @@ struct emm_layout {
     uint32_t *nb_start;        /* ncells + 1 */
     uint32_t *nb;
     uint8_t *nb_side;
+    /* Layouts in space: the neighbours that share a vertex with the cell
+     * (emm_layout_ring), with their sides; NULL in the plane, where the
+     * ring is the neighbour list */
+    uint32_t *ring_start;      /* ncells + 1 */
+    uint32_t *ring;
+    uint8_t *ring_side;
     /* Layouts in space: the boxes or leaves cut (nraw), of which the
      * ncells that hold triangles are cells (0 in the plane); with
      * ops->compact, cell_of maps the kind's own numbers to cells (the boxes

@@ -139,14 +139,17 @@ static void print_table(const char *trace, uint64_t accesses, const emm_machine 
                    (unsigned long long)res[i].dma.transfers, (unsigned long long)res[i].dma.bytes);
         if (res[i].has_emm)
             printf("\n%s: cell changes %llu, demand fetches %llu, prefetches %llu "
-                   "(useful %llu, dropped %llu, filtered %llu), evictions %llu",
+                   "(useful %llu, dropped %llu, filtered %llu, evicted unused %llu), evictions %llu, "
+                   "refetches %llu",
                    name, (unsigned long long)res[i].emm.cell_changes,
                    (unsigned long long)res[i].emm.demand_fetches,
                    (unsigned long long)res[i].emm.prefetches,
                    (unsigned long long)res[i].emm.useful_prefetches,
                    (unsigned long long)res[i].emm.dropped_prefetches,
                    (unsigned long long)res[i].emm.filtered_prefetches,
-                   (unsigned long long)res[i].emm.evictions);
+                   (unsigned long long)res[i].emm.unused_prefetches,
+                   (unsigned long long)res[i].emm.evictions,
+                   (unsigned long long)res[i].emm.refetches);
         if (res[i].has_direct)
             printf("\n%s: words read %llu, words written %llu", name,
                    (unsigned long long)res[i].direct.words_read,

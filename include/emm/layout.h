@@ -177,6 +177,13 @@ EMM_API uint32_t emm_layout_cell_vertices(const emm_layout *l, uint32_t c, const
  * sides may be NULL. */
 EMM_API uint32_t emm_layout_neighbors(const emm_layout *l, uint32_t c, const uint32_t **cells,
                                       const uint8_t **sides);
+/* The ring of cell c, which the fetch schemes prefetch from (docs/fetch.md):
+ * in the plane, its neighbours (emm_layout_neighbors); in space, those of
+ * its neighbours that hold a copy of one of c's vertices, the cells the
+ * surface continues into from c. Same order and sides as the neighbours;
+ * returns the count. */
+EMM_API uint32_t emm_layout_ring(const emm_layout *l, uint32_t c, const uint32_t **cells,
+                                 const uint8_t **sides);
 /* EMM_SIDE_* bits of where cell `to` lies seen from cell `from` (any two
  * cells; 0 when from == to). For neighbours it equals their entry in
  * emm_layout_neighbors. Grid and tiles compare cell centres; the quadtree

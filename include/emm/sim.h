@@ -175,6 +175,16 @@ typedef struct emm_result {
         int lookup_paged;                /* the tables exceed emm.lookup_budget: paged */
         uint64_t lookup_pages;           /* pages of the tables brought in by DMA */
         uint64_t lookup_page_bytes;      /* their bytes (part of dma.bytes) */
+        uint64_t refetches;              /* cell transfers (demand or prefetch) of a cell
+                                            transferred before in the run: evicted, then
+                                            needed or guessed again */
+        uint64_t refetch_bytes;
+        uint64_t unused_prefetches;      /* prefetched cells evicted before the program
+                                            entered them */
+        uint64_t prefetch_checks;        /* cells the fetch scheme named (each a look-up and,
+                                            for a cell with triangles, a residency check) */
+        uint64_t resident_cells;         /* cells present (resident or in flight) summed over
+                                            the cell changes: / cell_changes is the mean */
     } emm;
     /* Per-cell DMA traffic of an EMM strategy, filled only on request
      * (emm_model_cells, emm_replay_options.cells); cell == NULL otherwise.

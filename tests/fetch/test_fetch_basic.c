@@ -205,6 +205,11 @@ static void prefetch_filter(void)
     /* Cell 0 on demand, cell 1 prefetched and then entered: useful. */
     CHECK(r.emm.demand_fetches == 1 && r.emm.prefetches == 1 && r.emm.useful_prefetches == 1);
     CHECK(r.emm.filtered_prefetches == 0 && r.emm.evictions == 0);
+    /* Each of the three entries (0, 1, 0 again) names the other cell: three
+     * candidates; nothing is fetched twice or evicted; no cell present at
+     * the first entry, both at the other two. */
+    CHECK(r.emm.prefetch_checks == 3 && r.emm.refetches == 0 && r.emm.unused_prefetches == 0);
+    CHECK(r.emm.cell_changes == 3 && r.emm.resident_cells == 0 + 2 + 2);
     emm_model_free(model);
 
     /* Room for one cell: entering cell 0 wants cell 1, which does not fit
@@ -255,6 +260,10 @@ static void one_cell_store(void)
     CHECK(r.emm.dropped_prefetches == 3);
     CHECK(r.emm.evictions == 2 && ev.count == 2);
     CHECK(ev.in_flight == 0);
+    /* Cell 0's second fetch is a refetch of its 280 bytes; no prefetch
+     * came in, so none went out unused. */
+    CHECK(r.emm.refetches == 1 && r.emm.refetch_bytes == 280);
+    CHECK(r.emm.unused_prefetches == 0 && r.emm.prefetch_checks == 3);
     emm_model_free(model);
 
     /* One byte less and no cell fits: the layout's error names a CELL. */
