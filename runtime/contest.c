@@ -184,12 +184,19 @@ static void halve(contest *c)
     free(stay);
 }
 
+/* Whether x exceeds ref by more than CONTEST_MARGIN_PERCENT of ref. */
+static bool beyond_margin(uint64_t x, uint64_t ref)
+{
+    return x > ref && x - ref > ref / 100 * CONTEST_MARGIN_PERCENT +
+                                    ref % 100 * CONTEST_MARGIN_PERCENT / 100;
+}
+
 /* The margin (contest.h, CONTEST_MARGIN_PERCENT): from the second check on,
  * a contender that is not pinned is stopped when its cycles so far exceed
- * the leader's by more than the margin and, since the previous check, it
- * took at least as many cycles as the leader did: behind by more than the
- * margin, and not catching up. The leader (the fastest so far) is never
- * stopped, so the fastest contender still runs. */
+ * the leader's by more than the margin and so did its cycles since the
+ * previous check: behind by more than the margin, and still losing ground
+ * at that rate. The leader (the fastest so far) is never stopped, so the
+ * fastest contender still runs. */
 static void margin_stop(contest *c)
 {
     if (c->checks == 0 || c->nin < 2)
@@ -204,9 +211,7 @@ static void margin_stop(contest *c)
         size_t i = c->in[k];
         uint64_t span = c->total[k] - (i < c->nprev ? c->prev[i] : 0);
         bool stop = k != lead_k && !member(c->pinned, c->npinned, i) &&
-                    c->total[k] - lead > lead / 100 * CONTEST_MARGIN_PERCENT +
-                                             lead % 100 * CONTEST_MARGIN_PERCENT / 100 &&
-                    span >= lead_span;
+                    beyond_margin(c->total[k], lead) && beyond_margin(span, lead_span);
         if (stop) {
             retire(c, k, true, lead);
         } else {

@@ -11,11 +11,11 @@
  *
  * A confident prediction is confirmed cheaply: from the second check on, a
  * challenger more than CONTEST_MARGIN_PERCENT behind the leader (the
- * fastest so far) that did not gain on it since the previous check is
- * stopped, finalist or not (docs/profile.md "The contest"). It could still
- * have won only by taking, over the rest of the run, fewer cycles than the
- * leader by more than that gap; the report lists it as stopped by the
- * margin with its cycles and the leader's then.
+ * fastest so far), both over the records so far and since the previous
+ * check, is stopped, finalist or not (docs/profile.md "The contest"). It
+ * could still have won only by taking, over the rest of the run, fewer
+ * cycles than the leader by more than that gap; the report lists it as
+ * stopped by the margin with its cycles and the leader's then.
  *
  * The session and `emm profile` (which replays a trace the session wrote)
  * run the same contest over the same records, so they give the same answer

@@ -531,7 +531,7 @@ static void report_extra(json_writer *w, void *ctx)
             json_u64(w, dcycles[k]);
             /* halved (the slower half then) or stopped by the margin
              * (more than CONTEST_MARGIN_PERCENT behind the leader, whose
-             * cycles then are given, and not catching up) */
+             * cycles then are given, and since the previous check too) */
             uint64_t leader;
             bool stopped = contest_stopped(s->contest, k, &leader);
             json_key(w, "by");
@@ -733,7 +733,7 @@ static const char *how_decided(const session *s, const emm_result *res, size_t n
                  (unsigned long long)((at[k] - lead) / unit));
     }
     /* Of those, the ones the margin stopped ("of them 3 more than 25% behind
-     * the leader and not catching up") */
+     * the leader, so far and since the previous check") */
     const size_t *idx;
     const uint64_t *dat, *dcycles;
     size_t nd = contest_dropped(s->contest, &idx, &dat, &dcycles), stopped = 0;
@@ -744,7 +744,8 @@ static const char *how_decided(const session *s, const emm_result *res, size_t n
     char margin[160] = "";
     if (stopped)
         snprintf(margin, sizeof margin,
-                 " (%zu of them stopped as more than %u%% behind the leader and not catching up)",
+                 " (%zu of them stopped as more than %u%% behind the leader, so far and since "
+                 "the previous check)",
                  stopped, CONTEST_MARGIN_PERCENT);
     snprintf(buf, cap,
              "measured over the run: the fastest of the %zu candidates that ran to the end; the "

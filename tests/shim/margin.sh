@@ -16,7 +16,7 @@ for f in 4 all; do
     { cat "$WORK/$f.err" >&2; fail "emm run --finalists $f failed"; }
   cmp -s "$WORK/native.out" "$WORK/$f.out" || fail "--finalists $f: stdout differs under emm run"
 done
-grep -E '^emm: answer: .*\([0-9]+ of them stopped as more than 25% behind the leader and not catching up\)' \
+grep -E '^emm: answer: .*\([0-9]+ of them stopped as more than 25% behind the leader, so far and since the previous check\)' \
   "$WORK/4.err" || { cat "$WORK/4.err" >&2; fail "the summary does not count the stopped challengers"; }
 python3 - "$WORK/4.json" "$WORK/all.json" <<'PY' || fail "the margin's report"
 import json, sys
