@@ -191,15 +191,16 @@ static bool beyond_margin(uint64_t x, uint64_t ref)
                                     ref % 100 * CONTEST_MARGIN_PERCENT / 100;
 }
 
-/* The margin (contest.h, CONTEST_MARGIN_PERCENT): from the second check on,
- * a contender that is not pinned is stopped when its cycles so far exceed
- * the leader's by more than the margin and so did its cycles since the
+/* The margin (contest.h, CONTEST_MARGIN_PERCENT): once halving is over (the
+ * contenders not pinned are the finalists), from the second check on, a
+ * finalist that is not pinned is stopped when its cycles so far exceed the
+ * leader's by more than the margin and so did its cycles since the
  * previous check: behind by more than the margin, and still losing ground
  * at that rate. The leader (the fastest so far) is never stopped, so the
  * fastest contender still runs. */
 static void margin_stop(contest *c)
 {
-    if (c->checks == 0 || c->nin < 2)
+    if (c->checks == 0 || c->nin < 2 || c->nin - pinned_in(c) > c->finalists)
         return;
     rank(c, c->order);
     size_t lead_k = c->order[0];

@@ -9,10 +9,11 @@
  * 2016). The finalists run to the end, and the fastest is the answer: a
  * measurement over the program's own run, not a prediction.
  *
- * A confident prediction is confirmed cheaply: from the second check on, a
- * challenger more than CONTEST_MARGIN_PERCENT behind the leader (the
- * fastest so far), both over the records so far and since the previous
- * check, is stopped, finalist or not (docs/profile.md "The contest"). It
+ * A confident prediction is confirmed cheaply: once halving has left the
+ * finalists (from the second check on), a finalist more than
+ * CONTEST_MARGIN_PERCENT behind the leader (the fastest so far), both over
+ * the records so far and since the previous check, is stopped instead of
+ * running to the end (docs/profile.md "The contest"). It
  * could still have won only by taking, over the rest of the run, fewer
  * cycles than the leader by more than that gap; the report lists it as
  * stopped by the margin with its cycles and the leader's then.
