@@ -1,4 +1,5 @@
-/* The contest of runtime/contest.h: successive halving over the run. */
+/* The contest of runtime/contest.h: successive halving over the run, and
+ * the margin that stops a challenger which cannot catch up. */
 #include "contest.h"
 
 #include <stdlib.h>
@@ -15,7 +16,12 @@ struct contest {
     size_t npinned;
     size_t *retired;  /* runner indices retired, in the order they were */
     uint64_t *retired_at, *retired_cycles; /* the records run then, and its cycles */
+    uint64_t *retired_leader; /* a margin stop: the leader's cycles then; else 0 */
+    bool *retired_margin;     /* whether it was stopped by the margin (else halved) */
     size_t nretired;
+    uint64_t *prev;   /* by runner index: the cycles at the previous check */
+    size_t nprev;
+    size_t checks;    /* the checks made */
     size_t finalists;
     uint64_t lead, unit, done, next, step;
     uint64_t at[CONTEST_MAX_ROUNDS];
@@ -38,12 +44,20 @@ emm_status contest_new(emm_runner *r, const size_t *models, const bool *pinned, 
         c->retired = calloc(n ? n : 1, sizeof *c->retired);
         c->retired_at = calloc(n ? n : 1, sizeof *c->retired_at);
         c->retired_cycles = calloc(n ? n : 1, sizeof *c->retired_cycles);
+        c->retired_leader = calloc(n ? n : 1, sizeof *c->retired_leader);
+        c->retired_margin = calloc(n ? n : 1, sizeof *c->retired_margin);
+        size_t top = 0;
+        for (size_t j = 0; j < n; j++)
+            top = models[j] + 1 > top ? models[j] + 1 : top;
+        c->nprev = top;
+        c->prev = calloc(top ? top : 1, sizeof *c->prev);
         c->order = calloc(n ? n : 1, sizeof *c->order);
         c->total = calloc(n ? n : 1, sizeof *c->total);
         c->strategy = calloc(n ? n : 1, sizeof *c->strategy);
     }
     if (!c || !c->in || !c->pinned || !c->retired || !c->retired_at || !c->retired_cycles ||
-        !c->order || !c->total || !c->strategy) {
+        !c->retired_leader || !c->retired_margin || !c->prev || !c->order || !c->total ||
+        !c->strategy) {
         contest_free(c);
         return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the contest of %zu candidates", n);
     }
@@ -128,6 +142,20 @@ static size_t pinned_in(const contest *c)
     return n;
 }
 
+/* Retires contender k of those in (its cycles in c->total[k]; leader: the
+ * leader's cycles when the margin stopped it, else 0). The caller
+ * compacts c->in. */
+static void retire(contest *c, size_t k, bool margin, uint64_t leader)
+{
+    size_t i = c->in[k];
+    emm_runner_retire(c->runner, i);
+    c->retired[c->nretired] = i;
+    c->retired_at[c->nretired] = c->done;
+    c->retired_cycles[c->nretired] = c->total[k];
+    c->retired_margin[c->nretired] = margin;
+    c->retired_leader[c->nretired++] = leader;
+}
+
 /* Drops the slower half of the contenders still in (keeping at least
  * `finalists`), retiring them; a pinned contender (one the report shows,
  * simulated to the end anyway) stays in whatever its rank, so that the
@@ -147,22 +175,66 @@ static void halve(contest *c)
         stay[c->order[k]] = true;
     size_t m = 0;
     for (size_t k = 0; k < c->nin; k++) {
-        size_t i = c->in[k];
-        if (stay[k] || member(c->pinned, c->npinned, i)) {
-            c->in[m++] = i;
-        } else {
-            emm_runner_retire(c->runner, i);
-            c->retired[c->nretired] = i;
-            c->retired_at[c->nretired] = c->done;
-            c->retired_cycles[c->nretired++] = c->total[k];
-        }
+        if (stay[k] || member(c->pinned, c->npinned, c->in[k]))
+            c->in[m++] = c->in[k];
+        else
+            retire(c, k, false, 0);
     }
     c->nin = m;
     free(stay);
-    if (c->rounds < CONTEST_MAX_ROUNDS) {
-        c->at[c->rounds] = c->done;
-        c->kept[c->rounds] = m;
-        c->rounds++;
+}
+
+/* Whether x exceeds ref by more than CONTEST_MARGIN_PERCENT of ref. */
+static bool beyond_margin(uint64_t x, uint64_t ref)
+{
+    return x > ref && x - ref > ref / 100 * CONTEST_MARGIN_PERCENT +
+                                    ref % 100 * CONTEST_MARGIN_PERCENT / 100;
+}
+
+/* The margin (contest.h, CONTEST_MARGIN_PERCENT): once halving is over (the
+ * contenders not pinned are the finalists), from the second check on, a
+ * finalist that is not pinned is stopped when its cycles so far exceed the
+ * leader's by more than the margin and so did its cycles since the
+ * previous check: behind by more than the margin, and still losing ground
+ * at that rate. The leader (the fastest so far) is never stopped, so the
+ * fastest contender still runs. */
+static void margin_stop(contest *c)
+{
+    if (c->checks == 0 || c->nin < 2 || c->nin - pinned_in(c) > c->finalists)
+        return;
+    rank(c, c->order);
+    size_t lead_k = c->order[0];
+    uint64_t lead = c->total[lead_k];
+    size_t li = c->in[lead_k];
+    uint64_t lead_span = lead - (li < c->nprev ? c->prev[li] : 0);
+    size_t m = 0;
+    for (size_t k = 0; k < c->nin; k++) {
+        size_t i = c->in[k];
+        uint64_t span = c->total[k] - (i < c->nprev ? c->prev[i] : 0);
+        bool stop = k != lead_k && !member(c->pinned, c->npinned, i) &&
+                    beyond_margin(c->total[k], lead) && beyond_margin(span, lead_span);
+        if (stop) {
+            retire(c, k, true, lead);
+        } else {
+            c->in[m] = i;
+            c->total[m] = c->total[k];
+            c->strategy[m] = c->strategy[k];
+            m++;
+        }
+    }
+    c->nin = m;
+}
+
+/* Each contender's cycles now, for the next check's "since the previous
+ * check". */
+static void note_totals(contest *c)
+{
+    for (size_t k = 0; k < c->nin; k++) {
+        emm_result res;
+        emm_model_result(emm_runner_model(c->runner, c->in[k]), &res);
+        if (c->in[k] < c->nprev)
+            c->prev[c->in[k]] = res.total;
+        emm_result_release(&res);
     }
 }
 
@@ -176,8 +248,21 @@ void contest_run(contest *c, const emm_trace_record *recs, size_t n)
         recs += part;
         n -= part;
         if (c->done == c->next) {
+            size_t before = c->nin;
             if (c->nin - pinned_in(c) > c->finalists)
                 halve(c);
+            /* A contest that drops none (finalists at least the entrants:
+             * --finalists all) stops none by the margin either. */
+            if (c->finalists < c->entrants) {
+                margin_stop(c);
+                note_totals(c);
+            }
+            c->checks++;
+            if (c->nin < before && c->rounds < CONTEST_MAX_ROUNDS) {
+                c->at[c->rounds] = c->done;
+                c->kept[c->rounds] = c->nin;
+                c->rounds++;
+            }
             c->step = c->step > UINT64_MAX / 4 ? UINT64_MAX / 2 : 2 * c->step;
             c->next = c->lead + c->step;
         }
@@ -228,10 +313,19 @@ size_t contest_dropped(const contest *c, const size_t **idx, const uint64_t **at
     return c->nretired;
 }
 
+bool contest_stopped(const contest *c, size_t k, uint64_t *leader)
+{
+    *leader = k < c->nretired ? c->retired_leader[k] : 0;
+    return k < c->nretired && c->retired_margin[k];
+}
+
 void contest_free(contest *c)
 {
     if (!c)
         return;
+    free(c->retired_leader);
+    free(c->retired_margin);
+    free(c->prev);
     free(c->in);
     free(c->pinned);
     free(c->retired);

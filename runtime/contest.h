@@ -9,6 +9,15 @@
  * 2016). The finalists run to the end, and the fastest is the answer: a
  * measurement over the program's own run, not a prediction.
  *
+ * A confident prediction is confirmed cheaply: once halving has left the
+ * finalists (from the second check on), a finalist more than
+ * CONTEST_MARGIN_PERCENT behind the leader (the fastest so far), both over
+ * the records so far and since the previous check, is stopped instead of
+ * running to the end (docs/profile.md "The contest"). It
+ * could still have won only by taking, over the rest of the run, fewer
+ * cycles than the leader by more than that gap; the report lists it as
+ * stopped by the margin with its cycles and the leader's then.
+ *
  * The session and `emm profile` (which replays a trace the session wrote)
  * run the same contest over the same records, so they give the same answer
  * whatever their batch sizes: a batch is cut at each check. */
@@ -22,6 +31,9 @@
 
 /* At most this many halvings are recorded (2^CONTEST_MAX_ROUNDS windows). */
 #define CONTEST_MAX_ROUNDS 40
+
+/* The margin, in percent of the leader's cycles so far. */
+#define CONTEST_MARGIN_PERCENT 25u
 
 typedef struct contest contest;
 
@@ -70,6 +82,11 @@ bool contest_retired(const contest *c, size_t i);
  * measured). Returns how many. */
 size_t contest_dropped(const contest *c, const size_t **idx, const uint64_t **at,
                        const uint64_t **cycles);
+
+/* Whether the k-th candidate dropped (contest_dropped's order) was stopped
+ * by the margin rather than halved; *leader: the leader's cycles then (0
+ * when halved). */
+bool contest_stopped(const contest *c, size_t k, uint64_t *leader);
 
 void contest_free(contest *c);
 

@@ -494,6 +494,8 @@ static void report_extra(json_writer *w, void *ctx)
             json_string(w, "all");
         else
             json_u64(w, s->cfg.finalists);
+        json_key(w, "margin_percent");
+        json_u64(w, CONTEST_MARGIN_PERCENT);
         json_key(w, "lead");
         json_u64(w, contest_lead(s->contest));
         json_key(w, "unit");
@@ -527,6 +529,17 @@ static void report_extra(json_writer *w, void *ctx)
             json_u64(w, dat[k]);
             json_key(w, "cycles");
             json_u64(w, dcycles[k]);
+            /* halved (the slower half then) or stopped by the margin
+             * (more than CONTEST_MARGIN_PERCENT behind the leader, whose
+             * cycles then are given, and since the previous check too) */
+            uint64_t leader;
+            bool stopped = contest_stopped(s->contest, k, &leader);
+            json_key(w, "by");
+            json_string(w, stopped ? "margin" : "halving");
+            if (stopped) {
+                json_key(w, "leader_cycles");
+                json_u64(w, leader);
+            }
             json_end_object(w);
         }
         json_end_array(w);
@@ -719,11 +732,26 @@ static const char *how_decided(const session *s, const emm_result *res, size_t n
                  k == 0 ? "" : k + 1 == rounds ? " and " : ", ",
                  (unsigned long long)((at[k] - lead) / unit));
     }
+    /* Of those, the ones the margin stopped ("of them 3 more than 25% behind
+     * the leader, so far and since the previous check") */
+    const size_t *idx;
+    const uint64_t *dat, *dcycles;
+    size_t nd = contest_dropped(s->contest, &idx, &dat, &dcycles), stopped = 0;
+    for (size_t k = 0; k < nd; k++) {
+        uint64_t leader;
+        stopped += contest_stopped(s->contest, k, &leader);
+    }
+    char margin[160] = "";
+    if (stopped)
+        snprintf(margin, sizeof margin,
+                 " (%zu of them stopped as more than %u%% behind the leader, so far and since "
+                 "the previous check)",
+                 stopped, CONTEST_MARGIN_PERCENT);
     snprintf(buf, cap,
              "measured over the run: the fastest of the %zu candidates that ran to the end; the "
              "other %zu of %zu were dropped at %s windows, slower then, and not measured to the "
-             "end",
-             in, entrants - in, entrants, when);
+             "end%s",
+             in, entrants - in, entrants, when, margin);
     return buf;
 }
 

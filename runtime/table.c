@@ -1233,13 +1233,16 @@ int check_bounds_hold(const emm_machine *m, const emm_sweep *S, const uint8_t *p
  * early could have ranked first or second, S is swept again in full, so
  * the outcome is the full sweep's.
  * Returns EMM_OK leaving *out alone when the recipe names no traversal;
- * errors are out of memory only. */
+ * errors are out of memory only. *window: the window's sweep W when it was
+ * made (the caller frees it; the neighbours' costs read the same), or NULL. */
 static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info,
                                 const emm_mesh *mesh, const struct synth_arrays *arrays,
                                 const emm_trace_record *recs, size_t n, const char *name,
                                 const emm_threads *threads, emm_model_share *share,
-                                decide_cache *cache, emm_window_decision *out, emm_error *err)
+                                decide_cache *cache, emm_window_decision *out,
+                                emm_sweep **window, emm_error *err)
 {
+    *window = NULL;
     const char *recipe = strcmp(out->table.synth, "-") != 0 ? out->table.synth : out->table.pattern;
     uint64_t visits = info->geometry.nt < EMM_DECIDE_SYNTH_VISITS ? info->geometry.nt
                                                                   : EMM_DECIDE_SYNTH_VISITS;
@@ -1304,7 +1307,7 @@ done:
         emm_sweep_free(S);
         free(partial);
     }
-    emm_sweep_free(W);
+    *window = W;
     return st;
 }
 
@@ -1362,7 +1365,8 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
                                   const emm_trace_info *info, const emm_trace_record *recs,
                                   size_t n, const double f[EMM_FEATURES],
                                   const emm_threads *threads, emm_model_share *share,
-                                  emm_window_decision *out, emm_error *err)
+                                  const emm_sweep *window, emm_window_decision *out,
+                                  emm_error *err)
 {
     char id[17];
     emm_table_machine_id(m, id);
@@ -1414,10 +1418,16 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
     free(c);
     if (k == 0)
         return EMM_OK;
-    emm_sweep *W = NULL;
+    /* The window's sweep, the pattern check's when it made one (the same
+     * records, strategies and machine: the same cycles). */
+    emm_sweep *own = NULL;
+    const emm_sweep *W = window;
     emm_error e;
-    if (sweep_records_shared(m, info, recs, n, threads, share, true, &W, &e) != EMM_OK)
-        return e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
+    if (!W) {
+        if (sweep_records_shared(m, info, recs, n, threads, share, true, &own, &e) != EMM_OK)
+            return e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
+        W = own;
+    }
     double wb = INFINITY;
     for (size_t i = 0; i < W->count; i++)
         if (W->ran[i] && emm_machine_offers(m, &W->result[i].strategy) &&
@@ -1465,7 +1475,7 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
         out->neighbour_distance = dist[k - 1];
         set_runner_up(out, second == SIZE_MAX ? NULL : &W->result[second], score2 / score - 1);
     }
-    emm_sweep_free(W);
+    emm_sweep_free(own);
     return EMM_OK;
 }
 
@@ -1518,6 +1528,7 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
             return EMM_OK;
         struct synth_arrays arrays;
         emm_mesh *mesh = NULL;
+        emm_sweep *window = NULL;
         bool own_mesh = false;
         st = EMM_OK;
         if (info->geometry.nt > 0 && program_arrays(info, &arrays))
@@ -1527,7 +1538,7 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
                             out, err);
             if (st == EMM_OK)
                 st = check_pattern(m, info, mesh, &arrays, recs, n, name, threads, share, cache,
-                                   out, err);
+                                   out, &window, err);
         }
         if (own_mesh)
             emm_mesh_free(mesh);
@@ -1535,7 +1546,8 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
          * table has some, decide among the candidates (a sample of the
          * user's own class, without a recipe, stands as in the thesis). */
         if (st == EMM_OK && out->how == EMM_DECIDED_CHECKED)
-            st = neighbour_costs(t, m, info, recs, n, f, threads, share, out, err);
+            st = neighbour_costs(t, m, info, recs, n, f, threads, share, window, out, err);
+        emm_sweep_free(window);
         /* A sample's strategy the machine does not have (a cache label on a
          * machine without one) is no answer: the window decides. */
         if (st != EMM_OK || out->how == EMM_DECIDED_CHECKED ||

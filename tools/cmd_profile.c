@@ -280,8 +280,9 @@ static int profile(void *p)
         if (cr.finalists < cr.entrants)
             printf("contest:   %zu candidates over the whole trace (%llu records), the slower half\n"
                    "           dropped at 2, 4, 8, ... windows of %zu records after the leading\n"
-                   "           sweep's %zu: %zu ran to the end, %zu were dropped (not measured\n"
-                   "           to the end)\n",
+                   "           sweep's %zu, then finalists more than 25%% behind the leader, so\n"
+                   "           far and since the last check, stopped: %zu ran to the end,\n"
+                   "           %zu were dropped (not measured to the end)\n",
                    cr.entrants, (unsigned long long)cr.accesses, n - skip, skip, cr.finalists,
                    cr.entrants - cr.finalists);
         else
@@ -422,7 +423,9 @@ int emm_cmd_profile(int argc, char **argv)
         {.name = "--finalists", .metavar = "N", .kind = OPT_CALL, .dst = &a.finalists,
          .call = finalists_option,
          .help = "the run's contest, as emm run holds it: every candidate from the trace's "
-                 "start, the slower half dropped at 2, 4, 8, ... windows until N remain; the "
+                 "start, the slower half dropped at 2, 4, 8, ... windows until N remain, then "
+                 "finalists more than 25% behind the leader, so far and since the last check, "
+                 "stopped; the "
                  "fastest of those that ran to the end is the answer; all: none is dropped; 0: "
                  "the window's prediction stands (default 4)"},
         {.name = "--learn", .metavar = "NAME", .kind = OPT_TEXT, .dst = &a.learn,
