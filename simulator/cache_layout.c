@@ -278,6 +278,7 @@ emm_status emm_cache_layout_model_new(const emm_machine_params *p, const emm_str
     opt.triangle_bytes = m->tarray != NO_ARRAY ? trace->arrays[m->tarray].record_size
                                                : EMM_THESIS_TRIANGLE_BYTES;
     opt.vertex_cells = m->varray != NO_ARRAY && m->tarray == NO_ARRAY; /* as emm_fetch.c */
+    opt.pointer_bytes = (uint32_t)p->word_bytes; /* as emm_fetch.c: cl_run credits them */
     opt.local_store = 0; /* no cell is moved as a whole */
     opt.fetch = EMM_FETCH_NONE; /* the same layout as the EMM strategies' (shared) */
     if ((st = emm_model_share_layout(share, trace, &opt, name, &l, err)) != EMM_OK) {

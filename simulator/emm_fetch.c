@@ -838,6 +838,9 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
     /* A program without a triangle array: its geometry's triangles are its
      * vertices (the session's cells of vertices), carrying no records. */
     o.vertex_cells = have_v && !have_t;
+    /* The triangle's pointers to its vertices' copies, which vertex_cell
+     * credits, are words of this machine: they take room in the cell. */
+    o.pointer_bytes = (uint32_t)p->word_bytes;
     if ((st = emm_model_share_layout(share, trace, &o, name, &m->layout, err)) != EMM_OK) {
         m->layout = NULL;
         goto fail;

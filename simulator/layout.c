@@ -277,13 +277,24 @@ static emm_status fill_ring(emm_layout *l, const char *name, emm_error *err)
     return EMM_OK;
 }
 
+/* The one place that decides what a triangle takes in its cell: its
+ * record and the 3 pointers to its vertices' copies in the same cell
+ * (thesis §4.1.1), through which the models reach a vertex of the triangle
+ * just requested without a look-up (emm_fetch.c, cache_layout.c). Cells of
+ * vertices have no triangle records, so no pointers either. */
+uint32_t emm_layout_triangle_slot_bytes(const emm_layout *l)
+{
+    return l->opt.vertex_cells ? 0 : l->opt.triangle_bytes + 3 * l->opt.pointer_bytes;
+}
+
 static void fill_sizes(emm_layout *l)
 {
     uint64_t off = 0;
+    const uint64_t slot = emm_layout_triangle_slot_bytes(l);
     for (uint32_t c = 0; c < l->ncells; c++) {
         emm_layout_cell *cell = &l->cells[c];
         cell->bytes = EMM_LAYOUT_HEADER_BYTES + (uint64_t)cell->nvert * l->opt.vertex_bytes +
-                      (l->opt.vertex_cells ? 0 : (uint64_t)cell->ntri * l->opt.triangle_bytes);
+                      (uint64_t)cell->ntri * slot;
         cell->offset = off;
         off += cell->bytes;
     }
@@ -476,6 +487,8 @@ emm_status emm_layout_build(const double *xyz, size_t nv, const int32_t *tri, si
         o.vertex_bytes = EMM_THESIS_VERTEX_BYTES;
     if (o.triangle_bytes == 0)
         o.triangle_bytes = EMM_THESIS_TRIANGLE_BYTES;
+    if (o.pointer_bytes == 0)
+        o.pointer_bytes = EMM_LAYOUT_POINTER_BYTES;
     emm_layout *l = NULL;
     st = build_once(xyz, nv, tri, nt, &o, name, &l, err);
     if (st != EMM_OK)
@@ -645,7 +658,7 @@ uint64_t emm_layout_triangle_address(const emm_layout *l, uint32_t t, uint32_t o
     assert(t < l->nt && offset < l->opt.triangle_bytes);
     const emm_layout_cell *c = &l->cells[l->tri_cell[t]];
     return c->offset + EMM_LAYOUT_HEADER_BYTES + (uint64_t)c->nvert * l->opt.vertex_bytes +
-           (uint64_t)l->tri_pos[t] * l->opt.triangle_bytes + offset;
+           (uint64_t)l->tri_pos[t] * emm_layout_triangle_slot_bytes(l) + offset;
 }
 
 uint64_t emm_layout_vertex_address(const emm_layout *l, uint32_t v, uint32_t from_cell,
@@ -716,6 +729,7 @@ void emm_layout_get_stats(const emm_layout *l, emm_layout_stats *out)
     out->unused_vertices = l->nunused;
     out->duplicated_vertices = l->ncopies - (l->nv - l->nunused);
     out->image_bytes = emm_layout_image_bytes(l);
+    out->triangle_slot_bytes = emm_layout_triangle_slot_bytes(l);
     out->lookup_bytes = emm_layout_lookup_bytes(l);
     if (l->ops->stats)
         l->ops->stats(l, out);

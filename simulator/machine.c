@@ -37,7 +37,7 @@ struct key_desc {
 static const struct key_desc keys[] = {
     {{"clock.mhz", "MHz", "core clock, only to print seconds (thesis 6.1)", "400"},
      KEY_COUNT, P(clock_mhz), 400, 1, 1000000},
-    {{"word.bytes", "bytes", "the core's word; direct reads move one word at a time", "4"},
+    {{"word.bytes", "bytes", "the core's word; direct reads move one word at a time; a layout triangle's 3 vertex pointers are words", "4"},
      KEY_COUNT, P(word_bytes), 4, 1, 64},
     {{"local.bytes", "bytes", "local store size (thesis 6.1)", "256K"},
      KEY_SIZE, P(local_bytes), K(256), 1, G(64)},

@@ -82,7 +82,7 @@ static bool same_key(const emm_layout_options *a, const emm_layout_options *b)
 {
     return a->kind == b->kind && a->cell == b->cell && a->vertex_bytes == b->vertex_bytes &&
            a->triangle_bytes == b->triangle_bytes && a->local_store == b->local_store &&
-           a->vertex_cells == b->vertex_cells;
+           a->vertex_cells == b->vertex_cells && a->pointer_bytes == b->pointer_bytes;
 }
 
 emm_status emm_model_share_layout(emm_model_share *sh, const emm_trace_info *t,

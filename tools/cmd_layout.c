@@ -24,7 +24,7 @@ static void usage(FILE *out, const opts *o)
 {
     fprintf(out,
             "usage: emm layout MESH --strategy S [--svg FILE] [--stats] [--local BYTES]\n"
-            "                  [--vertex-bytes N] [--triangle-bytes N]\n"
+            "                  [--vertex-bytes N] [--triangle-bytes N] [--pointer-bytes N]\n"
             "                  [--write OUT [--perm FILE]]\n"
             "\n"
             "Builds the layout of strategy S (grid, tiles or quadtree in the plane, thesis\n"
@@ -36,6 +36,8 @@ static void usage(FILE *out, const opts *o)
     fprintf(out,
             "\n"
             "The default record sizes are the thesis' structs (Vertex %u B, Triangle %u B).\n"
+            "In a cell a triangle's record is followed by 3 pointers to its vertices'\n"
+            "copies in the cell (thesis 4.1.1): a slot of %u B on the default machine.\n"
             "A layout in the plane lays a 3D mesh out over the two axes along which its\n"
             "bounding box is largest; one in space over x, y and z. The SVG of a layout\n"
             "in space is a projection onto its first two axes (the third is seen\n"
@@ -52,7 +54,8 @@ static void usage(FILE *out, const opts *o)
             "permutation as text: a line 'vertices N', then N lines 'NEW OLD' in\n"
             "ascending NEW, then 'triangles M' and M such lines (ids from 0; OLD is the\n"
             "id in MESH, counting a polygon's fan triangles in order).\n",
-            EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES);
+            EMM_THESIS_VERTEX_BYTES, EMM_THESIS_TRIANGLE_BYTES,
+            EMM_THESIS_TRIANGLE_BYTES + 3 * EMM_LAYOUT_POINTER_BYTES);
 }
 
 static void print_stats(const emm_layout *l, const char *path, const emm_strategy *s)
@@ -90,6 +93,12 @@ static void print_stats(const emm_layout *l, const char *path, const emm_strateg
            emm_grouped(st.tri_median, b), emm_grouped(st.tri_max, c));
     printf("bytes/cell      min %s, median %s, max %s\n", emm_grouped(st.bytes_min, a),
            emm_grouped(st.bytes_median, b), emm_grouped(st.bytes_max, c));
+    const emm_layout_options *o = emm_layout_get_options(l);
+    if (o->vertex_cells)
+        printf("triangle slot   0 bytes (cells of vertices)\n");
+    else
+        printf("triangle slot   %u bytes (%u of record, 3 pointers of %u to its vertices' copies)\n",
+               st.triangle_slot_bytes, o->triangle_bytes, o->pointer_bytes);
     printf("vertex copies   %s (%s duplicated, %s vertices unused)\n",
            emm_grouped(st.vertex_copies, a), emm_grouped(st.duplicated_vertices, b),
            emm_grouped(st.unused_vertices, c));
@@ -376,12 +385,13 @@ out:
 #define DEFAULT_CELL_TEXT "64"
 _Static_assert(EMM_DEFAULT_CELL == 64u, "DEFAULT_CELL_TEXT is EMM_DEFAULT_CELL");
 
-/* --local's value when it is not given: the machine's local store. */
+/* --local's and --pointer-bytes' value when not given: the machine's local
+ * store and word. */
 #define LOCAL_UNSET UINT64_MAX
 
 static int layout(const char *mesh_path, const char *strategy, const char *svg, int stats,
-                  uint64_t local, uint64_t vbytes, uint64_t tbytes, const char *write,
-                  const char *perm)
+                  uint64_t local, uint64_t vbytes, uint64_t tbytes, uint64_t pbytes,
+                  const char *write, const char *perm)
 {
     const char *cmd = "layout";
     emm_strategy s;
@@ -399,12 +409,16 @@ static int layout(const char *mesh_path, const char *strategy, const char *svg, 
                                write);
     if (!svg && !write)
         stats = 1;
-    /* Only an EMM strategy moves whole cells into the local store. */
-    if (local == LOCAL_UNSET && s.kind == EMM_STRATEGY_EMM) {
+    /* Only an EMM strategy moves whole cells into the local store. A
+     * triangle's pointers to its vertices' copies are the machine's words. */
+    if ((local == LOCAL_UNSET && s.kind == EMM_STRATEGY_EMM) || pbytes == LOCAL_UNSET) {
         emm_machine *m;
         if (emm_machine_new(&m, &err) != EMM_OK)
             return cli_fail(&err);
-        local = emm_machine_get(m, "local.bytes");
+        if (local == LOCAL_UNSET)
+            local = emm_machine_get(m, "local.bytes");
+        if (pbytes == LOCAL_UNSET)
+            pbytes = emm_machine_get(m, "word.bytes");
         emm_machine_free(m);
     }
     if (s.kind != EMM_STRATEGY_EMM)
@@ -420,6 +434,7 @@ static int layout(const char *mesh_path, const char *strategy, const char *svg, 
         .cell = s.cell,
         .vertex_bytes = (uint32_t)vbytes,
         .triangle_bytes = (uint32_t)tbytes,
+        .pointer_bytes = (uint32_t)pbytes,
         .local_store = local,
         .fetch = s.fetch,
     };
@@ -447,7 +462,7 @@ int emm_cmd_layout(int argc, char **argv)
     const char *mesh_path = NULL, *strategy = NULL, *svg = NULL, *write = NULL, *perm = NULL;
     int stats = 0;
     uint64_t local = LOCAL_UNSET, vbytes = EMM_THESIS_VERTEX_BYTES;
-    uint64_t tbytes = EMM_THESIS_TRIANGLE_BYTES;
+    uint64_t tbytes = EMM_THESIS_TRIANGLE_BYTES, pbytes = LOCAL_UNSET;
     opts_row rows[] = {
         {.name = "--strategy", .alias = "-s", .metavar = "S", .kind = OPT_STRATEGY,
          .dst = &strategy, .required = true,
@@ -475,6 +490,11 @@ int emm_cmd_layout(int argc, char **argv)
          .help = "bytes of a vertex record"},
         {.name = "--triangle-bytes", .metavar = "N", .kind = OPT_U64, .dst = &tbytes, .min = 1,
          .max = 65536, .show_default = true, .help = "bytes of a triangle record"},
+        {.name = "--pointer-bytes", .metavar = "N", .kind = OPT_U64, .dst = &pbytes, .min = 1,
+         .max = 64,
+         .help = "bytes of each of the 3 pointers a cell's triangle keeps to its vertices' "
+                 "copies (thesis §4.1.1), which follow its record in the cell (default: the "
+                 "machine's word.bytes, 4)"},
         {.metavar = "MESH", .kind = OPT_TEXT, .dst = &mesh_path, .required = true},
         OPTS_END,
     };
@@ -482,5 +502,5 @@ int emm_cmd_layout(int argc, char **argv)
     int rc;
     if (opts_parse(&o, argc, argv, &rc))
         return rc;
-    return layout(mesh_path, strategy, svg, stats, local, vbytes, tbytes, write, perm);
+    return layout(mesh_path, strategy, svg, stats, local, vbytes, tbytes, pbytes, write, perm);
 }

@@ -47,6 +47,9 @@ typedef struct emm_layout emm_layout;
 
 /* Bytes of a cell's header: struct CellData {int verNr, triNr, length;}. */
 #define EMM_LAYOUT_HEADER_BYTES 12u
+/* Bytes of a pointer on the thesis' 32-bit core (the default word.bytes):
+ * a cell's triangle keeps 3 of them, to its vertices' copies (§4.1.1). */
+#define EMM_LAYOUT_POINTER_BYTES 4u
 /* Deepest quadtree level. Centroids that still share a leaf there (closer
  * than 2^-24 of the bounding square) stay together, even beyond `cell`. */
 #define EMM_LAYOUT_MAX_DEPTH 24u
@@ -85,6 +88,10 @@ typedef struct emm_layout_options {
                                 the most per leaf for the quadtree and octree; >= 1 */
     uint32_t vertex_bytes;   /* bytes of a vertex record; 0 = 80 (thesis) */
     uint32_t triangle_bytes; /* bytes of a triangle record; 0 = 28 (thesis) */
+    uint32_t pointer_bytes;  /* bytes of each of the 3 pointers a cell's triangle keeps to
+                                its vertices' copies in the cell (thesis §4.1.1: the
+                                layout's struct Triangle adds struct Vertex *vertices[3]);
+                                the machine's word.bytes; 0 = EMM_LAYOUT_POINTER_BYTES */
     uint64_t local_store;    /* bytes; a larger cell is an error; 0 = no check */
     emm_fetch_kind fetch;    /* only to name a strategy in that error; NONE if unknown */
     uint32_t vertex_cells;   /* 1: the program keeps vertices only (no triangle array), and
@@ -97,7 +104,8 @@ typedef struct emm_layout_options {
 typedef struct emm_layout_cell {
     uint32_t ntri;                /* triangles */
     uint32_t nvert;               /* vertex copies */
-    uint64_t bytes;               /* header + nvert * vertex_bytes + ntri * triangle_bytes */
+    uint64_t bytes;               /* header + nvert * vertex_bytes +
+                                     ntri * emm_layout_triangle_slot_bytes */
     uint64_t offset;              /* byte offset of the cell in the remote image */
     double lo[EMM_MAX_DIMS];      /* the cell's box (tiles at a row's ends reach */
     double hi[EMM_MAX_DIMS];      /* half a tile past the bounding box) */
@@ -129,6 +137,7 @@ typedef struct emm_layout_stats {
     uint64_t unused_vertices;          /* vertices no triangle uses */
     uint64_t image_bytes;              /* emm_layout_image_bytes */
     uint64_t lookup_bytes;             /* emm_layout_lookup_bytes */
+    uint32_t triangle_slot_bytes;      /* emm_layout_triangle_slot_bytes */
     uint32_t depth_min, depth_max;     /* quadtree or octree leaves; 0 otherwise */
     uint32_t quadtree_nodes;           /* internal nodes + leaves of the quadtree or
                                           octree; 0 otherwise */
@@ -216,7 +225,12 @@ EMM_API uint32_t emm_layout_vertex_at(const emm_layout *l, uint32_t cell, uint32
 /* Bytes of the remote image: all cells, then one record for each unused
  * vertex (in vertex order), so that every element has an address. */
 EMM_API uint64_t emm_layout_image_bytes(const emm_layout *l);
-/* Address in the image of byte `offset` (< triangle_bytes) of triangle t. */
+/* Bytes a triangle takes in its cell: its record, then the 3 pointers to
+ * its vertices' copies in the cell (triangle_bytes + 3 * pointer_bytes);
+ * 0 for cells of vertices (vertex_cells), whose triangles take no bytes. */
+EMM_API uint32_t emm_layout_triangle_slot_bytes(const emm_layout *l);
+/* Address in the image of byte `offset` (< triangle_bytes) of triangle t's
+ * record (the start of its slot). */
 EMM_API uint64_t emm_layout_triangle_address(const emm_layout *l, uint32_t t, uint32_t offset);
 /* Address in the image of byte `offset` (< vertex_bytes) of vertex v's copy
  * as seen from `from_cell` (EMM_LAYOUT_NONE: the home copy). */

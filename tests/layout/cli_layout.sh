@@ -1,5 +1,6 @@
 #!/bin/sh
-# emm layout as a user runs it: SVG output, statistics, and the errors.
+# emm layout as a user runs it: SVG output, statistics (the triangle's slot
+# with its vertex pointers, also in a run's report), and the errors.
 # usage: cli_layout.sh EMM WORKDIR
 set -u
 EMM=$1
@@ -29,6 +30,37 @@ done
 for key in '^cells ' '^triangles/cell  min [0-9,]*, median [0-9,]*, max ' '^bytes/cell ' 'duplicated' '^lookup bytes ' '^quadtree depth  min [0-9]*, max [0-9]*'; do
     grep -q "$key" "$DIR/stats" || fail "--stats lacks '$key'"
 done
+# A triangle's slot in its cell: its record, then 3 pointers to its
+# vertices' copies (thesis 4.1.1), the machine's words: 28 + 3 x 4 = 40 bytes
+# by default, 28 + 3 x 8 = 52 with 8-byte pointers, and every one of the
+# 3,000 triangles' slots is in the image.
+grep -q '^triangle slot   40 bytes (28 of record, 3 pointers of 4 ' "$DIR/stats" ||
+    fail "--stats: triangle slot not 40 bytes: $(grep slot "$DIR/stats")"
+"$EMM" layout "$DIR/m.off" --strategy quadtree+naive@32 --pointer-bytes 8 > "$DIR/stats8" 2>&1 ||
+    fail "--pointer-bytes 8 exits non-zero"
+grep -q '^triangle slot   52 bytes (28 of record, 3 pointers of 8 ' "$DIR/stats8" ||
+    fail "--pointer-bytes 8: triangle slot not 52 bytes: $(grep slot "$DIR/stats8")"
+i4=$(sed -n 's/^image bytes *//p' "$DIR/stats" | tr -d ,)
+i8=$(sed -n 's/^image bytes *//p' "$DIR/stats8" | tr -d ,)
+[ -n "$i4" ] && [ -n "$i8" ] && [ $((i8 - i4)) -eq 36000 ] ||
+    fail "image bytes $i4 (4-byte pointers), $i8 (8-byte): not 3000 x 12 apart"
+# The run's report: with word.bytes = 8 an EMM strategy moves the same cells
+# with 12 bytes more a triangle (a scanline visits each triangle once; a 1M
+# store keeps every cell, so each moves once).
+"$EMM" trace synth --mesh "$DIR/m.off" --pattern scanline -o "$DIR/s.emmt" > /dev/null ||
+    fail "trace synth"
+for w in 4 8; do
+    "$EMM" replay "$DIR/s.emmt" --strategy grid+naive@64 --set local.bytes=1M --set word.bytes=$w \
+        --json "$DIR/w$w.json" > /dev/null 2>&1 || fail "replay with word.bytes=$w exits non-zero"
+done
+/usr/bin/python3 - "$DIR/w4.json" "$DIR/w8.json" <<'PY' || fail "report: cell bytes do not follow word.bytes"
+import json, sys
+r4, r8 = (json.load(open(f))["results"][0] for f in sys.argv[1:])
+for r in (r4, r8):
+    assert r["emm"]["refetches"] == 0 and r["emm"]["lookup_page_bytes"] == 0, r["emm"]
+d = r8["dma"]["bytes"] - r4["dma"]["bytes"]
+assert d == 3000 * 12, (r4["dma"]["bytes"], r8["dma"]["bytes"])
+PY
 # No --svg and no --stats: statistics.
 "$EMM" layout "$DIR/m.off" --strategy grid+naive > "$DIR/stats2" 2>&1 || fail "default run exits non-zero"
 grep -q '^layout          grid, CELL 64 ' "$DIR/stats2" || fail "default run prints no statistics"

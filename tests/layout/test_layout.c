@@ -249,12 +249,16 @@ static void check_layout(const emm_layout *l, const mesh *g)
     CHECK(st.vertex_copies == ncopies);
     CHECK(st.duplicated_vertices == ncopies - used);
     CHECK(st.unused_vertices == g->nv - used);
+    /* A triangle's slot: its record, then its 3 pointers to its vertices'
+     * copies (thesis §4.1.1). */
+    const uint64_t ptrs = 3ull * opt->pointer_bytes, slot = opt->triangle_bytes + ptrs;
+    CHECK(opt->pointer_bytes >= 1 && st.triangle_slot_bytes == slot);
     uint64_t off = 0;
     int bad_size = 0;
     for (uint32_t c = 0; c < nc; c++) {
         const emm_layout_cell *cell = emm_layout_cell_get(l, c);
         if (cell->bytes != 12u + (uint64_t)cell->nvert * opt->vertex_bytes +
-                               (uint64_t)cell->ntri * opt->triangle_bytes)
+                               (uint64_t)cell->ntri * slot)
             bad_size++;
         if (cell->offset != off)
             bad_size++;
@@ -263,7 +267,7 @@ static void check_layout(const emm_layout *l, const mesh *g)
     CHECKF(bad_size == 0, "%d cell size/offset errors", bad_size);
     CHECK(emm_layout_image_bytes(l) == off + (g->nv - used) * opt->vertex_bytes);
 
-    size_t nspan = nc + g->nt + ncopies + (g->nv - used), ns = 0;
+    size_t nspan = nc + 2 * g->nt + ncopies + (g->nv - used), ns = 0;
     addr_span *sp = malloc(nspan * sizeof *sp);
     int bad_addr = 0;
     for (uint32_t c = 0; c < nc; c++)
@@ -273,9 +277,10 @@ static void check_layout(const emm_layout *l, const mesh *g)
         uint64_t z = emm_layout_triangle_address(l, (uint32_t)t, opt->triangle_bytes - 1);
         const emm_layout_cell *cell = emm_layout_cell_get(l, emm_layout_triangle_index(l, (uint32_t)t).cell);
         if (z != a + opt->triangle_bytes - 1 || a < cell->offset + 12 ||
-            z >= cell->offset + cell->bytes)
+            z + ptrs >= cell->offset + cell->bytes)
             bad_addr++;
         sp[ns++] = (addr_span){a, opt->triangle_bytes};
+        sp[ns++] = (addr_span){a + opt->triangle_bytes, ptrs}; /* its pointers */
     }
     for (size_t v = 0; v < g->nv; v++) {
         const emm_layout_index *cp;
@@ -299,7 +304,8 @@ static void check_layout(const emm_layout *l, const mesh *g)
     }
     REQUIRE(ns == nspan);
     qsort(sp, ns, sizeof *sp, cmp_span);
-    /* Records and headers tile the image exactly: unique, no overlap, no gap. */
+    /* Records, pointers and headers tile the image exactly: unique, no
+     * overlap, no gap. */
     uint64_t at = 0;
     for (size_t i = 0; i < ns; i++) {
         if (sp[i].start != at)
@@ -927,13 +933,23 @@ static void test_record_sizes(void)
     CHECK(emm_layout_get_options(l)->vertex_bytes == 24);
     check_layout(l, &g);
     const emm_layout_cell *c = emm_layout_cell_get(l, emm_layout_triangle_index(l, 0).cell);
-    CHECK(c->bytes == 12 + 24u * c->nvert + 12u * c->ntri);
+    /* The triangle's pointers default to 4 bytes each (the 32-bit core). */
+    CHECK(emm_layout_triangle_slot_bytes(l) == 12 + 3 * 4);
+    CHECK(c->bytes == 12 + 24u * c->nvert + (12u + 12u) * c->ntri);
     /* Look-up accounting: 4 B per triangle and vertex, 8 per cell, 16 per node. */
     emm_layout_stats st;
     emm_layout_get_stats(l, &st);
     CHECK(emm_layout_lookup_bytes(l) ==
           4 * g.nt + 4 * g.nv + 8ull * st.cells + 16ull * st.quadtree_nodes);
     CHECK(st.quadtree_nodes >= st.cells && (st.quadtree_nodes - 1) % 4 == 0);
+    emm_layout_free(l);
+    /* A 64-bit machine's pointers: 8 bytes each. */
+    opt.pointer_bytes = 8;
+    REQUIRE(emm_layout_build(g.xyz, g.nv, g.tri, g.nt, &opt, "g", &l, &err) == EMM_OK);
+    check_layout(l, &g);
+    CHECK(emm_layout_triangle_slot_bytes(l) == 12 + 3 * 8);
+    c = emm_layout_cell_get(l, emm_layout_triangle_index(l, 0).cell);
+    CHECK(c->bytes == 12 + 24u * c->nvert + (12u + 24u) * c->ntri);
     emm_layout_free(l);
     mesh_free(&g);
 }
