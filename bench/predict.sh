@@ -36,7 +36,9 @@ tmp=$top/tmp.$$
 rm -rf "$tmp"
 mkdir -p "$tmp"
 trap 'rm -rf "$tmp"' EXIT INT TERM
-key() { sha256sum "$@" | sha256sum | cut -c1-16; }
+# A hash of the files' contents (not their names: the temporary folder's
+# changes each run).
+key() { for f in "$@"; do sha256sum <"$f"; done | sha256sum | cut -c1-16; }
 
 # name:surface:faces:seed:density:order — seeds no table mesh uses (11-14, 5-7).
 meshes="p10c:plane:10000:41:clustered:made
