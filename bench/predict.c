@@ -17,8 +17,9 @@
  *   ALL      `emm replay TRACE --all` 's listing on that machine
  * Prints one line a case, then mean, median and worst regret. --dump FILE
  * writes a JSON line a case for studying predictors offline: the window's
- * features, its cold sweep, the whole run's listing, the window's revisits
- * and the mesh's bytes against the local store. A benchmark, not a test. */
+ * features, its cold sweep (after the leading sweep, as the decision's),
+ * the whole run's listing, the window's revisits and the mesh's bytes
+ * against the local store. A benchmark, not a test. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -155,8 +156,17 @@ static void dump_case(FILE *f, const char *prog, const char *name, const char *m
     free(last);
     free(base);
     free(gaps);
-    fprintf(f, ", \"window\": {");
-    if (emm_sweep_records(m, info, recs, n, NULL, &w, &err) == EMM_OK) {
+    /* The window's sweep as the decision's: after the leading index-order
+     * sweep, which the profile leaves out (docs/profile.md). */
+    size_t skip = 0;
+    emm_profiler *p;
+    if (emm_profiler_new(info, n ? n : 1, EMM_PROFILE_PLANE, name, &p, &err) == EMM_OK) {
+        if (emm_profiler_add(p, recs, n, &err) == EMM_OK)
+            emm_profiler_swept(p, &skip);
+        emm_profiler_free(p);
+    }
+    fprintf(f, ", \"skip\": %zu, \"window\": {", skip);
+    if (emm_sweep_records(m, info, recs + skip, n - skip, NULL, &w, &err) == EMM_OK) {
         int first = 1;
         for (size_t i = 0; i < w->count; i++) {
             if (!w->ran[i])

@@ -1316,8 +1316,8 @@ done:
  * measured on this machine (their machine column is its fingerprint) that
  * list their run's costs. Each strategy's score is the geometric mean of
  * its cost in each neighbour's run (a strategy a neighbour does not list
- * counts as 1.25 times its last listed one: it was slower than all of
- * them), times (W/W_best)^EMM_DECIDE_WINDOW_WEIGHT, W the window's cold
+ * counts as EMM_DECIDE_UNLISTED times its last listed one: it was slower
+ * than all of them), times (W/W_best)^EMM_DECIDE_WINDOW_WEIGHT, W the window's cold
  * cycles: the neighbours say what the run rewards, the window what this
  * program's accesses cost. A strategy no neighbour lists is no candidate.
  * Leaves *out alone when no sample qualifies; errors are out of memory
@@ -1443,7 +1443,7 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
         size_t listed = 0;
         for (size_t j = 0; j < k; j++) {
             const emm_table_sample *nb = &t->s[near[j]];
-            double cost = 1.25 * nb->cost[nb->ncosts - 1];
+            double cost = EMM_DECIDE_UNLISTED * nb->cost[nb->ncosts - 1];
             for (uint32_t q = 0; q < nb->ncosts; q++)
                 if (same_strategy(&nb->cost_strategy[q], st)) {
                     cost = nb->cost[q];

@@ -47,13 +47,17 @@ extern "C" {
 /* The neighbours' costs decide (docs/profile.md "The neighbours' costs"):
  * the nearest runs measured on this machine, this many (one window each),
  * ... */
-#define EMM_DECIDE_NEIGHBOURS 5
-/* ... each strategy's score their costs' geometric mean times the window's
- * cold cycles over its best, to this power; ... */
-#define EMM_DECIDE_WINDOW_WEIGHT 0.25
+#define EMM_DECIDE_NEIGHBOURS 16
+/* ... each strategy's score their costs' geometric mean (a strategy a
+ * neighbour does not list counts as this many times its last listed one:
+ * over the runs of make predict, the strategies past the 24th cost a
+ * median 1.79 times the 24th, geometric mean) ... */
+#define EMM_DECIDE_UNLISTED 1.8
+/* ... times the window's cold cycles over its best, to this power; ... */
+#define EMM_DECIDE_WINDOW_WEIGHT 0.35
 /* ... when the nearest of them lies within this factor of the nearest
  * sample without costs (a canonical pattern's). */
-#define EMM_DECIDE_NEIGHBOUR_GATE 2.0
+#define EMM_DECIDE_NEIGHBOUR_GATE 2.5
 /* A window this near a sample without costs (a canonical pattern's) is that
  * pattern: the check decides, not the neighbours. */
 #define EMM_DECIDE_CANONICAL_NEAR 0.35

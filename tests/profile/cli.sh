@@ -142,7 +142,7 @@ if [ -x "$BIN/predict_traversals.sancov" ]; then
         "$EMM" run --quiet --capture sancov --trace walk4k.emmt -- \
             "$BIN/predict_traversals.sancov" walk walk4k.off >/dev/null || exit 1
     check costs 0 "$EMM" profile walk4k.emmt --finalists 0
-    has costs out.txt "^measured: *the 5 nearest runs measured on this machine"
+    has costs out.txt "^measured: *the 16 nearest runs measured on this machine"
     check costs-other-machine 0 "$EMM" profile walk4k.emmt --finalists 0 --set local.bytes=128K
     has costs-other-machine out.txt "^checked: "
     if grep -q "^measured:" out.txt; then echo "FAIL costs-other-machine: decided by costs"; fail=1; fi
