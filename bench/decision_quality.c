@@ -183,7 +183,7 @@ int main(int argc, char **argv)
                     skipped++;
                     continue;
                 }
-                emm_decide_options dopt = {0, simulate, NULL};
+                emm_decide_options dopt = {.simulate = simulate};
                 if (emm_decide_window(t, m, info, recs, n, path, &dopt, &d, &err) != EMM_OK)
                     die(patterns[p].name, &err);
                 emm_window_decision_release(&d); /* the classes checked are not used */

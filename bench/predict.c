@@ -279,7 +279,7 @@ int main(int argc, char **argv)
             emm_profile_trace_window(r, window, trace, &recs, &n, &err) != EMM_OK)
             die(trace, err.message);
         emm_window_decision d;
-        emm_decide_options dopt = {0, 0, NULL};
+        emm_decide_options dopt = {0};
         if (emm_decide_window(t, m, emm_trace_reader_info(r), recs, n, trace, &dopt, &d, &err) !=
             EMM_OK)
             die(trace, err.message);

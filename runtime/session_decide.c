@@ -670,7 +670,7 @@ static emm_status profile_window(session *s, emm_error *err)
 static emm_status choose(session *s, emm_error *err)
 {
     emm_window_decision wd;
-    emm_decide_options opt = {0, 0, &s->threads};
+    emm_decide_options opt = {.threads = &s->threads};
     emm_status st = decide_features_shared(s->table, s->machine, &s->info, s->window + s->wskip,
                                            s->wn - s->wskip, s->features, s->nD, s->program, &opt,
                                            s->layouts, s->decisions, &wd, err);
@@ -694,7 +694,7 @@ static emm_status choose(session *s, emm_error *err)
 static emm_status choose_on_window(session *s, emm_error *err)
 {
     emm_window_decision wd;
-    emm_decide_options opt = {0, 0, &s->threads};
+    emm_decide_options opt = {.threads = &s->threads};
     double f[EMM_FEATURES] = {0};
     emm_status st = decide_features_shared(NULL, s->machine, &s->info, s->window + s->wskip,
                                            s->wn - s->wskip, f, s->nD, s->program, &opt,

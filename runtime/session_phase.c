@@ -157,7 +157,8 @@ static void evaluate(void *ctx)
     j->opinion = true;
     const char *pattern = job_pattern(j);
     if (strcmp(pattern, j->cur) != 0 && !j->full && strcmp(pattern, j->pending) == 0) {
-        emm_decide_options opt = {0, 0, &s->threads};
+        emm_decide_options opt = {.threads = &s->threads,
+                                  .synth_visits = SESSION_PHASE_SYNTH_PROBES * j->reads};
         j->decided = decide_features_shared(s->table, s->machine, &s->info, j->recs, j->n, f, n,
                                             s->program, &opt, s->layouts, s->decisions, &j->wd,
                                             &e) == EMM_OK;

@@ -1239,13 +1239,15 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
                                 const emm_mesh *mesh, const struct synth_arrays *arrays,
                                 const emm_trace_record *recs, size_t n, const char *name,
                                 const emm_threads *threads, emm_model_share *share,
-                                decide_cache *cache, emm_window_decision *out,
+                                decide_cache *cache, uint64_t visits, emm_window_decision *out,
                                 emm_sweep **window, emm_error *err)
 {
     *window = NULL;
     const char *recipe = strcmp(out->table.synth, "-") != 0 ? out->table.synth : out->table.pattern;
-    uint64_t visits = info->geometry.nt < EMM_DECIDE_SYNTH_VISITS ? info->geometry.nt
-                                                                  : EMM_DECIDE_SYNTH_VISITS;
+    if (visits == 0 || visits > EMM_DECIDE_SYNTH_VISITS)
+        visits = EMM_DECIDE_SYNTH_VISITS;
+    if (info->geometry.nt < visits)
+        visits = info->geometry.nt;
     emm_synth_options so;
     emm_status st = synth_options(mesh, arrays, recipe, recs, n, visits, &so, err);
     if (st == EMM_ERR_INVALID)
@@ -1538,7 +1540,7 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
                             out, err);
             if (st == EMM_OK)
                 st = check_pattern(m, info, mesh, &arrays, recs, n, name, threads, share, cache,
-                                   out, &window, err);
+                                   opt ? opt->synth_visits : 0, out, &window, err);
         }
         if (own_mesh)
             emm_mesh_free(mesh);

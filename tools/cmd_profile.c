@@ -236,7 +236,7 @@ static int profile(void *p)
         goto done;
     }
     emm_window_decision w;
-    emm_decide_options dopt = {threshold, simulate, NULL};
+    emm_decide_options dopt = {.threshold = threshold, .simulate = simulate};
     if (emm_decide_window(t, m, info, recs, n, trace, &dopt, &w, &err) != EMM_OK) {
         rc = cli_fail(&err);
         goto done;

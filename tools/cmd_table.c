@@ -161,7 +161,7 @@ static int table_add_swept(const char *trace, const char *table, uint64_t window
     emm_trace_record *recs = NULL;
     size_t n = 0;
     emm_window_decision w;
-    emm_decide_options dopt = {0, 1, NULL};
+    emm_decide_options dopt = {.simulate = 1};
     rc = EMM_EXIT_OK;
     if (emm_profile_trace_window(r, window, trace, &recs, &n, &err) != EMM_OK ||
         emm_decide_window(NULL, m, emm_trace_reader_info(r), recs, n, trace, &dopt, &w, &err) !=

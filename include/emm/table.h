@@ -259,6 +259,8 @@ typedef struct emm_decide_options {
     double threshold;           /* novelty threshold; <= 0: EMM_NOVELTY_THRESHOLD */
     int simulate;               /* sweep the window even when a sample matches */
     const emm_threads *threads; /* NULL: the online CPUs, no start hook */
+    uint64_t synth_visits;      /* the pattern check's long run, at most this many visits;
+                                   0: EMM_DECIDE_SYNTH_VISITS */
 } emm_decide_options;
 
 /* The session's decision on a window (thesis §5, and beyond it: see
