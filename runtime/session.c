@@ -979,6 +979,9 @@ static emm_status engine_finish(emm_session *h, FILE *summary, const char *ended
         s->phase = PHASE_DONE;
         return s->failure.status;
     }
+    /* The models have run every record (their pipeline drained): what
+     * their stall hooks counted is whole. */
+    emm_runner_sync(s->runner);
     session_phases_close(s);
     /* The answer and the runner-up: the contest's finalists, or the
      * window's check, fastest first; then what is the answer's. */

@@ -849,6 +849,14 @@ static emm_status build_models(session *s, emm_error *err)
         (st = contest_new(s->runner, entrants, NULL, ne, 0, 1, EMM_CONFIG_FINALISTS_ALL,
                           &s->window_rank, err)) == EMM_OK)
         s->window_check = true;
+    /* The run's batches queue for the models, which run beside the program
+     * (and beside the capture's process, under valgrind) instead of
+     * holding it at every batch. Without memory for that they run as
+     * before. */
+    if (st == EMM_OK) {
+        emm_error e;
+        emm_runner_pipeline(s->runner, &e);
+    }
 out:
     free(all);
     free(list);

@@ -67,6 +67,25 @@ void emm_runner_run_bounded(emm_runner *r, const size_t *idx, size_t k,
                             const emm_trace_record *recs, size_t n, size_t chunk, uint64_t bound,
                             size_t *ran);
 
+/* From now on emm_runner_run queues a copy of its batch and returns: the
+ * models run the queued batches on threads of the runner's own (as many as
+ * its threads allow, started as the pool's are), each model its batches in
+ * order on one thread at a time, so a model's results are those of the
+ * plain run; models do not wait for each other between batches, and the
+ * caller goes on with its own work (the program, under a capture) while
+ * they run. At most PIPE_MAX_RECORDS records are queued: a caller ahead of
+ * the models waits. Every call that reads or changes the models
+ * (emm_runner_model, _retire, _add, _costs, _run_bounded, _free) first
+ * waits for the queue to empty, so what it sees is every batch run. With
+ * one thread, or when no thread can be started, nothing changes.
+ * EMM_ERR_NOMEM when memory runs out (the runner is as before). */
+emm_status emm_runner_pipeline(emm_runner *r, emm_error *err);
+
+/* Waits until the models have run every batch queued (nothing without a
+ * pipeline): what the models' hooks wrote as they ran (emm_model_stalls'
+ * counts) is complete after it. NULL is allowed. */
+void emm_runner_sync(emm_runner *r);
+
 /* Frees the runner and its models; NULL is allowed. */
 void emm_runner_free(emm_runner *r);
 
