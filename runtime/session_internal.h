@@ -109,10 +109,10 @@ typedef struct late_array {
  * beside the run. */
 #define SESSION_PROBE_LAG 262144
 /* A phase's pattern check synthesises its long run at most this many probe
- * lengths (of element accesses) long, a quarter of the window's at the
+ * lengths (of element accesses) long, an eighth of the window's at the
  * default window: the phase's candidate is a proposal that its own model
  * then measures from the detection on, not the answer. */
-#define SESSION_PHASE_SYNTH_PROBES 4
+#define SESSION_PHASE_SYNTH_PROBES 2
 
 typedef struct program_phase {
     uint64_t start;       /* accesses simulated before its first probe */
