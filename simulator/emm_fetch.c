@@ -56,6 +56,7 @@ enum { CELL_PRESENT = 1u, CELL_PREFETCHED = 2u, CELL_USELESS = 4u };
  * page; the frames are kept least-recently-used. */
 typedef struct pager {
     uint64_t page;                  /* bytes per page */
+    uint32_t page_shift;            /* log2(page) when page is a power of two, else 0 */
     uint32_t frames, used;
     uint64_t tri_off, vert_off, cell_off, cell_entry;
     uint64_t node_off;              /* a tree's nodes, 16 bytes each */
@@ -212,15 +213,21 @@ static inline void charge(fetch_model *m, emm_bucket b, uint64_t cycles)
     m->now += cycles;
 }
 
-static void stall_until(fetch_model *m, uint64_t t)
+static void __attribute__((noinline)) stall(fetch_model *m, uint64_t t)
 {
-    if (t > m->now) {
-        if (m->observed && m->obs.stall)
-            m->obs.stall(m->obs_ctx, m->now, t - m->now);
-        if (m->stall_fn)
-            m->stall_fn(m->stall_ctx, m->rec, t - m->now);
-        charge(m, EMM_BUCKET_DMA_STALL, t - m->now);
-    }
+    if (m->observed && m->obs.stall)
+        m->obs.stall(m->obs_ctx, m->now, t - m->now);
+    if (m->stall_fn)
+        m->stall_fn(m->stall_ctx, m->rec, t - m->now);
+    charge(m, EMM_BUCKET_DMA_STALL, t - m->now);
+}
+
+/* The core waits for time t, if it is still to come (on every record: the
+ * test inline, the wait not). */
+static inline void stall_until(fetch_model *m, uint64_t t)
+{
+    if (t > m->now)
+        stall(m, t);
 }
 
 /* The runtime's bookkeeping, then the core programs the engine for `what`
@@ -264,20 +271,12 @@ static void frame_push_front(pager *g, uint32_t f)
     g->head = f;
 }
 
-/* The table entry at byte `off` of the tables: a resident page is a local
- * access to it; a missing one is brought in by a DMA the core waits for,
- * into the least recently used frame. */
-static void touch_table(fetch_model *m, uint64_t off)
+/* A page of the tables not in a frame: brought in by a DMA the core waits
+ * for, into the least recently used frame. */
+static void __attribute__((noinline)) page_in(fetch_model *m, uint32_t p)
 {
     pager *g = &m->pg;
-    uint32_t p = (uint32_t)(off / g->page), f = g->page_frame[p];
-    if (f != NONE) {
-        if (g->head != f) {
-            frame_unlink(g, f);
-            frame_push_front(g, f);
-        }
-        return;
-    }
+    uint32_t f;
     if (g->used < g->frames) {
         f = g->used++;
     } else {
@@ -291,6 +290,23 @@ static void touch_table(fetch_model *m, uint64_t off)
     stall_until(m, start_dma(m, g->page, EMM_TRANSFER_TABLE_PAGE, p));
     g->fetches++;
     g->bytes += g->page;
+}
+
+/* The table entry at byte `off` of the tables: a resident page is a local
+ * access to it, and its frame becomes the most recently used; a missing one
+ * is paged in. (The page by a shift when its size is a power of two: a
+ * division on every look-up is dear.) */
+static inline void touch_table(fetch_model *m, uint64_t off)
+{
+    pager *g = &m->pg;
+    uint32_t p = (uint32_t)(g->page_shift ? off >> g->page_shift : off / g->page);
+    uint32_t f = g->page_frame[p];
+    if (f == NONE) {
+        page_in(m, p);
+    } else if (g->head != f) {
+        frame_unlink(g, f);
+        frame_push_front(g, f);
+    }
 }
 
 /* The descent to cell c's leaf reads the tree's nodes on its path, which
@@ -713,6 +729,9 @@ static emm_status plan_local_store(fetch_model *m, const emm_machine_params *p,
     if (tables > budget || (largest + two <= p->local_bytes && tables > p->local_bytes - largest)) {
         m->paged = true;
         m->pg.page = p->emm_lookup_page;
+        if ((m->pg.page & (m->pg.page - 1)) == 0)
+            while ((1ull << m->pg.page_shift) < m->pg.page)
+                m->pg.page_shift++;
         /* (A cell that leaves no two frames does not fit anyway: its
          * error then reads against the budget's frames.) */
         uint64_t room = largest + two <= p->local_bytes ? p->local_bytes - largest : budget;
