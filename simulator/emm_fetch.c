@@ -54,6 +54,21 @@ enum { CELL_PRESENT = 1u, CELL_PREFETCHED = 2u, CELL_USELESS = 4u };
  * cell), then the rest (quadtree nodes); for the indexed variant, the
  * per-cell table alone (EMM_INDEXED_CELL_BYTES a cell). A frame holds one
  * page; the frames are kept least-recently-used. */
+/* A model's state of one cell, everything the record loop, a prefetch and
+ * an eviction read of it in one 32-byte slot (one cache line, never two):
+ * the layout's cells are large and cold, and separate arrays cost a miss
+ * each. */
+typedef struct cell_state {
+    uint64_t ready;       /* present cells: when their transfer completes */
+    uint64_t bytes;       /* the cell's (the layout's emm_layout_cell.bytes) */
+    uint32_t prev, next;  /* LRU list of present cells, most recent at head */
+    uint32_t find;        /* emm.lookup + emm.quadtree_level x the leaf's depth: the
+                             look-up's cost (at most 25 M: fits) */
+    uint8_t flags;        /* CELL_* */
+    uint8_t empty;        /* the cell holds no triangle */
+} cell_state;
+_Static_assert(sizeof(cell_state) == 32, "a cell's state is one aligned 32-byte slot");
+
 typedef struct pager {
     uint64_t page;                  /* bytes per page */
     uint32_t page_shift;            /* log2(page) when page is a power of two, else 0 */
@@ -88,9 +103,7 @@ struct fetch_model {
     const uint32_t *vcopy_start;
     const emm_layout_index *vcopy;
     const emm_layout_cell *cells;
-    uint64_t *find;           /* per cell: emm.lookup + emm.quadtree_level x its depth (the
-                                 look-up's cost, beside the record loop's other state: the
-                                 shared cells are large and cold) */
+    cell_state *cell;         /* per cell: the model's state of it */
 
     /* Costs, from the machine. */
     uint64_t residency, issue_instr, local_cycles;
@@ -107,13 +120,10 @@ struct fetch_model {
     /* The run. */
     emm_dma dma;
     uint64_t cycles[EMM_BUCKET_COUNT];
-    uint64_t *ready;          /* present cells: when their transfer completes */
     /* Not beside cycles: a charge then adds to both in one 16-byte load and
      * store, which cannot take the 8-byte store just made to either (a
      * store-forwarding stall on every record). */
     uint64_t now;
-    uint32_t *prev, *next;    /* LRU list of present cells, most recent at head */
-    uint8_t *flags;
     uint64_t *cell_dma;       /* bytes DMA moved per cell (emm_model_cells) */
     uint32_t head, tail;
     uint64_t used;            /* bytes of present cells (resident or in flight) */
@@ -147,23 +157,23 @@ typedef struct fetch_model fetch_model;
 
 static void lru_unlink(fetch_model *m, uint32_t c)
 {
-    uint32_t p = m->prev[c], n = m->next[c];
+    uint32_t p = m->cell[c].prev, n = m->cell[c].next;
     if (p != NONE)
-        m->next[p] = n;
+        m->cell[p].next = n;
     else
         m->head = n;
     if (n != NONE)
-        m->prev[n] = p;
+        m->cell[n].prev = p;
     else
         m->tail = p;
 }
 
 static void lru_push_front(fetch_model *m, uint32_t c)
 {
-    m->prev[c] = NONE;
-    m->next[c] = m->head;
+    m->cell[c].prev = NONE;
+    m->cell[c].next = m->head;
     if (m->head != NONE)
-        m->prev[m->head] = c;
+        m->cell[m->head].prev = c;
     else
         m->tail = c;
     m->head = c;
@@ -171,13 +181,13 @@ static void lru_push_front(fetch_model *m, uint32_t c)
 
 static void evict(fetch_model *m, uint32_t c)
 {
-    assert(m->ready[c] <= m->now); /* a cell in flight is never evicted */
+    assert(m->cell[c].ready <= m->now); /* a cell in flight is never evicted */
     if (m->hook)
-        m->hook(m->hook_ctx, c, m->now, m->ready[c]);
+        m->hook(m->hook_ctx, c, m->now, m->cell[c].ready);
     lru_unlink(m, c);
-    m->unused_prefetches += (m->flags[c] & CELL_PREFETCHED) != 0;
-    m->flags[c] = m->flags[c] & CELL_PREFETCHED ? CELL_USELESS : 0;
-    m->used -= m->cells[c].bytes;
+    m->unused_prefetches += (m->cell[c].flags & CELL_PREFETCHED) != 0;
+    m->cell[c].flags = m->cell[c].flags & CELL_PREFETCHED ? CELL_USELESS : 0;
+    m->used -= m->cell[c].bytes;
     m->present--;
     m->evictions++;
 }
@@ -191,14 +201,14 @@ static int make_room(fetch_model *m, uint64_t bytes, uint32_t keep)
     if (m->used + bytes <= m->budget)
         return 1;
     need = m->used + bytes - m->budget;
-    for (uint32_t c = m->tail; c != NONE && freeable < need; c = m->prev[c])
-        if (c != keep && m->ready[c] <= m->now)
-            freeable += m->cells[c].bytes;
+    for (uint32_t c = m->tail; c != NONE && freeable < need; c = m->cell[c].prev)
+        if (c != keep && m->cell[c].ready <= m->now)
+            freeable += m->cell[c].bytes;
     if (freeable < need)
         return 0;
     for (uint32_t c = m->tail; m->used + bytes > m->budget;) {
-        uint32_t p = m->prev[c];
-        if (c != keep && m->ready[c] <= m->now)
+        uint32_t p = m->cell[c].prev;
+        if (c != keep && m->cell[c].ready <= m->now)
             evict(m, c);
         c = p;
     }
@@ -328,7 +338,7 @@ static void touch_path(fetch_model *m, uint32_t c)
  * tables, the pages those entries live in. */
 static void lookup(fetch_model *m, int kind, uint64_t e, uint32_t c)
 {
-    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->find[c] + m->residency);
+    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->cell[c].find + m->residency);
     m->lookups++;
     if (m->indexed) {
         /* The renumbered id against the previous access's cell, one
@@ -352,8 +362,8 @@ static void lookup(fetch_model *m, int kind, uint64_t e, uint32_t c)
  * from now on and most recently used. */
 static void issue(fetch_model *m, uint32_t c, emm_transfer_kind kind)
 {
-    uint64_t bytes = m->cells[c].bytes;
-    m->ready[c] = start_dma(m, bytes, kind, c);
+    uint64_t bytes = m->cell[c].bytes;
+    m->cell[c].ready = start_dma(m, bytes, kind, c);
     if (m->cell_dma[c]) {
         m->refetches++;
         m->refetch_bytes += bytes;
@@ -370,18 +380,18 @@ static void issue(fetch_model *m, uint32_t c, emm_transfer_kind kind)
  * construction), so this ends. */
 static void demand_fetch(fetch_model *m, uint32_t c)
 {
-    while (!make_room(m, m->cells[c].bytes, NONE)) {
+    while (!make_room(m, m->cell[c].bytes, NONE)) {
         uint64_t first = UINT64_MAX;
-        for (uint32_t x = m->head; x != NONE; x = m->next[x])
-            if (m->ready[x] > m->now && m->ready[x] < first)
-                first = m->ready[x];
+        for (uint32_t x = m->head; x != NONE; x = m->cell[x].next)
+            if (m->cell[x].ready > m->now && m->cell[x].ready < first)
+                first = m->cell[x].ready;
         assert(first != UINT64_MAX);
         stall_until(m, first);
     }
     issue(m, c, EMM_TRANSFER_DEMAND);
-    m->flags[c] = CELL_PRESENT;
+    m->cell[c].flags = CELL_PRESENT;
     m->demand_fetches++;
-    m->demand_bytes += m->cells[c].bytes;
+    m->demand_bytes += m->cell[c].bytes;
 }
 
 /* A cell the scheme expects the program to need soon (`entered` is the cell
@@ -396,29 +406,29 @@ static void demand_fetch(fetch_model *m, uint32_t c)
 void emm_fetcher_prefetch(fetch_model *m, uint32_t c, uint32_t entered)
 {
     m->prefetch_checks++;
-    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->find[c]);
+    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->cell[c].find);
     if (m->paged) {
         if (!m->indexed)
             touch_path(m, c);
         touch_table(m, m->pg.cell_off + m->pg.cell_entry * (uint64_t)c);
     }
-    if (m->cells[c].ntri == 0)
+    if (m->cell[c].empty)
         return;
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->residency);
-    if (m->flags[c] & CELL_PRESENT)
+    if (m->cell[c].flags & CELL_PRESENT)
         return;
-    if ((m->flags[c] & CELL_USELESS) && m->filter) {
+    if ((m->cell[c].flags & CELL_USELESS) && m->filter) {
         m->filtered_prefetches++;
         return;
     }
-    if (!make_room(m, m->cells[c].bytes, entered)) {
+    if (!make_room(m, m->cell[c].bytes, entered)) {
         m->dropped_prefetches++;
         return;
     }
     issue(m, c, EMM_TRANSFER_PREFETCH);
-    m->flags[c] = CELL_PRESENT | CELL_PREFETCHED;
+    m->cell[c].flags = CELL_PRESENT | CELL_PREFETCHED;
     m->prefetches++;
-    m->prefetch_bytes += m->cells[c].bytes;
+    m->prefetch_bytes += m->cell[c].bytes;
 }
 
 const emm_layout *emm_fetcher_layout(const emm_fetcher *f)
@@ -517,18 +527,18 @@ static void access_one(fetch_model *m, const emm_trace_record *r)
         m->cur = c;
         if (m->observed && m->obs.enter)
             m->obs.enter(m->obs_ctx, m->now, c);
-        if (!(m->flags[c] & CELL_PRESENT))
+        if (!(m->cell[c].flags & CELL_PRESENT))
             demand_fetch(m, c);
-        else if (m->flags[c] & CELL_PREFETCHED) {
+        else if (m->cell[c].flags & CELL_PREFETCHED) {
             m->useful_prefetches++;
-            m->flags[c] &= (uint8_t)~CELL_PREFETCHED;
+            m->cell[c].flags &= (uint8_t)~CELL_PREFETCHED;
         }
         if (m->scheme->enter)
             m->scheme->enter(m, m->scheme_state, from, c);
-    } else if (!(m->flags[c] & CELL_PRESENT)) {
+    } else if (!(m->cell[c].flags & CELL_PRESENT)) {
         demand_fetch(m, c); /* only after a reset of the residency by hand */
     }
-    stall_until(m, m->ready[c]);
+    stall_until(m, m->cell[c].ready);
     if (m->head != c) {
         lru_unlink(m, c);
         lru_push_front(m, c);
@@ -574,7 +584,8 @@ static void fetch_reset(emm_model *model)
     emm_dma_reset(&m->dma);
     m->now = 0;
     memset(m->cycles, 0, sizeof m->cycles);
-    memset(m->flags, 0, m->ncells);
+    for (uint32_t c = 0; c < m->ncells; c++)
+        m->cell[c].flags = 0;
     memset(m->cell_dma, 0, m->ncells * sizeof *m->cell_dma);
     m->head = m->tail = NONE;
     m->used = 0;
@@ -673,12 +684,8 @@ static void fetch_destroy(emm_model *model)
     emm_model_share_unref(m->share);
     emm_addr_map_free(&m->map);
     free(m->array_kind);
-    free(m->ready);
-    free(m->prev);
-    free(m->next);
-    free(m->flags);
+    free(m->cell);
     free(m->cell_dma);
-    free(m->find);
     free(m->scheme_state);
     free(m->pg.page_frame);
     free(m->pg.path_start);
@@ -882,13 +889,9 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
     if (m->paged && (st = alloc_pager(m, name, err)) != EMM_OK)
         goto fail;
     uint32_t nc = m->ncells;
-    m->ready = calloc(nc, sizeof *m->ready);
-    m->prev = malloc(nc * sizeof *m->prev);
-    m->next = malloc(nc * sizeof *m->next);
-    m->flags = calloc(nc, 1);
+    m->cell = aligned_alloc(sizeof *m->cell, (nc ? nc : 1) * sizeof *m->cell);
     m->cell_dma = calloc(nc, sizeof *m->cell_dma);
-    m->find = malloc(nc * sizeof *m->find);
-    if (!m->ready || !m->prev || !m->next || !m->flags || !m->cell_dma || !m->find) {
+    if (!m->cell || !m->cell_dma) {
         st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for %u cells", name, nc);
         goto fail;
     }
@@ -896,9 +899,14 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
     /* The indexed variant finds a cell from the id, not by descending the
      * tree: its steps are the binary search's, and only outside the cell of
      * the previous access (lookup()). */
-    for (uint32_t c = 0; c < nc; c++)
-        m->find[c] =
-            p->emm_lookup + (m->indexed ? 0 : p->emm_quadtree_level * m->cells[c].depth);
+    for (uint32_t c = 0; c < nc; c++) {
+        cell_state *x = &m->cell[c];
+        memset(x, 0, sizeof *x);
+        x->bytes = m->cells[c].bytes;
+        x->find = (uint32_t)(p->emm_lookup +
+                             (m->indexed ? 0 : p->emm_quadtree_level * m->cells[c].depth));
+        x->empty = m->cells[c].ntri == 0;
+    }
     uint32_t steps = 0;
     while (steps < 32 && (1ull << steps) < nc)
         steps++;
