@@ -76,7 +76,9 @@ typedef struct pager {
     uint64_t tri_off, vert_off, cell_off, cell_entry;
     uint64_t node_off;              /* a tree's nodes, 16 bytes each */
     uint32_t *path_start;           /* ncells + 1: each cell's descent in path */
-    uint32_t *path;                 /* the nodes each descent reads, root first */
+    uint32_t *path;                 /* the pages of the nodes each descent reads, root
+                                       first, a page that the node before was on left out
+                                       (touching it again changes nothing) */
     uint32_t npages;
     uint32_t *page_frame;           /* npages: the frame holding the page, or NONE */
     uint32_t *frame_page;           /* frames */
@@ -306,10 +308,9 @@ static void __attribute__((noinline)) page_in(fetch_model *m, uint32_t p)
  * access to it, and its frame becomes the most recently used; a missing one
  * is paged in. (The page by a shift when its size is a power of two: a
  * division on every look-up is dear.) */
-static inline void touch_table(fetch_model *m, uint64_t off)
+static inline void touch_page(fetch_model *m, uint32_t p)
 {
     pager *g = &m->pg;
-    uint32_t p = (uint32_t)(g->page_shift ? off >> g->page_shift : off / g->page);
     uint32_t f = g->page_frame[p];
     if (f == NONE) {
         page_in(m, p);
@@ -317,6 +318,12 @@ static inline void touch_table(fetch_model *m, uint64_t off)
         frame_unlink(g, f);
         frame_push_front(g, f);
     }
+}
+
+static inline void touch_table(fetch_model *m, uint64_t off)
+{
+    const pager *g = &m->pg;
+    touch_page(m, (uint32_t)(g->page_shift ? off >> g->page_shift : off / g->page));
 }
 
 /* The descent to cell c's leaf reads the tree's nodes on its path, which
@@ -328,7 +335,7 @@ static void touch_path(fetch_model *m, uint32_t c)
     if (!g->path)
         return;
     for (uint32_t k = g->path_start[c]; k < g->path_start[c + 1]; k++)
-        touch_table(m, g->node_off + 16 * (uint64_t)g->path[k]);
+        touch_page(m, g->path[k]);
 }
 
 /* A look-up of element `e` of an array of `kind` in cell c (the id table
@@ -786,8 +793,21 @@ static emm_status alloc_pager(fetch_model *m, const char *name, emm_error *err)
         g->path = malloc((total ? total : 1) * sizeof *g->path);
         if (!g->path)
             return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the paged tables", name);
-        for (uint32_t c = 0; c < l->ncells; c++)
-            l->ops->path_nodes(l, c, g->path + g->path_start[c]);
+        /* Each descent's nodes, as pages; in place, as leaving pages out
+         * only shortens the list. */
+        uint32_t w = 0;
+        for (uint32_t c = 0; c < l->ncells; c++) {
+            uint32_t k = g->path_start[c], end = g->path_start[c + 1];
+            l->ops->path_nodes(l, c, g->path + k);
+            g->path_start[c] = w;
+            for (uint32_t last = NONE; k < end; k++) {
+                uint64_t off = g->node_off + 16 * (uint64_t)g->path[k];
+                uint32_t page = (uint32_t)(off / g->page);
+                if (page != last)
+                    g->path[w++] = last = page;
+            }
+        }
+        g->path_start[l->ncells] = w;
     }
     uint64_t npages = (m->lookup_bytes + g->page - 1) / g->page;
     if (npages > UINT32_MAX - 1)
