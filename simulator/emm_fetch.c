@@ -131,7 +131,8 @@ struct fetch_model {
     uint64_t used;            /* bytes of present cells (resident or in flight) */
     uint32_t cur;             /* the cell of the previous access */
     uint32_t last_tri;        /* the cell of the latest triangle request */
-    int64_t last_tri_id;      /* that triangle, or -1 */
+    uint64_t last_tv[3];      /* that triangle's vertex ids (as the record loop compares
+                                 them with a vertex's), or UINT64_MAX: none */
     bool any;                 /* a record was seen */
     uint32_t last_array;      /* the previous record's element */
     uint64_t last_element;
@@ -467,14 +468,14 @@ static inline uint32_t vertex_cell(const fetch_model *m, uint64_t v, bool *point
     /* First the triangle just requested, which is in the cache: a vertex of
      * a triangle with a layout index has a copy in that triangle's cell
      * (layout.c, fill_vertices), so its copies need not be looked at — the
-     * index table is the cold load of the record loop. */
-    if (m->last_tri_id >= 0) {
-        const int32_t *t = m->tri + 3 * m->last_tri_id;
-        if ((uint64_t)t[0] == v || (uint64_t)t[1] == v || (uint64_t)t[2] == v) {
-            assert(m->vcopy_start[v] != m->vcopy_start[v + 1]);
-            *pointer = true;
-            return m->last_tri;
-        }
+     * index table is the cold load of the record loop. The triangle's
+     * vertex ids were copied when it was requested, and tested at once:
+     * which of them it is does not matter and would be a branch
+     * mispredicted every other time. */
+    if ((m->last_tv[0] == v) | (m->last_tv[1] == v) | (m->last_tv[2] == v)) {
+        assert(m->vcopy_start[v] != m->vcopy_start[v + 1]);
+        *pointer = true;
+        return m->last_tri;
     }
     uint32_t lo = m->vcopy_start[v], hi = m->vcopy_start[v + 1];
     if (lo == hi)
@@ -514,7 +515,10 @@ static void access_one(fetch_model *m, const emm_trace_record *r)
     if (kind == ARR_TRIANGLES && r->element < m->nt) {
         c = m->tri_cell[r->element];
         m->last_tri = c;
-        m->last_tri_id = (int64_t)r->element;
+        const int32_t *t = m->tri + 3 * r->element;
+        m->last_tv[0] = (uint64_t)t[0];
+        m->last_tv[1] = (uint64_t)t[1];
+        m->last_tv[2] = (uint64_t)t[2];
     } else if (kind == ARR_VERTICES) {
         c = vertex_cell(m, r->element, &pointer);
     }
@@ -598,7 +602,7 @@ static void fetch_reset(emm_model *model)
     m->used = 0;
     m->present = 0;
     m->cur = m->last_tri = m->last_cell = NONE;
-    m->last_tri_id = -1;
+    m->last_tv[0] = m->last_tv[1] = m->last_tv[2] = UINT64_MAX;
     m->any = false;
     if (m->scheme->state_bytes)
         memset(m->scheme_state, 0, m->scheme->state_bytes);
