@@ -129,6 +129,8 @@ struct fetch_model {
     uint64_t *cell_dma;       /* bytes DMA moved per cell (emm_model_cells) */
     uint32_t head, tail;
     uint64_t used;            /* bytes of present cells (resident or in flight) */
+    uint64_t last_ready;      /* the latest arrival of a cell's transfer: none in flight
+                                 once the clock has passed it */
     uint32_t cur;             /* the cell of the previous access */
     uint32_t last_tri;        /* the cell of the latest triangle request */
     uint64_t last_tv[3];      /* that triangle's vertex ids (as the record loop compares
@@ -204,9 +206,16 @@ static int make_room(fetch_model *m, uint64_t bytes, uint32_t keep)
     if (m->used + bytes <= m->budget)
         return 1;
     need = m->used + bytes - m->budget;
-    for (uint32_t c = m->tail; c != NONE && freeable < need; c = m->cell[c].prev)
-        if (c != keep && m->cell[c].ready <= m->now)
-            freeable += m->cell[c].bytes;
+    if (m->last_ready <= m->now) {
+        /* No cell in flight: every present cell but `keep` may go. */
+        freeable = m->used;
+        if (keep != NONE && (m->cell[keep].flags & CELL_PRESENT))
+            freeable -= m->cell[keep].bytes;
+    } else {
+        for (uint32_t c = m->tail; c != NONE && freeable < need; c = m->cell[c].prev)
+            if (c != keep && m->cell[c].ready <= m->now)
+                freeable += m->cell[c].bytes;
+    }
     if (freeable < need)
         return 0;
     for (uint32_t c = m->tail; m->used + bytes > m->budget;) {
@@ -371,7 +380,10 @@ static void lookup(fetch_model *m, int kind, uint64_t e, uint32_t c)
 static void issue(fetch_model *m, uint32_t c, emm_transfer_kind kind)
 {
     uint64_t bytes = m->cell[c].bytes;
-    m->cell[c].ready = start_dma(m, bytes, kind, c);
+    uint64_t ready = start_dma(m, bytes, kind, c);
+    m->cell[c].ready = ready;
+    if (ready > m->last_ready)
+        m->last_ready = ready;
     if (m->cell_dma[c]) {
         m->refetches++;
         m->refetch_bytes += bytes;
@@ -498,17 +510,9 @@ static void access_one(fetch_model *m, const emm_trace_record *r)
 {
     m->rec = r;
     charge(m, EMM_BUCKET_COMPUTE, m->compute_per_access + (uint64_t)r->work * m->compute_per_work);
-    bool same = m->any && r->array == m->last_array && r->element == m->last_element;
     m->any = true;
     m->last_array = r->array;
     m->last_element = r->element;
-    /* A further load of the record just requested: the runtime has handed
-     * the program its local copy, so this is a local access and no more. */
-    if (same && m->last_cell != NONE) {
-        m->same_record++;
-        charge(m, EMM_BUCKET_LOCAL_ACCESS, m->local_cycles);
-        return;
-    }
     int kind = m->array_kind[r->array];
     bool pointer = false;
     uint32_t c = NONE;
@@ -560,31 +564,43 @@ static void access_one(fetch_model *m, const emm_trace_record *r)
     charge(m, EMM_BUCKET_LOCAL_ACCESS, m->local_cycles);
 }
 
-/* Record by record — but the further loads of a record just requested
- * (the most common record: a vertex's y and z after its x) are charged as
- * one run: each is the compute of an access and one local access, which
- * start no transfer and wait for none, so the clock and every bucket come
- * out as they do one by one, without a round trip through the model for
- * each. */
-static void fetch_run(emm_model *model, const emm_trace_record *recs, size_t n)
+/* The further loads of the record just requested from recs[i] on, up to
+ * n: the runtime has handed the program its local copy, so each is the
+ * compute of an access and a local access and no more — charged as one run,
+ * which starts no transfer and waits for none, so the clock and every
+ * bucket come out as they do one by one. Returns where the run ends. */
+static inline size_t same_run(fetch_model *m, const emm_trace_record *recs, size_t i, size_t n)
 {
-    fetch_model *m = (fetch_model *)model;
-    size_t i = 0;
-    while (i < n) {
-        access_one(m, &recs[i++]);
-        if (m->last_cell == NONE)
-            continue;
-        uint64_t work = 0;
-        size_t j = i;
-        while (j < n && recs[j].element == m->last_element && recs[j].array == m->last_array)
-            work += recs[j++].work;
-        if (j == i)
-            continue;
+    const uint64_t element = m->last_element;
+    const uint32_t array = m->last_array;
+    uint64_t work = 0;
+    size_t j = i;
+    while (j < n && recs[j].element == element && recs[j].array == array)
+        work += recs[j++].work;
+    if (j > i) {
         uint64_t k = j - i;
         m->same_record += k;
         charge(m, EMM_BUCKET_COMPUTE, k * m->compute_per_access + work * m->compute_per_work);
         charge(m, EMM_BUCKET_LOCAL_ACCESS, k * m->local_cycles);
-        i = j;
+    }
+    return j;
+}
+
+/* Record by record, each record's further loads (the most common record: a
+ * vertex's y and z after its x) as one run. Only the first records of a
+ * call can continue the previous call's record; within a call, a record
+ * after a run is another. A record served by direct reads has no local
+ * copy: its further loads are records of their own. */
+static void fetch_run(emm_model *model, const emm_trace_record *recs, size_t n)
+{
+    fetch_model *m = (fetch_model *)model;
+    size_t i = 0;
+    if (m->any && m->last_cell != NONE)
+        i = same_run(m, recs, 0, n);
+    while (i < n) {
+        access_one(m, &recs[i++]);
+        if (m->last_cell != NONE)
+            i = same_run(m, recs, i, n);
     }
     m->accesses += n;
 }
@@ -600,6 +616,7 @@ static void fetch_reset(emm_model *model)
     memset(m->cell_dma, 0, m->ncells * sizeof *m->cell_dma);
     m->head = m->tail = NONE;
     m->used = 0;
+    m->last_ready = 0;
     m->present = 0;
     m->cur = m->last_tri = m->last_cell = NONE;
     m->last_tv[0] = m->last_tv[1] = m->last_tv[2] = UINT64_MAX;
