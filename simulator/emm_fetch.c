@@ -66,6 +66,8 @@ typedef struct cell_state {
                              look-up's cost (at most 25 M: fits) */
     uint8_t flags;        /* CELL_* */
     uint8_t empty;        /* the cell holds no triangle */
+    uint8_t fetched;      /* cell_dma[c] > 0, where the refetch count reads it: the
+                             counters are cold */
 } cell_state;
 _Static_assert(sizeof(cell_state) == 32, "a cell's state is one aligned 32-byte slot");
 
@@ -384,10 +386,11 @@ static void issue(fetch_model *m, uint32_t c, emm_transfer_kind kind)
     m->cell[c].ready = ready;
     if (ready > m->last_ready)
         m->last_ready = ready;
-    if (m->cell_dma[c]) {
+    if (m->cell[c].fetched) {
         m->refetches++;
         m->refetch_bytes += bytes;
     }
+    m->cell[c].fetched |= bytes != 0;
     m->cell_dma[c] += bytes;
     m->used += bytes;
     m->present++;
@@ -612,7 +615,7 @@ static void fetch_reset(emm_model *model)
     m->now = 0;
     memset(m->cycles, 0, sizeof m->cycles);
     for (uint32_t c = 0; c < m->ncells; c++)
-        m->cell[c].flags = 0;
+        m->cell[c].flags = m->cell[c].fetched = 0;
     memset(m->cell_dma, 0, m->ncells * sizeof *m->cell_dma);
     m->head = m->tail = NONE;
     m->used = 0;
