@@ -804,34 +804,33 @@ static emm_status alloc_pager(fetch_model *m, const char *name, emm_error *err)
     g->cell_entry = m->indexed ? EMM_INDEXED_CELL_BYTES : 8;
     g->node_off = g->cell_off + 8 * (uint64_t)l->ncells;
     if (!m->indexed && l->ops->path_nodes) {
+        /* Each descent's nodes, as pages, a page the node before was on
+         * left out: one descent at a time into a list that grows. */
         uint32_t nodes[EMM_LAYOUT_MAX_DEPTH + 1];
-        size_t total = 0;
+        size_t cap = (size_t)l->ncells * 4 + EMM_LAYOUT_MAX_DEPTH + 1, w = 0;
         g->path_start = malloc(((size_t)l->ncells + 1) * sizeof *g->path_start);
-        if (!g->path_start)
+        g->path = malloc(cap * sizeof *g->path);
+        if (!g->path_start || !g->path)
             return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the paged tables", name);
         for (uint32_t c = 0; c < l->ncells; c++) {
-            g->path_start[c] = (uint32_t)total;
-            total += l->ops->path_nodes(l, c, nodes);
-        }
-        g->path_start[l->ncells] = (uint32_t)total;
-        g->path = malloc((total ? total : 1) * sizeof *g->path);
-        if (!g->path)
-            return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the paged tables", name);
-        /* Each descent's nodes, as pages; in place, as leaving pages out
-         * only shortens the list. */
-        uint32_t w = 0;
-        for (uint32_t c = 0; c < l->ncells; c++) {
-            uint32_t k = g->path_start[c], end = g->path_start[c + 1];
-            l->ops->path_nodes(l, c, g->path + k);
-            g->path_start[c] = w;
-            for (uint32_t last = NONE; k < end; k++) {
-                uint64_t off = g->node_off + 16 * (uint64_t)g->path[k];
+            uint32_t k = l->ops->path_nodes(l, c, nodes);
+            if (w + k > cap) {
+                uint32_t *more = realloc(g->path, 2 * cap * sizeof *g->path);
+                if (!more)
+                    return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the paged tables",
+                                    name);
+                g->path = more;
+                cap *= 2;
+            }
+            g->path_start[c] = (uint32_t)w;
+            for (uint32_t i = 0, last = NONE; i < k; i++) {
+                uint64_t off = g->node_off + 16 * (uint64_t)nodes[i];
                 uint32_t page = (uint32_t)(off / g->page);
                 if (page != last)
                     g->path[w++] = last = page;
             }
         }
-        g->path_start[l->ncells] = w;
+        g->path_start[l->ncells] = (uint32_t)w;
     }
     uint64_t npages = (m->lookup_bytes + g->page - 1) / g->page;
     if (npages > UINT32_MAX - 1)
