@@ -54,6 +54,9 @@ enum { CELL_PRESENT = 1u, CELL_PREFETCHED = 2u, CELL_USELESS = 4u };
  * cell), then the rest (quadtree nodes); for the indexed variant, the
  * per-cell table alone (EMM_INDEXED_CELL_BYTES a cell). A frame holds one
  * page; the frames are kept least-recently-used. */
+/* Transfers noted before the per-cell counters are brought up to date. */
+#define DMA_LOG 256u
+
 /* A model's state of one cell, everything the record loop, a prefetch and
  * an eviction read of it in one 32-byte slot (one cache line, never two):
  * the layout's cells are large and cold, and separate arrays cost a miss
@@ -128,7 +131,11 @@ struct fetch_model {
      * store, which cannot take the 8-byte store just made to either (a
      * store-forwarding stall on every record). */
     uint64_t now;
-    uint64_t *cell_dma;       /* bytes DMA moved per cell (emm_model_cells) */
+    uint64_t *cell_dma;       /* bytes DMA moved per cell (emm_model_cells), but for */
+    uint32_t dma_log[DMA_LOG]; /* the cells fetched since it was last brought up to date:
+                                  added in one go, their misses overlap (one at every
+                                  transfer stalled the record loop) */
+    uint32_t ndma_log;
     uint32_t head, tail;
     uint64_t used;            /* bytes of present cells (resident or in flight) */
     uint64_t last_ready;      /* the latest arrival of a cell's transfer: none in flight
@@ -377,6 +384,13 @@ static void lookup(fetch_model *m, int kind, uint64_t e, uint32_t c)
 
 /* ---- fetching ---------------------------------------------------------------- */
 
+static void __attribute__((noinline)) flush_dma_log(fetch_model *m)
+{
+    for (uint32_t i = 0; i < m->ndma_log; i++)
+        m->cell_dma[m->dma_log[i]] += m->cell[m->dma_log[i]].bytes;
+    m->ndma_log = 0;
+}
+
 /* The core programs the engine for cell c, which is present (in flight)
  * from now on and most recently used. */
 static void issue(fetch_model *m, uint32_t c, emm_transfer_kind kind)
@@ -391,7 +405,9 @@ static void issue(fetch_model *m, uint32_t c, emm_transfer_kind kind)
         m->refetch_bytes += bytes;
     }
     m->cell[c].fetched |= bytes != 0;
-    m->cell_dma[c] += bytes;
+    m->dma_log[m->ndma_log++] = c;
+    if (m->ndma_log == DMA_LOG)
+        flush_dma_log(m);
     m->used += bytes;
     m->present++;
     lru_push_front(m, c);
@@ -617,6 +633,7 @@ static void fetch_reset(emm_model *model)
     for (uint32_t c = 0; c < m->ncells; c++)
         m->cell[c].flags = m->cell[c].fetched = 0;
     memset(m->cell_dma, 0, m->ncells * sizeof *m->cell_dma);
+    m->ndma_log = 0;
     m->head = m->tail = NONE;
     m->used = 0;
     m->last_ready = 0;
@@ -1012,6 +1029,8 @@ emm_status emm_model_cells(const emm_model *model, emm_result *out, emm_error *e
         memcpy(o->hi, m->cells[c].hi, sizeof o->hi);
         o->bytes = m->cell_dma[c];
     }
+    for (uint32_t i = 0; i < m->ndma_log; i++)
+        out->cells.cell[m->dma_log[i]].bytes += m->cell[m->dma_log[i]].bytes;
     return EMM_OK;
 }
 
