@@ -54,13 +54,36 @@ enum { CELL_PRESENT = 1u, CELL_PREFETCHED = 2u, CELL_USELESS = 4u };
  * cell), then the rest (quadtree nodes); for the indexed variant, the
  * per-cell table alone (EMM_INDEXED_CELL_BYTES a cell). A frame holds one
  * page; the frames are kept least-recently-used. */
+/* Transfers noted before the per-cell counters are brought up to date. */
+#define DMA_LOG 256u
+
+/* A model's state of one cell, everything the record loop, a prefetch and
+ * an eviction read of it in one 32-byte slot (one cache line, never two):
+ * the layout's cells are large and cold, and separate arrays cost a miss
+ * each. */
+typedef struct cell_state {
+    uint64_t ready;       /* present cells: when their transfer completes */
+    uint64_t bytes;       /* the cell's (the layout's emm_layout_cell.bytes) */
+    uint32_t prev, next;  /* LRU list of present cells, most recent at head */
+    uint32_t find;        /* emm.lookup + emm.quadtree_level x the leaf's depth: the
+                             look-up's cost (at most 25 M: fits) */
+    uint8_t flags;        /* CELL_* */
+    uint8_t empty;        /* the cell holds no triangle */
+    uint8_t fetched;      /* cell_dma[c] > 0, where the refetch count reads it: the
+                             counters are cold */
+} cell_state;
+_Static_assert(sizeof(cell_state) == 32, "a cell's state is one aligned 32-byte slot");
+
 typedef struct pager {
     uint64_t page;                  /* bytes per page */
+    uint32_t page_shift;            /* log2(page) when page is a power of two, else 0 */
     uint32_t frames, used;
     uint64_t tri_off, vert_off, cell_off, cell_entry;
     uint64_t node_off;              /* a tree's nodes, 16 bytes each */
     uint32_t *path_start;           /* ncells + 1: each cell's descent in path */
-    uint32_t *path;                 /* the nodes each descent reads, root first */
+    uint32_t *path;                 /* the pages of the nodes each descent reads, root
+                                       first, a page that the node before was on left out
+                                       (touching it again changes nothing) */
     uint32_t npages;
     uint32_t *page_frame;           /* npages: the frame holding the page, or NONE */
     uint32_t *frame_page;           /* frames */
@@ -87,9 +110,7 @@ struct fetch_model {
     const uint32_t *vcopy_start;
     const emm_layout_index *vcopy;
     const emm_layout_cell *cells;
-    uint64_t *find;           /* per cell: emm.lookup + emm.quadtree_level x its depth (the
-                                 look-up's cost, beside the record loop's other state: the
-                                 shared cells are large and cold) */
+    cell_state *cell;         /* per cell: the model's state of it */
 
     /* Costs, from the machine. */
     uint64_t residency, issue_instr, local_cycles;
@@ -106,19 +127,23 @@ struct fetch_model {
     /* The run. */
     emm_dma dma;
     uint64_t cycles[EMM_BUCKET_COUNT];
-    uint64_t *ready;          /* present cells: when their transfer completes */
     /* Not beside cycles: a charge then adds to both in one 16-byte load and
      * store, which cannot take the 8-byte store just made to either (a
      * store-forwarding stall on every record). */
     uint64_t now;
-    uint32_t *prev, *next;    /* LRU list of present cells, most recent at head */
-    uint8_t *flags;
-    uint64_t *cell_dma;       /* bytes DMA moved per cell (emm_model_cells) */
+    uint64_t *cell_dma;       /* bytes DMA moved per cell (emm_model_cells), but for */
+    uint32_t dma_log[DMA_LOG]; /* the cells fetched since it was last brought up to date:
+                                  added in one go, their misses overlap (one at every
+                                  transfer stalled the record loop) */
+    uint32_t ndma_log;
     uint32_t head, tail;
     uint64_t used;            /* bytes of present cells (resident or in flight) */
+    uint64_t last_ready;      /* the latest arrival of a cell's transfer: none in flight
+                                 once the clock has passed it */
     uint32_t cur;             /* the cell of the previous access */
     uint32_t last_tri;        /* the cell of the latest triangle request */
-    int64_t last_tri_id;      /* that triangle, or -1 */
+    uint64_t last_tv[3];      /* that triangle's vertex ids (as the record loop compares
+                                 them with a vertex's), or UINT64_MAX: none */
     bool any;                 /* a record was seen */
     uint32_t last_array;      /* the previous record's element */
     uint64_t last_element;
@@ -146,23 +171,23 @@ typedef struct fetch_model fetch_model;
 
 static void lru_unlink(fetch_model *m, uint32_t c)
 {
-    uint32_t p = m->prev[c], n = m->next[c];
+    uint32_t p = m->cell[c].prev, n = m->cell[c].next;
     if (p != NONE)
-        m->next[p] = n;
+        m->cell[p].next = n;
     else
         m->head = n;
     if (n != NONE)
-        m->prev[n] = p;
+        m->cell[n].prev = p;
     else
         m->tail = p;
 }
 
 static void lru_push_front(fetch_model *m, uint32_t c)
 {
-    m->prev[c] = NONE;
-    m->next[c] = m->head;
+    m->cell[c].prev = NONE;
+    m->cell[c].next = m->head;
     if (m->head != NONE)
-        m->prev[m->head] = c;
+        m->cell[m->head].prev = c;
     else
         m->tail = c;
     m->head = c;
@@ -170,13 +195,13 @@ static void lru_push_front(fetch_model *m, uint32_t c)
 
 static void evict(fetch_model *m, uint32_t c)
 {
-    assert(m->ready[c] <= m->now); /* a cell in flight is never evicted */
+    assert(m->cell[c].ready <= m->now); /* a cell in flight is never evicted */
     if (m->hook)
-        m->hook(m->hook_ctx, c, m->now, m->ready[c]);
+        m->hook(m->hook_ctx, c, m->now, m->cell[c].ready);
     lru_unlink(m, c);
-    m->unused_prefetches += (m->flags[c] & CELL_PREFETCHED) != 0;
-    m->flags[c] = m->flags[c] & CELL_PREFETCHED ? CELL_USELESS : 0;
-    m->used -= m->cells[c].bytes;
+    m->unused_prefetches += (m->cell[c].flags & CELL_PREFETCHED) != 0;
+    m->cell[c].flags = m->cell[c].flags & CELL_PREFETCHED ? CELL_USELESS : 0;
+    m->used -= m->cell[c].bytes;
     m->present--;
     m->evictions++;
 }
@@ -190,14 +215,21 @@ static int make_room(fetch_model *m, uint64_t bytes, uint32_t keep)
     if (m->used + bytes <= m->budget)
         return 1;
     need = m->used + bytes - m->budget;
-    for (uint32_t c = m->tail; c != NONE && freeable < need; c = m->prev[c])
-        if (c != keep && m->ready[c] <= m->now)
-            freeable += m->cells[c].bytes;
+    if (m->last_ready <= m->now) {
+        /* No cell in flight: every present cell but `keep` may go. */
+        freeable = m->used;
+        if (keep != NONE && (m->cell[keep].flags & CELL_PRESENT))
+            freeable -= m->cell[keep].bytes;
+    } else {
+        for (uint32_t c = m->tail; c != NONE && freeable < need; c = m->cell[c].prev)
+            if (c != keep && m->cell[c].ready <= m->now)
+                freeable += m->cell[c].bytes;
+    }
     if (freeable < need)
         return 0;
     for (uint32_t c = m->tail; m->used + bytes > m->budget;) {
-        uint32_t p = m->prev[c];
-        if (c != keep && m->ready[c] <= m->now)
+        uint32_t p = m->cell[c].prev;
+        if (c != keep && m->cell[c].ready <= m->now)
             evict(m, c);
         c = p;
     }
@@ -212,15 +244,21 @@ static inline void charge(fetch_model *m, emm_bucket b, uint64_t cycles)
     m->now += cycles;
 }
 
-static void stall_until(fetch_model *m, uint64_t t)
+static void __attribute__((noinline)) stall(fetch_model *m, uint64_t t)
 {
-    if (t > m->now) {
-        if (m->observed && m->obs.stall)
-            m->obs.stall(m->obs_ctx, m->now, t - m->now);
-        if (m->stall_fn)
-            m->stall_fn(m->stall_ctx, m->rec, t - m->now);
-        charge(m, EMM_BUCKET_DMA_STALL, t - m->now);
-    }
+    if (m->observed && m->obs.stall)
+        m->obs.stall(m->obs_ctx, m->now, t - m->now);
+    if (m->stall_fn)
+        m->stall_fn(m->stall_ctx, m->rec, t - m->now);
+    charge(m, EMM_BUCKET_DMA_STALL, t - m->now);
+}
+
+/* The core waits for time t, if it is still to come (on every record: the
+ * test inline, the wait not). */
+static inline void stall_until(fetch_model *m, uint64_t t)
+{
+    if (t > m->now)
+        stall(m, t);
 }
 
 /* The runtime's bookkeeping, then the core programs the engine for `what`
@@ -264,20 +302,12 @@ static void frame_push_front(pager *g, uint32_t f)
     g->head = f;
 }
 
-/* The table entry at byte `off` of the tables: a resident page is a local
- * access to it; a missing one is brought in by a DMA the core waits for,
- * into the least recently used frame. */
-static void touch_table(fetch_model *m, uint64_t off)
+/* A page of the tables not in a frame: brought in by a DMA the core waits
+ * for, into the least recently used frame. */
+static void __attribute__((noinline)) page_in(fetch_model *m, uint32_t p)
 {
     pager *g = &m->pg;
-    uint32_t p = (uint32_t)(off / g->page), f = g->page_frame[p];
-    if (f != NONE) {
-        if (g->head != f) {
-            frame_unlink(g, f);
-            frame_push_front(g, f);
-        }
-        return;
-    }
+    uint32_t f;
     if (g->used < g->frames) {
         f = g->used++;
     } else {
@@ -293,6 +323,28 @@ static void touch_table(fetch_model *m, uint64_t off)
     g->bytes += g->page;
 }
 
+/* The table entry at byte `off` of the tables: a resident page is a local
+ * access to it, and its frame becomes the most recently used; a missing one
+ * is paged in. (The page by a shift when its size is a power of two: a
+ * division on every look-up is dear.) */
+static inline void touch_page(fetch_model *m, uint32_t p)
+{
+    pager *g = &m->pg;
+    uint32_t f = g->page_frame[p];
+    if (f == NONE) {
+        page_in(m, p);
+    } else if (g->head != f) {
+        frame_unlink(g, f);
+        frame_push_front(g, f);
+    }
+}
+
+static inline void touch_table(fetch_model *m, uint64_t off)
+{
+    const pager *g = &m->pg;
+    touch_page(m, (uint32_t)(g->page_shift ? off >> g->page_shift : off / g->page));
+}
+
 /* The descent to cell c's leaf reads the tree's nodes on its path, which
  * are part of the paged tables (emm_layout_lookup_bytes counts them): their
  * pages. Nothing for a layout without a tree. */
@@ -302,7 +354,7 @@ static void touch_path(fetch_model *m, uint32_t c)
     if (!g->path)
         return;
     for (uint32_t k = g->path_start[c]; k < g->path_start[c + 1]; k++)
-        touch_table(m, g->node_off + 16 * (uint64_t)g->path[k]);
+        touch_page(m, g->path[k]);
 }
 
 /* A look-up of element `e` of an array of `kind` in cell c (the id table
@@ -312,7 +364,7 @@ static void touch_path(fetch_model *m, uint32_t c)
  * tables, the pages those entries live in. */
 static void lookup(fetch_model *m, int kind, uint64_t e, uint32_t c)
 {
-    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->find[c] + m->residency);
+    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->cell[c].find + m->residency);
     m->lookups++;
     if (m->indexed) {
         /* The renumbered id against the previous access's cell, one
@@ -332,17 +384,30 @@ static void lookup(fetch_model *m, int kind, uint64_t e, uint32_t c)
 
 /* ---- fetching ---------------------------------------------------------------- */
 
+static void __attribute__((noinline)) flush_dma_log(fetch_model *m)
+{
+    for (uint32_t i = 0; i < m->ndma_log; i++)
+        m->cell_dma[m->dma_log[i]] += m->cell[m->dma_log[i]].bytes;
+    m->ndma_log = 0;
+}
+
 /* The core programs the engine for cell c, which is present (in flight)
  * from now on and most recently used. */
 static void issue(fetch_model *m, uint32_t c, emm_transfer_kind kind)
 {
-    uint64_t bytes = m->cells[c].bytes;
-    m->ready[c] = start_dma(m, bytes, kind, c);
-    if (m->cell_dma[c]) {
+    uint64_t bytes = m->cell[c].bytes;
+    uint64_t ready = start_dma(m, bytes, kind, c);
+    m->cell[c].ready = ready;
+    if (ready > m->last_ready)
+        m->last_ready = ready;
+    if (m->cell[c].fetched) {
         m->refetches++;
         m->refetch_bytes += bytes;
     }
-    m->cell_dma[c] += bytes;
+    m->cell[c].fetched |= bytes != 0;
+    m->dma_log[m->ndma_log++] = c;
+    if (m->ndma_log == DMA_LOG)
+        flush_dma_log(m);
     m->used += bytes;
     m->present++;
     lru_push_front(m, c);
@@ -354,18 +419,18 @@ static void issue(fetch_model *m, uint32_t c, emm_transfer_kind kind)
  * construction), so this ends. */
 static void demand_fetch(fetch_model *m, uint32_t c)
 {
-    while (!make_room(m, m->cells[c].bytes, NONE)) {
+    while (!make_room(m, m->cell[c].bytes, NONE)) {
         uint64_t first = UINT64_MAX;
-        for (uint32_t x = m->head; x != NONE; x = m->next[x])
-            if (m->ready[x] > m->now && m->ready[x] < first)
-                first = m->ready[x];
+        for (uint32_t x = m->head; x != NONE; x = m->cell[x].next)
+            if (m->cell[x].ready > m->now && m->cell[x].ready < first)
+                first = m->cell[x].ready;
         assert(first != UINT64_MAX);
         stall_until(m, first);
     }
     issue(m, c, EMM_TRANSFER_DEMAND);
-    m->flags[c] = CELL_PRESENT;
+    m->cell[c].flags = CELL_PRESENT;
     m->demand_fetches++;
-    m->demand_bytes += m->cells[c].bytes;
+    m->demand_bytes += m->cell[c].bytes;
 }
 
 /* A cell the scheme expects the program to need soon (`entered` is the cell
@@ -380,29 +445,29 @@ static void demand_fetch(fetch_model *m, uint32_t c)
 void emm_fetcher_prefetch(fetch_model *m, uint32_t c, uint32_t entered)
 {
     m->prefetch_checks++;
-    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->find[c]);
+    charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->cell[c].find);
     if (m->paged) {
         if (!m->indexed)
             touch_path(m, c);
         touch_table(m, m->pg.cell_off + m->pg.cell_entry * (uint64_t)c);
     }
-    if (m->cells[c].ntri == 0)
+    if (m->cell[c].empty)
         return;
     charge(m, EMM_BUCKET_EMM_INSTRUCTIONS, m->residency);
-    if (m->flags[c] & CELL_PRESENT)
+    if (m->cell[c].flags & CELL_PRESENT)
         return;
-    if ((m->flags[c] & CELL_USELESS) && m->filter) {
+    if ((m->cell[c].flags & CELL_USELESS) && m->filter) {
         m->filtered_prefetches++;
         return;
     }
-    if (!make_room(m, m->cells[c].bytes, entered)) {
+    if (!make_room(m, m->cell[c].bytes, entered)) {
         m->dropped_prefetches++;
         return;
     }
     issue(m, c, EMM_TRANSFER_PREFETCH);
-    m->flags[c] = CELL_PRESENT | CELL_PREFETCHED;
+    m->cell[c].flags = CELL_PRESENT | CELL_PREFETCHED;
     m->prefetches++;
-    m->prefetch_bytes += m->cells[c].bytes;
+    m->prefetch_bytes += m->cell[c].bytes;
 }
 
 const emm_layout *emm_fetcher_layout(const emm_fetcher *f)
@@ -434,14 +499,14 @@ static inline uint32_t vertex_cell(const fetch_model *m, uint64_t v, bool *point
     /* First the triangle just requested, which is in the cache: a vertex of
      * a triangle with a layout index has a copy in that triangle's cell
      * (layout.c, fill_vertices), so its copies need not be looked at — the
-     * index table is the cold load of the record loop. */
-    if (m->last_tri_id >= 0) {
-        const int32_t *t = m->tri + 3 * m->last_tri_id;
-        if ((uint64_t)t[0] == v || (uint64_t)t[1] == v || (uint64_t)t[2] == v) {
-            assert(m->vcopy_start[v] != m->vcopy_start[v + 1]);
-            *pointer = true;
-            return m->last_tri;
-        }
+     * index table is the cold load of the record loop. The triangle's
+     * vertex ids were copied when it was requested, and tested at once:
+     * which of them it is does not matter and would be a branch
+     * mispredicted every other time. */
+    if ((m->last_tv[0] == v) | (m->last_tv[1] == v) | (m->last_tv[2] == v)) {
+        assert(m->vcopy_start[v] != m->vcopy_start[v + 1]);
+        *pointer = true;
+        return m->last_tri;
     }
     uint32_t lo = m->vcopy_start[v], hi = m->vcopy_start[v + 1];
     if (lo == hi)
@@ -464,24 +529,19 @@ static void access_one(fetch_model *m, const emm_trace_record *r)
 {
     m->rec = r;
     charge(m, EMM_BUCKET_COMPUTE, m->compute_per_access + (uint64_t)r->work * m->compute_per_work);
-    bool same = m->any && r->array == m->last_array && r->element == m->last_element;
     m->any = true;
     m->last_array = r->array;
     m->last_element = r->element;
-    /* A further load of the record just requested: the runtime has handed
-     * the program its local copy, so this is a local access and no more. */
-    if (same && m->last_cell != NONE) {
-        m->same_record++;
-        charge(m, EMM_BUCKET_LOCAL_ACCESS, m->local_cycles);
-        return;
-    }
     int kind = m->array_kind[r->array];
     bool pointer = false;
     uint32_t c = NONE;
     if (kind == ARR_TRIANGLES && r->element < m->nt) {
         c = m->tri_cell[r->element];
         m->last_tri = c;
-        m->last_tri_id = (int64_t)r->element;
+        const int32_t *t = m->tri + 3 * r->element;
+        m->last_tv[0] = (uint64_t)t[0];
+        m->last_tv[1] = (uint64_t)t[1];
+        m->last_tv[2] = (uint64_t)t[2];
     } else if (kind == ARR_VERTICES) {
         c = vertex_cell(m, r->element, &pointer);
     }
@@ -501,18 +561,18 @@ static void access_one(fetch_model *m, const emm_trace_record *r)
         m->cur = c;
         if (m->observed && m->obs.enter)
             m->obs.enter(m->obs_ctx, m->now, c);
-        if (!(m->flags[c] & CELL_PRESENT))
+        if (!(m->cell[c].flags & CELL_PRESENT))
             demand_fetch(m, c);
-        else if (m->flags[c] & CELL_PREFETCHED) {
+        else if (m->cell[c].flags & CELL_PREFETCHED) {
             m->useful_prefetches++;
-            m->flags[c] &= (uint8_t)~CELL_PREFETCHED;
+            m->cell[c].flags &= (uint8_t)~CELL_PREFETCHED;
         }
         if (m->scheme->enter)
             m->scheme->enter(m, m->scheme_state, from, c);
-    } else if (!(m->flags[c] & CELL_PRESENT)) {
+    } else if (!(m->cell[c].flags & CELL_PRESENT)) {
         demand_fetch(m, c); /* only after a reset of the residency by hand */
     }
-    stall_until(m, m->ready[c]);
+    stall_until(m, m->cell[c].ready);
     if (m->head != c) {
         lru_unlink(m, c);
         lru_push_front(m, c);
@@ -523,31 +583,43 @@ static void access_one(fetch_model *m, const emm_trace_record *r)
     charge(m, EMM_BUCKET_LOCAL_ACCESS, m->local_cycles);
 }
 
-/* Record by record — but the further loads of a record just requested
- * (the most common record: a vertex's y and z after its x) are charged as
- * one run: each is the compute of an access and one local access, which
- * start no transfer and wait for none, so the clock and every bucket come
- * out as they do one by one, without a round trip through the model for
- * each. */
-static void fetch_run(emm_model *model, const emm_trace_record *recs, size_t n)
+/* The further loads of the record just requested from recs[i] on, up to
+ * n: the runtime has handed the program its local copy, so each is the
+ * compute of an access and a local access and no more — charged as one run,
+ * which starts no transfer and waits for none, so the clock and every
+ * bucket come out as they do one by one. Returns where the run ends. */
+static inline size_t same_run(fetch_model *m, const emm_trace_record *recs, size_t i, size_t n)
 {
-    fetch_model *m = (fetch_model *)model;
-    size_t i = 0;
-    while (i < n) {
-        access_one(m, &recs[i++]);
-        if (m->last_cell == NONE)
-            continue;
-        uint64_t work = 0;
-        size_t j = i;
-        while (j < n && recs[j].element == m->last_element && recs[j].array == m->last_array)
-            work += recs[j++].work;
-        if (j == i)
-            continue;
+    const uint64_t element = m->last_element;
+    const uint32_t array = m->last_array;
+    uint64_t work = 0;
+    size_t j = i;
+    while (j < n && recs[j].element == element && recs[j].array == array)
+        work += recs[j++].work;
+    if (j > i) {
         uint64_t k = j - i;
         m->same_record += k;
         charge(m, EMM_BUCKET_COMPUTE, k * m->compute_per_access + work * m->compute_per_work);
         charge(m, EMM_BUCKET_LOCAL_ACCESS, k * m->local_cycles);
-        i = j;
+    }
+    return j;
+}
+
+/* Record by record, each record's further loads (the most common record: a
+ * vertex's y and z after its x) as one run. Only the first records of a
+ * call can continue the previous call's record; within a call, a record
+ * after a run is another. A record served by direct reads has no local
+ * copy: its further loads are records of their own. */
+static void fetch_run(emm_model *model, const emm_trace_record *recs, size_t n)
+{
+    fetch_model *m = (fetch_model *)model;
+    size_t i = 0;
+    if (m->any && m->last_cell != NONE)
+        i = same_run(m, recs, 0, n);
+    while (i < n) {
+        access_one(m, &recs[i++]);
+        if (m->last_cell != NONE)
+            i = same_run(m, recs, i, n);
     }
     m->accesses += n;
 }
@@ -558,13 +630,16 @@ static void fetch_reset(emm_model *model)
     emm_dma_reset(&m->dma);
     m->now = 0;
     memset(m->cycles, 0, sizeof m->cycles);
-    memset(m->flags, 0, m->ncells);
+    for (uint32_t c = 0; c < m->ncells; c++)
+        m->cell[c].flags = m->cell[c].fetched = 0;
     memset(m->cell_dma, 0, m->ncells * sizeof *m->cell_dma);
+    m->ndma_log = 0;
     m->head = m->tail = NONE;
     m->used = 0;
+    m->last_ready = 0;
     m->present = 0;
     m->cur = m->last_tri = m->last_cell = NONE;
-    m->last_tri_id = -1;
+    m->last_tv[0] = m->last_tv[1] = m->last_tv[2] = UINT64_MAX;
     m->any = false;
     if (m->scheme->state_bytes)
         memset(m->scheme_state, 0, m->scheme->state_bytes);
@@ -657,12 +732,8 @@ static void fetch_destroy(emm_model *model)
     emm_model_share_unref(m->share);
     emm_addr_map_free(&m->map);
     free(m->array_kind);
-    free(m->ready);
-    free(m->prev);
-    free(m->next);
-    free(m->flags);
+    free(m->cell);
     free(m->cell_dma);
-    free(m->find);
     free(m->scheme_state);
     free(m->pg.page_frame);
     free(m->pg.path_start);
@@ -713,6 +784,9 @@ static emm_status plan_local_store(fetch_model *m, const emm_machine_params *p,
     if (tables > budget || (largest + two <= p->local_bytes && tables > p->local_bytes - largest)) {
         m->paged = true;
         m->pg.page = p->emm_lookup_page;
+        if ((m->pg.page & (m->pg.page - 1)) == 0)
+            while ((1ull << m->pg.page_shift) < m->pg.page)
+                m->pg.page_shift++;
         /* (A cell that leaves no two frames does not fit anyway: its
          * error then reads against the budget's frames.) */
         uint64_t room = largest + two <= p->local_bytes ? p->local_bytes - largest : budget;
@@ -747,21 +821,33 @@ static emm_status alloc_pager(fetch_model *m, const char *name, emm_error *err)
     g->cell_entry = m->indexed ? EMM_INDEXED_CELL_BYTES : 8;
     g->node_off = g->cell_off + 8 * (uint64_t)l->ncells;
     if (!m->indexed && l->ops->path_nodes) {
+        /* Each descent's nodes, as pages, a page the node before was on
+         * left out: one descent at a time into a list that grows. */
         uint32_t nodes[EMM_LAYOUT_MAX_DEPTH + 1];
-        size_t total = 0;
+        size_t cap = (size_t)l->ncells * 4 + EMM_LAYOUT_MAX_DEPTH + 1, w = 0;
         g->path_start = malloc(((size_t)l->ncells + 1) * sizeof *g->path_start);
-        if (!g->path_start)
+        g->path = malloc(cap * sizeof *g->path);
+        if (!g->path_start || !g->path)
             return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the paged tables", name);
         for (uint32_t c = 0; c < l->ncells; c++) {
-            g->path_start[c] = (uint32_t)total;
-            total += l->ops->path_nodes(l, c, nodes);
+            uint32_t k = l->ops->path_nodes(l, c, nodes);
+            if (w + k > cap) {
+                uint32_t *more = realloc(g->path, 2 * cap * sizeof *g->path);
+                if (!more)
+                    return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the paged tables",
+                                    name);
+                g->path = more;
+                cap *= 2;
+            }
+            g->path_start[c] = (uint32_t)w;
+            for (uint32_t i = 0, last = NONE; i < k; i++) {
+                uint64_t off = g->node_off + 16 * (uint64_t)nodes[i];
+                uint32_t page = (uint32_t)(off / g->page);
+                if (page != last)
+                    g->path[w++] = last = page;
+            }
         }
-        g->path_start[l->ncells] = (uint32_t)total;
-        g->path = malloc((total ? total : 1) * sizeof *g->path);
-        if (!g->path)
-            return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the paged tables", name);
-        for (uint32_t c = 0; c < l->ncells; c++)
-            l->ops->path_nodes(l, c, g->path + g->path_start[c]);
+        g->path_start[l->ncells] = (uint32_t)w;
     }
     uint64_t npages = (m->lookup_bytes + g->page - 1) / g->page;
     if (npages > UINT32_MAX - 1)
@@ -863,13 +949,9 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
     if (m->paged && (st = alloc_pager(m, name, err)) != EMM_OK)
         goto fail;
     uint32_t nc = m->ncells;
-    m->ready = calloc(nc, sizeof *m->ready);
-    m->prev = malloc(nc * sizeof *m->prev);
-    m->next = malloc(nc * sizeof *m->next);
-    m->flags = calloc(nc, 1);
+    m->cell = aligned_alloc(sizeof *m->cell, (nc ? nc : 1) * sizeof *m->cell);
     m->cell_dma = calloc(nc, sizeof *m->cell_dma);
-    m->find = malloc(nc * sizeof *m->find);
-    if (!m->ready || !m->prev || !m->next || !m->flags || !m->cell_dma || !m->find) {
+    if (!m->cell || !m->cell_dma) {
         st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for %u cells", name, nc);
         goto fail;
     }
@@ -877,9 +959,14 @@ emm_status emm_emm_model_new(const emm_machine_params *p, const emm_strategy *s,
     /* The indexed variant finds a cell from the id, not by descending the
      * tree: its steps are the binary search's, and only outside the cell of
      * the previous access (lookup()). */
-    for (uint32_t c = 0; c < nc; c++)
-        m->find[c] =
-            p->emm_lookup + (m->indexed ? 0 : p->emm_quadtree_level * m->cells[c].depth);
+    for (uint32_t c = 0; c < nc; c++) {
+        cell_state *x = &m->cell[c];
+        memset(x, 0, sizeof *x);
+        x->bytes = m->cells[c].bytes;
+        x->find = (uint32_t)(p->emm_lookup +
+                             (m->indexed ? 0 : p->emm_quadtree_level * m->cells[c].depth));
+        x->empty = m->cells[c].ntri == 0;
+    }
     uint32_t steps = 0;
     while (steps < 32 && (1ull << steps) < nc)
         steps++;
@@ -942,6 +1029,8 @@ emm_status emm_model_cells(const emm_model *model, emm_result *out, emm_error *e
         memcpy(o->hi, m->cells[c].hi, sizeof o->hi);
         o->bytes = m->cell_dma[c];
     }
+    for (uint32_t i = 0; i < m->ndma_log; i++)
+        out->cells.cell[m->dma_log[i]].bytes += m->cell[m->dma_log[i]].bytes;
     return EMM_OK;
 }
 

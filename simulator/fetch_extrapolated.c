@@ -15,13 +15,19 @@ struct fifo {
 
 #define SIDES ((1u << EMM_SIDE_BITS) - 1u)
 
-/* A move's sides as counts of one in counts' lanes. */
+/* A move's sides as counts of one in counts' lanes: the product puts a
+ * copy of the move's bits at every 7th bit, so bit b of the copy shifted
+ * by 7b lands on bit 8b, and no copy overlaps the next (the bits are fewer
+ * than 7). */
+_Static_assert(EMM_SIDE_BITS <= 7, "a move's side bits spread by one product");
 static uint64_t spread(unsigned mv)
 {
-    uint64_t s = 0;
-    for (unsigned b = 0; b < EMM_SIDE_BITS; b++)
-        s |= (uint64_t)((mv >> b) & 1u) << (8 * b);
-    return s;
+    uint64_t copies = 0, lanes = 0;
+    for (unsigned b = 0; b < EMM_SIDE_BITS; b++) {
+        copies |= 1ull << (7 * b);
+        lanes |= 1ull << (8 * b);
+    }
+    return ((uint64_t)mv * copies) & lanes;
 }
 
 static void reset(void *state, const emm_machine_params *p)

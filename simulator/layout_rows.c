@@ -84,13 +84,27 @@ uint32_t emm_rows_cell_at(const emm_layout *l, const double *p, uint32_t *levels
 }
 
 /* Doubled cell centres, exact in integers: tiles of odd rows sit half a
- * tile left of the even rows' tiles with the same column. */
+ * tile left of the even rows' tiles with the same column. The cell's row
+ * and column (its coord) follow from its number, cells being row-major:
+ * with `shift`, each pair of rows holds 2 cols + 1 cells. (Computed, not
+ * read: the cells are large, and the one just entered is not in the cache
+ * of a model that keeps its own state of it.) */
 static void centre2(const emm_layout *l, uint32_t c, int64_t *x2, int64_t *y2)
 {
-    const emm_layout_cell *cell = &l->cells[c];
-    int64_t shift = (R(l)->shift && (cell->coord[1] & 1)) ? 0 : 1;
-    *x2 = 2 * (int64_t)cell->coord[0] + shift;
-    *y2 = 2 * (int64_t)cell->coord[1] + 1;
+    const struct rows *r = R(l);
+    uint32_t row, col;
+    if (r->shift) {
+        uint32_t pair = c / (2 * r->cols + 1), rest = c % (2 * r->cols + 1);
+        row = 2 * pair + (rest >= r->cols);
+        col = rest >= r->cols ? rest - r->cols : rest;
+    } else {
+        row = c / r->cols;
+        col = c % r->cols;
+    }
+    assert((int32_t)row == l->cells[c].coord[1] && (int32_t)col == l->cells[c].coord[0]);
+    int64_t shift = (r->shift && (row & 1)) ? 0 : 1;
+    *x2 = 2 * (int64_t)col + shift;
+    *y2 = 2 * (int64_t)row + 1;
 }
 
 unsigned emm_rows_move_side(const emm_layout *l, uint32_t from, uint32_t to)
