@@ -17,8 +17,10 @@
  *   ALL      `emm replay TRACE --all` 's listing on that machine
  * Prints one line a case, then mean, median and worst regret. --dump FILE
  * writes a JSON line a case for studying predictors offline: the window's
- * features, its cold sweep (after the leading sweep, as the decision's),
- * the whole run's listing, the window's revisits and the mesh's bytes
+ * features, its cold sweep (after the leading sweep, as the decision's)
+ * on the machine and on its local store shifted right by 1 to 4 bits
+ * (window_1 ... window_4), the whole run's listing, the window's revisits
+ * and the bytes of the distinct elements it touches, and the mesh's bytes
  * against the local store. A benchmark, not a test. */
 #include <stdio.h>
 #include <stdlib.h>
