@@ -17,8 +17,10 @@
  *   ALL      `emm replay TRACE --all` 's listing on that machine
  * Prints one line a case, then mean, median and worst regret. --dump FILE
  * writes a JSON line a case for studying predictors offline: the window's
- * features, its cold sweep (after the leading sweep, as the decision's),
- * the whole run's listing, the window's revisits and the mesh's bytes
+ * features, its cold sweep (after the leading sweep, as the decision's)
+ * on the machine and on its local store shifted right by 1 to 4 bits
+ * (window_1 ... window_4), the whole run's listing, the window's revisits
+ * and the bytes of the distinct elements it touches, and the mesh's bytes
  * against the local store. A benchmark, not a test. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -105,6 +107,7 @@ static void dump_case(FILE *f, const char *prog, const char *name, const char *m
     uint32_t *last = calloc(total ? total : 1, sizeof *last);
     uint64_t *base = calloc(info->narrays ? info->narrays : 1, sizeof *base);
     size_t *gaps = malloc((n ? n : 1) * sizeof *gaps), ngaps = 0, acc = 0, distinct = 0;
+    uint64_t dbytes = 0;
     for (uint32_t a = 1; a < info->narrays; a++)
         base[a] = base[a - 1] + info->arrays[a - 1].count;
     uint64_t prev = UINT64_MAX;
@@ -119,8 +122,10 @@ static void dump_case(FILE *f, const char *prog, const char *name, const char *m
         acc++;
         if (last[e])
             gaps[ngaps++] = acc - last[e];
-        else
+        else {
             distinct++;
+            dbytes += info->arrays[recs[i].array].record_size;
+        }
         last[e] = (uint32_t)acc;
     }
     size_t med = 0;
@@ -148,11 +153,11 @@ static void dump_case(FILE *f, const char *prog, const char *name, const char *m
         bytes += info->arrays[a].count * info->arrays[a].record_size;
     fprintf(f, "], \"window_accesses\": %zu, \"distinct\": %zu, \"revisits\": %zu, "
                "\"median_gap\": %zu, \"mesh_bytes\": %llu, \"nt\": %llu, \"nv\": %llu, "
-               "\"local_bytes\": %llu, \"run_records\": %llu",
+               "\"local_bytes\": %llu, \"run_records\": %llu, \"distinct_bytes\": %llu",
             acc, distinct, ngaps, med, (unsigned long long)bytes,
             (unsigned long long)info->geometry.nt, (unsigned long long)info->geometry.nv,
             (unsigned long long)emm_machine_get(m, "local.bytes"),
-            (unsigned long long)info->accesses);
+            (unsigned long long)info->accesses, (unsigned long long)dbytes);
     free(last);
     free(base);
     free(gaps);
@@ -179,7 +184,35 @@ static void dump_case(FILE *f, const char *prog, const char *name, const char *m
         }
         emm_sweep_free(w);
     }
-    fprintf(f, "}, \"run\": {");
+    fprintf(f, "}");
+    /* The same window on smaller local stores (a quarter, a sixteenth...):
+     * a cold window leaves most of the store empty where the run fills it. */
+    uint64_t lb = emm_machine_get(m, "local.bytes");
+    for (int sh = 1; sh <= 4; sh++) {
+        emm_machine *ms;
+        char a[64];
+        snprintf(a, sizeof a, "local.bytes=%llu", (unsigned long long)(lb >> sh));
+        if (emm_machine_clone(m, &ms, &err) != EMM_OK)
+            continue;
+        if (emm_machine_set(ms, a, &err) == EMM_OK && emm_machine_validate(ms, &err) == EMM_OK &&
+            emm_sweep_records(ms, info, recs + skip, n - skip, NULL, &w, &err) == EMM_OK) {
+            fprintf(f, ", \"window_%d\": {", sh);
+            int first = 1;
+            for (size_t i = 0; i < w->count; i++) {
+                if (!w->ran[i])
+                    continue;
+                char sname[96];
+                emm_strategy_format(&w->result[i].strategy, sname, sizeof sname);
+                fprintf(f, "%s\"%s\": %llu", first ? "" : ", ", sname,
+                        (unsigned long long)w->result[i].total);
+                first = 0;
+            }
+            fprintf(f, "}");
+            emm_sweep_free(w);
+        }
+        emm_machine_free(ms);
+    }
+    fprintf(f, ", \"run\": {");
     for (size_t i = 0; i < l->n; i++)
         fprintf(f, "%s\"%s\": %llu", i ? ", " : "", l->name[i], l->total[i]);
     fprintf(f, "}}\n");

@@ -1320,8 +1320,10 @@ done:
  * its cost in each neighbour's run (a strategy a neighbour does not list
  * counts as EMM_DECIDE_UNLISTED times its last listed one: it was slower
  * than all of them), times (W/W_best)^EMM_DECIDE_WINDOW_WEIGHT, W the window's cold
- * cycles: the neighbours say what the run rewards, the window what this
- * program's accesses cost. A strategy no neighbour lists is no candidate.
+ * cycles, the worse of W/W_best on the machine and on a machine with the
+ * local store shifted right by EMM_DECIDE_WINDOW_STORE_SHIFT (a cold window
+ * fills less of the store than the run): the neighbours say what the run
+ * rewards, the window what this program's accesses cost. A strategy no neighbour lists is no candidate.
  * Leaves *out alone when no sample qualifies; errors are out of memory
  * only. */
 static bool same_strategy(const emm_strategy *a, const emm_strategy *b)
@@ -1430,16 +1432,40 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
             return e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
         W = own;
     }
-    double wb = INFINITY;
+    /* The window again on a smaller local store (EMM_DECIDE_WINDOW_STORE_SHIFT),
+     * as full as the run will keep it; its strategies are the same sweep's,
+     * index for index. Without it (a store too small to halve), the
+     * window's own sweep stands. */
+    emm_sweep *small = NULL;
+    emm_machine *ms = NULL;
+    char bytes[32];
+    snprintf(bytes, sizeof bytes, "%llu",
+             (unsigned long long)(emm_machine_get(m, "local.bytes") >>
+                                  EMM_DECIDE_WINDOW_STORE_SHIFT));
+    if (emm_machine_clone(m, &ms, &e) == EMM_OK &&
+        emm_machine_set_key(ms, "local.bytes", bytes, "decision", &e) == EMM_OK &&
+        emm_machine_validate(ms, &e) == EMM_OK &&
+        sweep_records_shared(ms, info, recs, n, threads, share, true, &small, &e) != EMM_OK &&
+        e.status == EMM_ERR_NOMEM) {
+        emm_machine_free(ms);
+        emm_sweep_free(own);
+        return emm_fail(err, e.status, "%s", e.message);
+    }
+    emm_machine_free(ms);
+    const emm_sweep *Ws = small && small->count == W->count ? small : W;
+    double wb = INFINITY, wsb = INFINITY;
     for (size_t i = 0; i < W->count; i++)
-        if (W->ran[i] && emm_machine_offers(m, &W->result[i].strategy) &&
-            (double)W->result[i].total < wb)
-            wb = (double)W->result[i].total;
+        if (W->ran[i] && emm_machine_offers(m, &W->result[i].strategy)) {
+            if ((double)W->result[i].total < wb)
+                wb = (double)W->result[i].total;
+            if (Ws->ran[i] && (double)Ws->result[i].total < wsb)
+                wsb = (double)Ws->result[i].total;
+        }
     size_t pick = SIZE_MAX, second = SIZE_MAX, scored = 0;
     double score = INFINITY, score2 = INFINITY;
-    for (size_t i = 0; i < W->count && wb > 0 && isfinite(wb); i++) {
+    for (size_t i = 0; i < W->count && wb > 0 && isfinite(wb) && wsb > 0 && isfinite(wsb); i++) {
         const emm_strategy *st = &W->result[i].strategy;
-        if (!W->ran[i] || !emm_machine_offers(m, st))
+        if (!W->ran[i] || !Ws->ran[i] || !emm_machine_offers(m, st))
             continue;
         double logsum = 0;
         size_t listed = 0;
@@ -1457,8 +1483,9 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
         if (listed == 0)
             continue;
         scored++;
-        double v = exp(logsum / (double)k) *
-                   pow((double)W->result[i].total / wb, EMM_DECIDE_WINDOW_WEIGHT);
+        /* The window's cost, the worse of the whole store and the smaller. */
+        double wr = fmax((double)W->result[i].total / wb, (double)Ws->result[i].total / wsb);
+        double v = exp(logsum / (double)k) * pow(wr, EMM_DECIDE_WINDOW_WEIGHT);
         if (v < score) {
             score2 = score;
             second = pick;
@@ -1477,6 +1504,7 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
         out->neighbour_distance = dist[k - 1];
         set_runner_up(out, second == SIZE_MAX ? NULL : &W->result[second], score2 / score - 1);
     }
+    emm_sweep_free(small);
     emm_sweep_free(own);
     return EMM_OK;
 }

@@ -53,8 +53,15 @@ extern "C" {
  * over the runs of make predict, the strategies past the 24th cost a
  * median 1.79 times the 24th, geometric mean) ... */
 #define EMM_DECIDE_UNLISTED 1.8
-/* ... times the window's cold cycles over its best, to this power; ... */
-#define EMM_DECIDE_WINDOW_WEIGHT 0.35
+/* ... times the window's cold cycles over its best, to this power, ... */
+#define EMM_DECIDE_WINDOW_WEIGHT 0.75
+/* ... the worse of that ratio on the machine's local store and on the
+ * store shifted right by this many bits (half of it): a cold window leaves
+ * the store part empty where the run fills it, so on the whole store alone
+ * it ranks large cells too well (make predict: the window's own best was
+ * 35.8 % off the run's best on average on the whole store, 22.0 % on half
+ * of it, 28.9 % on a quarter); a strategy must be cheap on both, ... */
+#define EMM_DECIDE_WINDOW_STORE_SHIFT 1
 /* ... when the nearest of them lies within this factor of the nearest
  * sample without costs (a canonical pattern's). */
 #define EMM_DECIDE_NEIGHBOUR_GATE 2.5
