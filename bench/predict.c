@@ -84,6 +84,21 @@ static unsigned long long cycles_of(const struct listing *l, const char *s)
     return 0;
 }
 
+/* A sweep's cycles as the members of a JSON object: "strategy": cycles. */
+static void dump_sweep(FILE *f, const emm_sweep *w)
+{
+    int first = 1;
+    for (size_t i = 0; i < w->count; i++) {
+        if (!w->ran[i])
+            continue;
+        char sname[96];
+        emm_strategy_format(&w->result[i].strategy, sname, sizeof sname);
+        fprintf(f, "%s\"%s\": %llu", first ? "" : ", ", sname,
+                (unsigned long long)w->result[i].total);
+        first = 0;
+    }
+}
+
 /* A JSON line for the case: what a predictor could look at, and the truth. */
 static void dump_case(FILE *f, const char *prog, const char *name, const char *mname,
                       const emm_machine *m, const emm_trace_info *info,
@@ -172,16 +187,7 @@ static void dump_case(FILE *f, const char *prog, const char *name, const char *m
     }
     fprintf(f, ", \"skip\": %zu, \"window\": {", skip);
     if (emm_sweep_records(m, info, recs + skip, n - skip, NULL, &w, &err) == EMM_OK) {
-        int first = 1;
-        for (size_t i = 0; i < w->count; i++) {
-            if (!w->ran[i])
-                continue;
-            char sname[96];
-            emm_strategy_format(&w->result[i].strategy, sname, sizeof sname);
-            fprintf(f, "%s\"%s\": %llu", first ? "" : ", ", sname,
-                    (unsigned long long)w->result[i].total);
-            first = 0;
-        }
+        dump_sweep(f, w);
         emm_sweep_free(w);
     }
     fprintf(f, "}");
@@ -197,16 +203,7 @@ static void dump_case(FILE *f, const char *prog, const char *name, const char *m
         if (emm_machine_set(ms, a, &err) == EMM_OK && emm_machine_validate(ms, &err) == EMM_OK &&
             emm_sweep_records(ms, info, recs + skip, n - skip, NULL, &w, &err) == EMM_OK) {
             fprintf(f, ", \"window_%d\": {", sh);
-            int first = 1;
-            for (size_t i = 0; i < w->count; i++) {
-                if (!w->ran[i])
-                    continue;
-                char sname[96];
-                emm_strategy_format(&w->result[i].strategy, sname, sizeof sname);
-                fprintf(f, "%s\"%s\": %llu", first ? "" : ", ", sname,
-                        (unsigned long long)w->result[i].total);
-                first = 0;
-            }
+            dump_sweep(f, w);
             fprintf(f, "}");
             emm_sweep_free(w);
         }
