@@ -212,10 +212,9 @@ static void pipe_release(const emm_runner *r)
         pthread_mutex_unlock(&r->pipe->mu);
 }
 
-/* With the lock held and every live model through every batch (after
- * pipe_sync, or before the workers start): the live list may have
- * changed, the cursors, sized for r->cap, start at the queue's end. */
-static bool pipe_fit(emm_runner *r)
+/* The cursors and flags sized for r->cap models, with the lock held (or
+ * before the workers start). */
+static bool pipe_size(emm_runner *r)
 {
     struct pipe *p = r->pipe;
     if (!p)
@@ -227,13 +226,21 @@ static bool pipe_fit(emm_runner *r)
     bool *b = c ? realloc(p->busy, cap * sizeof *b) : NULL;
     if (b)
         p->busy = b;
-    if (!c || !b)
-        return false;
-    for (size_t k = 0; k < cap; k++) {
+    return c && b;
+}
+
+/* With the lock held and every live model through every batch (after
+ * pipe_sync, or before the workers start): the live list may have
+ * changed, every cursor starts at the queue's end. */
+static void pipe_reset(emm_runner *r)
+{
+    struct pipe *p = r->pipe;
+    if (!p)
+        return;
+    for (size_t k = 0; k < r->cap; k++) {
         p->cursor[k] = p->tail;
         p->busy[k] = false;
     }
-    return true;
 }
 
 emm_status emm_runner_pipeline(emm_runner *r, emm_error *err)
@@ -256,10 +263,11 @@ emm_status emm_runner_pipeline(emm_runner *r, emm_error *err)
     p->t = r->t;
     p->tids = tids;
     r->pipe = p;
-    if (!pipe_fit(r)) { /* no worker yet: no lock needed */
+    if (!pipe_size(r)) { /* no worker yet: no lock needed */
         pipe_free(r);
         return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the runner's pipeline");
     }
+    pipe_reset(r);
     while (p->nthreads < jobs && emm_thread_start(&p->tids[p->nthreads], pipe_worker, r) == 0)
         p->nthreads++;
     if (p->nthreads == 0)
@@ -327,9 +335,14 @@ emm_status emm_runner_add(emm_runner *r, const emm_machine *m, const emm_strateg
         emm_model **ll = mm ? realloc(r->live, cap * sizeof *ll) : NULL;
         if (ll)
             r->live = ll;
+        /* The cursors must cover every slot r->cap counts: without room
+         * for them the runner keeps its old capacity. */
+        size_t old = r->cap;
         if (mm && ll)
             r->cap = cap;
-        bool fit = mm && ll && pipe_fit(r);
+        bool fit = mm && ll && pipe_size(r);
+        if (!fit)
+            r->cap = old;
         pipe_release(r);
         if (!fit)
             return emm_fail(err, EMM_ERR_NOMEM, "out of memory for %zu models", r->n + n);
@@ -355,7 +368,7 @@ emm_status emm_runner_add(emm_runner *r, const emm_machine *m, const emm_strateg
             if (job.models[i])
                 r->live[r->nlive++] = job.models[i];
         r->n += n;
-        pipe_fit(r); /* sized already: it only sets the cursors */
+        pipe_reset(r);
         pipe_release(r);
     }
     if (!errs)
@@ -384,7 +397,7 @@ void emm_runner_retire(emm_runner *r, size_t i)
         if (r->live[k] == r->models[i]) {
             memmove(r->live + k, r->live + k + 1, (r->nlive - k - 1) * sizeof *r->live);
             r->nlive--;
-            pipe_fit(r);
+            pipe_reset(r);
             break;
         }
     pipe_release(r);
