@@ -113,6 +113,22 @@ typedef struct late_array {
  * default window: the phase's candidate is a proposal that its own model
  * then measures from the detection on, not the answer. */
 #define SESSION_PHASE_SYNTH_PROBES 2
+/* A probe whose pattern differs from the current phase's, but only weakly
+ * (farther than EMM_WEAK_MATCH from its sample), argues for a new phase
+ * only when at least this share of its mesh reads come from program
+ * counters the current phase has not run: new code. A periodic program's
+ * probes land on different stretches of the same loops and their weak
+ * matches scatter over every pattern; a new traversal runs new code. */
+#define SESSION_PHASE_NEW_CODE 0.5
+/* The program counters a phase's set keeps at most (past it, the set stops
+ * growing, and unseen code counts as new). */
+#define SESSION_PHASE_PCS_MAX 65536u
+
+/* Distinct program counters (sorted; 0, unknown, left out). */
+typedef struct pc_set {
+    uint64_t *pc;
+    size_t n;
+} pc_set;
 
 typedef struct program_phase {
     uint64_t start;       /* accesses simulated before its first probe */
@@ -350,6 +366,8 @@ typedef struct session {
     bool pany;
     char pending[EMM_TABLE_NAME_MAX]; /* a probe's new pattern awaiting a second probe */
     uint64_t pending_start;
+    pc_set phase_pcs;    /* the code of the current phase's mesh reads (window and probes) */
+    pc_set pending_pcs;  /* and of the pending probe's, until it is confirmed or dropped */
     uint32_t plast_array;
     uint64_t plast_element;
     struct probe_job *probe_job; /* a full probe evaluated beside the run, or NULL */

@@ -21,6 +21,95 @@
 
 static void finish_probe(session *s);
 
+/* ---- the code a phase runs --------------------------------------------- */
+
+/* A read of the mesh (not of a raw array): what a phase's code is. */
+static bool mesh_read(const session *s, const emm_trace_record *r)
+{
+    return !r->write && s->info.arrays[r->array].kind != EMM_ARRAY_RAW;
+}
+
+static int cmp_pc(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* The distinct program counters of the mesh reads in recs; false without
+ * memory. */
+static bool pcs_of(const session *s, const emm_trace_record *recs, size_t n, pc_set *out)
+{
+    out->pc = NULL;
+    out->n = 0;
+    uint64_t *v = malloc((n ? n : 1) * sizeof *v);
+    if (!v)
+        return false;
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++)
+        if (recs[i].pc && mesh_read(s, &recs[i]))
+            v[m++] = recs[i].pc;
+    qsort(v, m, sizeof *v, cmp_pc);
+    size_t u = 0;
+    for (size_t i = 0; i < m; i++)
+        if (u == 0 || v[i] != v[u - 1])
+            v[u++] = v[i];
+    out->pc = v;
+    out->n = u;
+    return true;
+}
+
+static bool pcs_has(const pc_set *set, uint64_t pc)
+{
+    return set->n && bsearch(&pc, set->pc, set->n, sizeof pc, cmp_pc) != NULL;
+}
+
+/* add's counters joined to into (add emptied), up to SESSION_PHASE_PCS_MAX;
+ * without memory, into stays as it was. */
+static void pcs_join(pc_set *into, pc_set *add)
+{
+    size_t cap = into->n + add->n;
+    if (cap > SESSION_PHASE_PCS_MAX)
+        cap = SESSION_PHASE_PCS_MAX;
+    uint64_t *v = cap > into->n ? malloc(cap * sizeof *v) : NULL;
+    if (v) {
+        size_t a = 0, b = 0, m = 0;
+        while (m < cap && (a < into->n || b < add->n)) {
+            uint64_t x = a < into->n ? into->pc[a] : UINT64_MAX;
+            uint64_t y = b < add->n ? add->pc[b] : UINT64_MAX;
+            v[m++] = x <= y ? x : y;
+            a += x <= y;
+            b += y <= x;
+        }
+        free(into->pc);
+        into->pc = v;
+        into->n = m;
+    }
+    free(add->pc);
+    add->pc = NULL;
+    add->n = 0;
+}
+
+static void pcs_free(pc_set *set)
+{
+    free(set->pc);
+    set->pc = NULL;
+    set->n = 0;
+}
+
+/* The share of recs' mesh reads whose code is not in set; -1 when none of
+ * them has a known program counter (the capture does not say). */
+static double new_code(const session *s, const pc_set *set, const emm_trace_record *recs,
+                       size_t n)
+{
+    size_t known = 0, fresh = 0;
+    for (size_t i = 0; i < n; i++)
+        if (recs[i].pc && mesh_read(s, &recs[i])) {
+            known++;
+            fresh += !pcs_has(set, recs[i].pc);
+        }
+    return known ? (double)fresh / (double)known : -1;
+}
+
 static uint64_t model_total(const session *s, size_t i)
 {
     emm_model *m = emm_runner_model(s->runner, i);
@@ -59,6 +148,11 @@ void session_phases_start(session *s)
     p->best = s->chosen;
     p->model = SIZE_MAX;
     s->nphases = 1;
+    pcs_free(&s->phase_pcs);
+    pcs_free(&s->pending_pcs);
+    pc_set w;
+    if (pcs_of(s, s->window, s->wn, &w))
+        pcs_join(&s->phase_pcs, &w);
     s->probe_len = s->nD;
     s->gap = SESSION_PROBE_GAP * s->probe_len;
     /* Probes need EMM_PHASES, a table, a chosen strategy to weigh a switch
@@ -122,6 +216,8 @@ struct probe_job {
     bool off;               /* it failed (memory): probing ends */
     bool opinion;           /* enough positions to name a pattern */
     emm_decision d;
+    bool argues;            /* its pattern is a new phase's (new, and a strong match or new code) */
+    pc_set pcs;             /* the code of its mesh reads */
     bool decided;           /* the best candidate of a new phase is in wd */
     emm_window_decision wd;
 };
@@ -139,7 +235,8 @@ static void evaluate(void *ctx)
     emm_error e;
     double *D = NULL, f[EMM_FEATURES];
     size_t n;
-    if (emm_profiler_new(&s->info, j->reads, EMM_PROFILE_PLANE, s->program, &pr, &e) != EMM_OK ||
+    if (!pcs_of(s, j->recs, j->n, &j->pcs) ||
+        emm_profiler_new(&s->info, j->reads, EMM_PROFILE_PLANE, s->program, &pr, &e) != EMM_OK ||
         emm_profiler_add(pr, j->recs, j->n, &e) != EMM_OK)
         goto off;
     const double *xy = emm_profiler_positions(pr, &n);
@@ -156,7 +253,10 @@ static void evaluate(void *ctx)
         goto off;
     j->opinion = true;
     const char *pattern = job_pattern(j);
-    if (strcmp(pattern, j->cur) != 0 && !j->full && strcmp(pattern, j->pending) == 0) {
+    double fresh = new_code(s, &s->phase_pcs, j->recs, j->n);
+    j->argues = strcmp(pattern, j->cur) != 0 &&
+                (j->d.distance <= EMM_WEAK_MATCH || fresh < 0 || fresh >= SESSION_PHASE_NEW_CODE);
+    if (j->argues && !j->full && strcmp(pattern, j->pending) == 0) {
         emm_decide_options opt = {.threads = &s->threads,
                                   .synth_visits = SESSION_PHASE_SYNTH_PROBES * j->reads};
         j->decided = decide_features_shared(s->table, s->machine, &s->info, j->recs, j->n, f, n,
@@ -181,12 +281,18 @@ static void apply(session *s, struct probe_job *j)
         s->probing = false;
         return;
     }
-    if (!j->opinion)
+    if (!j->opinion) {
+        pcs_join(&s->phase_pcs, &j->pcs);
         return;
+    }
     const char *pattern = job_pattern(j);
     program_phase *cur = &s->phases[s->nphases - 1];
-    if (strcmp(pattern, cur->pattern) == 0 || s->nphases == SESSION_MAX_PHASES) {
+    /* A probe that does not argue for a new phase is the current phase's,
+     * and so is the code of a pending probe it does not confirm. */
+    if (!j->argues || s->nphases == SESSION_MAX_PHASES) {
         s->pending[0] = 0;
+        pcs_join(&s->phase_pcs, &s->pending_pcs);
+        pcs_join(&s->phase_pcs, &j->pcs);
         return;
     }
     /* One probe is not a phase: a short stretch of the traversal can look
@@ -195,9 +301,19 @@ static void apply(session *s, struct probe_job *j)
     if (strcmp(pattern, s->pending) != 0) {
         snprintf(s->pending, sizeof s->pending, "%s", pattern);
         s->pending_start = j->start;
+        pcs_join(&s->phase_pcs, &s->pending_pcs);
+        s->pending_pcs = j->pcs;
+        j->pcs.pc = NULL;
+        j->pcs.n = 0;
         return;
     }
     s->pending[0] = 0;
+    /* The new phase's code is its two probes'. */
+    pcs_free(&s->phase_pcs);
+    s->phase_pcs = s->pending_pcs;
+    s->pending_pcs.pc = NULL;
+    s->pending_pcs.n = 0;
+    pcs_join(&s->phase_pcs, &j->pcs);
     close_phase(s, cur);
     program_phase *p = &s->phases[s->nphases++];
     memset(p, 0, sizeof *p);
@@ -244,6 +360,7 @@ static void free_probe(struct probe_job *j)
 {
     if (j) {
         free(j->recs);
+        pcs_free(&j->pcs);
         emm_window_decision_release(&j->wd);
     }
     free(j);
@@ -345,6 +462,8 @@ void session_phases_answer(session *s)
 void session_phases_free(session *s)
 {
     free_probe(take_probe(s));
+    pcs_free(&s->phase_pcs);
+    pcs_free(&s->pending_pcs);
     for (int i = 0; i < s->nphases; i++) {
         free(s->phases[i].at);
         free(s->phases[i].end);

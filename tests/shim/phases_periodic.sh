@@ -1,0 +1,21 @@
+# One traversal repeated: ten smoothing passes over a 40,000-face mesh, a
+# loop over the triangles then one over the vertices each pass. The probes
+# land on different stretches of the same two loops, and their weak matches
+# scatter over the patterns (three phases were found here before the rule
+# below); none of them runs code the window's phase has not run, so the
+# run is one phase: probed, and the window's pattern stands.
+#   sh phases_periodic.sh SHIM WORKDIR PROGRAM MESH PASSES
+EMM_TEST_DECIDE=1
+. "$(dirname "$0")/lib.sh"
+unset EMM_STRATEGY
+EMM_TAG='vertices:site=load_mesh,stride=12,xyz=0:f32;triangles:site=load_mesh,stride=12,vidx=0:u32'
+EMM_REPORT="$WORK/report.json"
+export EMM_TAG EMM_REPORT
+run_both periodic "$@"
+expect_err periodic '^emm: answer: '
+grep -q '"phases_probed": true' "$EMM_REPORT" || fail "report: phases_probed is not true"
+! grep -q '^emm:   phases: ' "$WORK/periodic.shim.err" || {
+  cat "$WORK/periodic.shim.err" >&2; fail "the summary lists phases of a periodic run"; }
+n=$(grep -c '"start":' "$EMM_REPORT")
+[ "$n" = 1 ] || { cat "$EMM_REPORT" >&2; fail "report: $n phases, expected the window's only"; }
+echo "periodic: one phase, probed"
