@@ -100,7 +100,8 @@ typedef struct late_array {
 /* Phases (docs/profile.md "Phases"): after the window the session profiles
  * probes of the run as long as the window, one every SESSION_PROBE_GAP + 1
  * window lengths; two probes in a row whose pattern differs from the
- * current phase's (the same new pattern) start a phase, whose best candidate is decided on the probe and
+ * current phase's (the same new pattern; a weak match only with new code)
+ * start a phase, whose best candidate is decided on the probe and
  * simulated from there on, cold, as a switch would start. */
 #define SESSION_MAX_PHASES 8
 #define SESSION_PROBE_GAP 7
@@ -120,6 +121,11 @@ typedef struct late_array {
  * probes land on different stretches of the same loops and their weak
  * matches scatter over every pattern; a new traversal runs new code. */
 #define SESSION_PHASE_NEW_CODE 0.5
+/* A probe of the current phase's code (less than SESSION_PHASE_NEW_CODE of
+ * new code) can argue for a phase only by a strong match: its profile, most
+ * of a probe's cost, is worked out only for every (SESSION_PROBE_OLD_SKIP +
+ * 1)th such probe in a row. */
+#define SESSION_PROBE_OLD_SKIP 3
 /* The program counters a phase's set keeps at most (past it, the set stops
  * growing, and unseen code counts as new). */
 #define SESSION_PHASE_PCS_MAX 65536u
@@ -368,6 +374,7 @@ typedef struct session {
     uint64_t pending_start;
     pc_set phase_pcs;    /* the code of the current phase's mesh reads (window and probes) */
     pc_set pending_pcs;  /* and of the pending probe's, until it is confirmed or dropped */
+    uint32_t old_probes; /* probes in a row of old code left unprofiled */
     uint32_t plast_array;
     uint64_t plast_element;
     struct probe_job *probe_job; /* a full probe evaluated beside the run, or NULL */

@@ -5,7 +5,9 @@
  * worked out beside the run and acted on SESSION_PROBE_LAG records after
  * the probe filled (the detection) — and when two probes in a row find the
  * same pattern, other than the current phase's, a phase begins at the
- * first of them. Its best candidate is decided on the probe as the
+ * first of them; a weak match counts only when its probe runs new code
+ * (SESSION_PHASE_NEW_CODE), and a probe of old code is profiled only now
+ * and then (SESSION_PROBE_OLD_SKIP). Its best candidate is decided on the probe as the
  * window's was (emm_decide_features) and, when it differs from the chosen
  * strategy, simulated from the detection on in a model of its own that starts cold:
  * exactly what switching strategy would do (the local store flushed). At
@@ -44,10 +46,18 @@ static bool pcs_of(const session *s, const emm_trace_record *recs, size_t n, pc_
     uint64_t *v = malloc((n ? n : 1) * sizeof *v);
     if (!v)
         return false;
+    /* A loop's few counters repeat: a small direct-mapped memory of those
+     * seen keeps most repeats out of the sort. */
+    uint64_t recent[64] = {0};
     size_t m = 0;
-    for (size_t i = 0; i < n; i++)
-        if (recs[i].pc && mesh_read(s, &recs[i]))
-            v[m++] = recs[i].pc;
+    for (size_t i = 0; i < n; i++) {
+        uint64_t pc = recs[i].pc;
+        uint64_t *slot = &recent[(pc ^ pc >> 6 ^ pc >> 12) & 63];
+        if (pc && *slot != pc && mesh_read(s, &recs[i])) {
+            *slot = pc;
+            v[m++] = pc;
+        }
+    }
     qsort(v, m, sizeof *v, cmp_pc);
     size_t u = 0;
     for (size_t i = 0; i < m; i++)
@@ -148,6 +158,7 @@ void session_phases_start(session *s)
     p->best = s->chosen;
     p->model = SIZE_MAX;
     s->nphases = 1;
+    s->old_probes = 0;
     pcs_free(&s->phase_pcs);
     pcs_free(&s->pending_pcs);
     pc_set w;
@@ -216,6 +227,8 @@ struct probe_job {
     bool off;               /* it failed (memory): probing ends */
     bool opinion;           /* enough positions to name a pattern */
     emm_decision d;
+    bool sample;            /* profiled even when its code is old (SESSION_PROBE_OLD_SKIP) */
+    bool skipped;           /* old code, not profiled: no opinion */
     bool argues;            /* its pattern is a new phase's (new, and a strong match or new code) */
     pc_set pcs;             /* the code of its mesh reads */
     bool decided;           /* the best candidate of a new phase is in wd */
@@ -235,8 +248,17 @@ static void evaluate(void *ctx)
     emm_error e;
     double *D = NULL, f[EMM_FEATURES];
     size_t n;
-    if (!pcs_of(s, j->recs, j->n, &j->pcs) ||
-        emm_profiler_new(&s->info, j->reads, EMM_PROFILE_PLANE, s->program, &pr, &e) != EMM_OK ||
+    if (!pcs_of(s, j->recs, j->n, &j->pcs))
+        goto off;
+    /* The current phase's code argues for a new phase only by a strong
+     * match, which one probe in SESSION_PROBE_OLD_SKIP + 1 is profiled for. */
+    double fresh = new_code(s, &s->phase_pcs, j->recs, j->n);
+    bool old_code = fresh >= 0 && fresh < SESSION_PHASE_NEW_CODE;
+    if (old_code && !j->sample) {
+        j->skipped = true;
+        goto done;
+    }
+    if (emm_profiler_new(&s->info, j->reads, EMM_PROFILE_PLANE, s->program, &pr, &e) != EMM_OK ||
         emm_profiler_add(pr, j->recs, j->n, &e) != EMM_OK)
         goto off;
     const double *xy = emm_profiler_positions(pr, &n);
@@ -253,9 +275,7 @@ static void evaluate(void *ctx)
         goto off;
     j->opinion = true;
     const char *pattern = job_pattern(j);
-    double fresh = new_code(s, &s->phase_pcs, j->recs, j->n);
-    j->argues = strcmp(pattern, j->cur) != 0 &&
-                (j->d.distance <= EMM_WEAK_MATCH || fresh < 0 || fresh >= SESSION_PHASE_NEW_CODE);
+    j->argues = strcmp(pattern, j->cur) != 0 && (!old_code || j->d.distance <= EMM_WEAK_MATCH);
     if (j->argues && !j->full && strcmp(pattern, j->pending) == 0) {
         emm_decide_options opt = {.threads = &s->threads,
                                   .synth_visits = SESSION_PHASE_SYNTH_PROBES * j->reads};
@@ -281,6 +301,7 @@ static void apply(session *s, struct probe_job *j)
         s->probing = false;
         return;
     }
+    s->old_probes = j->skipped ? s->old_probes + 1 : 0;
     if (!j->opinion) {
         pcs_join(&s->phase_pcs, &j->pcs);
         return;
@@ -393,6 +414,7 @@ static void launch_probe(session *s)
     snprintf(j->cur, sizeof j->cur, "%s", s->phases[s->nphases - 1].pattern);
     snprintf(j->pending, sizeof j->pending, "%s", s->pending);
     j->full = s->nphases == SESSION_MAX_PHASES;
+    j->sample = s->old_probes >= SESSION_PROBE_OLD_SKIP;
     s->probe = NULL;
     s->pn = s->pcap = 0;
     s->probe_job = j;
