@@ -678,7 +678,10 @@ static const char *how_predicted(const session *s)
     case FROM_SIMULATION:
         return "the best candidate of the sweep on the window";
     case FROM_CHECKED:
-        return "the table's pattern simulated over this mesh on this machine";
+        return s->has_wd && s->wd.neighbours
+                   ? "the costs of the runs measured on this machine nearest the window, "
+                     "weighed with the window"
+                   : "the table's pattern simulated over this mesh on this machine";
     default:
         return "the nearest sample's strategy";
     }

@@ -1152,6 +1152,21 @@ done:
     return st;
 }
 
+/* The traversal the nearest sample's pattern is made by (its recipe, or
+ * the pattern's name), which the pattern check runs. */
+static const char *check_recipe(const emm_window_decision *out)
+{
+    return strcmp(out->table.synth, "-") != 0 ? out->table.synth : out->table.pattern;
+}
+
+/* Whether the check has a traversal to run: the recipe parses. */
+static bool names_traversal(const emm_window_decision *out)
+{
+    emm_synth_options so = {0};
+    emm_error e;
+    return emm_synth_recipe_parse(check_recipe(out), &so, &e) == EMM_OK;
+}
+
 /* The table's pattern, checked on this mesh and this window (docs/profile.md
  * "The decision"): the nearest sample's canonical traversal (its recipe,
  * or its class's for a sample from a program) is synthesised over the
@@ -1243,7 +1258,7 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
                                 emm_sweep **window, emm_error *err)
 {
     *window = NULL;
-    const char *recipe = strcmp(out->table.synth, "-") != 0 ? out->table.synth : out->table.pattern;
+    const char *recipe = check_recipe(out);
     if (visits == 0 || visits > EMM_DECIDE_SYNTH_VISITS)
         visits = EMM_DECIDE_SYNTH_VISITS;
     if (info->geometry.nt < visits)
@@ -1365,17 +1380,22 @@ static bool any_in_space(const emm_strategy *s, size_t n)
     return false;
 }
 
-static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
-                                  const emm_trace_info *info, const emm_trace_record *recs,
-                                  size_t n, const double f[EMM_FEATURES],
-                                  const emm_threads *threads, emm_model_share *share,
-                                  const emm_sweep *window, emm_window_decision *out,
-                                  emm_error *err)
+/* The neighbours: the samples nearest f among the runs measured on this
+ * machine, at most EMM_DECIDE_NEIGHBOURS (their indices in near, their
+ * distances in dist, nearest first; one sample a run), and only when the
+ * window is no canonical pattern's (farther than EMM_DECIDE_CANONICAL_NEAR
+ * from every sample without costs: those traversals the check predicts
+ * nearly exactly) and its nearest run is within EMM_DECIDE_NEIGHBOUR_GATE
+ * times the nearest such sample's distance. Returns how many; SIZE_MAX
+ * without memory. */
+static size_t pick_neighbours(const emm_table *t, const emm_machine *m,
+                              const emm_trace_info *info, const double f[EMM_FEATURES],
+                              size_t near[EMM_DECIDE_NEIGHBOURS],
+                              double dist[EMM_DECIDE_NEIGHBOURS])
 {
     char id[17];
     emm_table_machine_id(m, id);
-    size_t near[EMM_DECIDE_NEIGHBOURS], k = 0;
-    double dist[EMM_DECIDE_NEIGHBOURS];
+    size_t k = 0;
     /* A run over a mesh with depth tried the layouts in space, and its
      * fastest include some: such samples serve such meshes, the others the
      * planar ones (their costs rank different candidates). */
@@ -1387,7 +1407,7 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
         size_t i;
     } *c = malloc((t->n ? t->n : 1) * sizeof *c);
     if (!c)
-        return emm_fail(err, EMM_ERR_NOMEM, "out of memory");
+        return SIZE_MAX;
     size_t nc = 0;
     double canonical = INFINITY; /* the nearest sample without costs */
     for (size_t i = 0; i < t->n; i++) {
@@ -1402,11 +1422,6 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
             c[nc++] = (struct cand){d, i};
     }
     qsort(c, nc, sizeof *c, by_distance);
-    /* The nearest runs, one window each, and only when the window is no
-     * canonical pattern's (farther than EMM_DECIDE_CANONICAL_NEAR from
-     * every sample without costs: those traversals the check predicts
-     * nearly exactly) and its nearest run is within
-     * EMM_DECIDE_NEIGHBOUR_GATE times the nearest such sample's distance. */
     for (size_t j = 0; j < nc && k < EMM_DECIDE_NEIGHBOURS; j++) {
         if (k == 0 && !(c[j].d <= EMM_DECIDE_NEIGHBOUR_GATE * canonical &&
                         canonical > EMM_DECIDE_CANONICAL_NEAR))
@@ -1420,6 +1435,17 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
         dist[k++] = c[j].d;
     }
     free(c);
+    return k;
+}
+
+static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
+                                  const emm_trace_info *info, const emm_trace_record *recs,
+                                  size_t n, const size_t near[EMM_DECIDE_NEIGHBOURS],
+                                  const double dist[EMM_DECIDE_NEIGHBOURS], size_t k,
+                                  const emm_threads *threads, emm_model_share *share,
+                                  const emm_sweep *window, emm_window_decision *out,
+                                  emm_error *err)
+{
     if (k == 0)
         return EMM_OK;
     /* The window's sweep, the pattern check's when it made one (the same
@@ -1563,20 +1589,32 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
         st = EMM_OK;
         if (info->geometry.nt > 0 && program_arrays(info, &arrays))
             program_mesh(cache, info, name, &mesh, &own_mesh);
+        size_t near[EMM_DECIDE_NEIGHBOURS], k = 0;
+        double dist[EMM_DECIDE_NEIGHBOURS];
         if (mesh) {
             st = pick_class(t, info, mesh, &arrays, recs, n, f, accesses, name, threads, cache,
                             out, err);
-            if (st == EMM_OK)
+            /* Runs measured on this machine near the window, when the table
+             * has some, decide among the candidates once the pattern names
+             * a traversal to check (a sample of the user's own class,
+             * without a recipe, stands as in the thesis): the check's long
+             * run, most of a decision's cost, would not count, and is made
+             * only when they decide nothing. */
+            if (st == EMM_OK && names_traversal(out) &&
+                (k = pick_neighbours(t, m, info, f, near, dist)) == SIZE_MAX)
+                st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+            if (st == EMM_OK && k > 0) {
+                st = neighbour_costs(t, m, info, recs, n, near, dist, k, threads, share, NULL,
+                                     out, err);
+                if (out->neighbours)
+                    out->how = EMM_DECIDED_CHECKED;
+            }
+            if (st == EMM_OK && !out->neighbours)
                 st = check_pattern(m, info, mesh, &arrays, recs, n, name, threads, share, cache,
                                    opt ? opt->synth_visits : 0, out, &window, err);
         }
         if (own_mesh)
             emm_mesh_free(mesh);
-        /* The pattern was checked: runs measured on this machine, when the
-         * table has some, decide among the candidates (a sample of the
-         * user's own class, without a recipe, stands as in the thesis). */
-        if (st == EMM_OK && out->how == EMM_DECIDED_CHECKED)
-            st = neighbour_costs(t, m, info, recs, n, f, threads, share, window, out, err);
         emm_sweep_free(window);
         /* A sample's strategy the machine does not have (a cache label on a
          * machine without one) is no answer: the window decides. */
