@@ -82,7 +82,8 @@ for p in plane sphere; do
         -o "$tmp/probe-$p.emmt" >/dev/null
 done
 for machine in "$src"/predict_machines/*.ini; do
-    "$bin/emm" machine show --machine "$machine" >"$tmp/model.$(basename "$machine")"
+    # The listing's first line names the file: only the settings key.
+    "$bin/emm" machine show --machine "$machine" | tail -n +2 >"$tmp/model.$(basename "$machine")"
     for p in plane sphere; do
         "$bin/emm" replay "$tmp/probe-$p.emmt" --all --machine "$machine" |
             tail -n +2 >"$tmp/model.$p.$(basename "$machine")"
