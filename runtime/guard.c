@@ -11,12 +11,14 @@
  * program's own. */
 #include "emm/guard.h"
 
+#include <errno.h>
 #include <pthread.h>
 #include <sched.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
 #define CHUNK_REGIONS 64
@@ -59,6 +61,7 @@ struct emm_guard {
     unsigned nslots;    /* atomic: slots claimed */
     size_t split;       /* pages split (split_pages), under the lock */
     size_t page;
+    int peek;           /* process_vm_readv reads this process (last_word) */
     emm_sigaction_fn real;             /* the C library's sigaction */
     struct sigaction saved_segv, saved_trap; /* the program's handlers */
 };
@@ -72,6 +75,11 @@ emm_guard *emm_guard_new(void)
     g->page = (size_t)sysconf(_SC_PAGESIZE);
     g->watching = 1;
     g->building = 1;
+    /* A seccomp filter may refuse process_vm_readv: then kept pages are
+     * read in place, as before. */
+    uint64_t probe = 1, got = 0;
+    struct iovec to = {&got, sizeof got}, from = {&probe, sizeof probe};
+    g->peek = process_vm_readv(getpid(), &to, 1, &from, 1, 0) == (ssize_t)sizeof got && got == 1;
 #if defined(__x86_64__)
     void *m = mmap(NULL, SLOT_MAP, PROT_READ | PROT_WRITE | PROT_EXEC,
                    MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
@@ -454,9 +462,44 @@ void emm_guard_step_abandon(emm_guard *g, emm_guard_step *s, uintptr_t *pc)
     step_close(g, s);
 }
 
+/* The last of the n words at a that is not 0, or 0 (none, or the page
+ * was protected meanwhile). Read with process_vm_readv, which fails with
+ * EFAULT on a protected page instead of faulting: another thread may
+ * protect a kept page at any moment — it kept the same page and closed it,
+ * or faulted on it before it opened and stepped — and a fault here, inside
+ * the SIGSEGV handler, where SIGSEGV is blocked, would kill the program.
+ * From the end, 64 words at a time (a handler's stack is the program's).
+ * Without process_vm_readv (g->peek 0) the words are read in place. */
+static uintptr_t last_word(const emm_guard *g, uintptr_t a, size_t n)
+{
+    if (!g->peek) {
+        for (size_t i = n; i-- > 0;)
+            if (*(const volatile uint64_t *)(a + i * 8) != 0)
+                return a + i * 8;
+        return 0;
+    }
+    int saved = errno; /* the interrupted program's */
+    pid_t pid = getpid();
+    uint64_t buf[64];
+    uintptr_t last = 0;
+    while (n > 0 && !last) {
+        size_t k = n < 64 ? n : 64;
+        n -= k;
+        struct iovec to = {buf, k * 8}, from = {(void *)(a + n * 8), k * 8};
+        if (process_vm_readv(pid, &to, 1, &from, 1, 0) != (ssize_t)(k * 8))
+            break;
+        for (size_t i = k; i-- > 0 && !last;)
+            if (buf[i] != 0)
+                last = a + (n + i) * 8;
+    }
+    errno = saved;
+    return last;
+}
+
 /* Protects a page kept open while building again, unless its region left
  * (emm_guard_step_done's checks), after telling `note` the last word of the
- * array on it that is not 0. */
+ * array on it that is not 0. The caller took the page out of g->kept: each
+ * entry closes once. */
 static void close_kept(emm_guard *g, uintptr_t page, void (*note)(uintptr_t addr))
 {
     int in;
@@ -468,10 +511,7 @@ static void close_kept(emm_guard *g, uintptr_t page, void (*note)(uintptr_t addr
     uintptr_t a = page > lo ? page + ((lo - page) & 7) : lo, end = page + g->page;
     if (end > hi)
         end = hi;
-    uintptr_t last = 0;
-    for (; a + 8 <= end; a += 8)
-        if (*(const volatile uint64_t *)a != 0)
-            last = a;
+    uintptr_t last = a + 8 <= end ? last_word(g, a, (end - a) / 8) : 0;
     if (last)
         note(last);
     emm_guard_step_done(g, r, page);
@@ -495,8 +535,13 @@ int emm_guard_build_open(emm_guard *g, emm_guard_region *r, uintptr_t page, int 
     mprotect((void *)page, g->page, PROT_READ | PROT_WRITE);
     unsigned k = __atomic_fetch_add(&g->nkept, 1, __ATOMIC_RELAXED) % EMM_GUARD_BUILD_PAGES;
     close_kept(g, __atomic_exchange_n(&g->kept[k], page, __ATOMIC_SEQ_CST), note);
-    /* The build ended while this page opened: the sweep may have missed it. */
-    if (!__atomic_load_n(&g->building, __ATOMIC_SEQ_CST))
+    /* The build ended while this page opened: the sweep may have missed
+     * it. Taken back only while still in its entry — else whoever took it
+     * (the sweep, or a thread that came round to the entry) closes it. */
+    uintptr_t mine = page;
+    if (!__atomic_load_n(&g->building, __ATOMIC_SEQ_CST) &&
+        __atomic_compare_exchange_n(&g->kept[k], &mine, 0, false, __ATOMIC_SEQ_CST,
+                                    __ATOMIC_SEQ_CST))
         close_kept(g, page, note);
     return 1;
 }

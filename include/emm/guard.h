@@ -12,7 +12,7 @@
  * own (every other page flagged MADV_NOHUGEPAGE, up to 32,768 pages in
  * all), so that opening and closing one page never splits and merges the
  * mapping around it. The calls marked signal-safe only read atomics and
- * call mprotect: a handler may make them. */
+ * make system calls (mprotect, process_vm_readv): a handler may make them. */
 #ifndef EMM_GUARD_H
 #define EMM_GUARD_H
 
@@ -116,8 +116,10 @@ EMM_API size_t emm_guard_insn_len(const unsigned char *pc);
  * closes, `note` is given the last word of the array on it that is not 0
  * (the end of what was written there, on pages of its own that start as
  * zeros), so the records in use stay known — up to trailing zeros on a
- * block larger than what was written, a capacity. Returns 1 when it opened the
- * page of region r (no single step), 0 once the build is over.
+ * block larger than what was written, a capacity. That read never faults
+ * (process_vm_readv where the kernel allows it): another thread may protect
+ * the page meanwhile; each page kept closes once. Returns 1 when it opened
+ * the page of region r (no single step), 0 once the build is over.
  * Signal-safe. */
 #define EMM_GUARD_BUILD_PAGES 8
 EMM_API int emm_guard_build_open(emm_guard *g, emm_guard_region *r, uintptr_t page, int write,
