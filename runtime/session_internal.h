@@ -375,6 +375,7 @@ typedef struct session {
     pc_set phase_pcs;    /* the code of the current phase's mesh reads (window and probes) */
     pc_set pending_pcs;  /* and of the pending probe's, until it is confirmed or dropped */
     uint32_t old_probes; /* probes in a row of old code left unprofiled */
+    uint64_t probes_taken, probes_profiled; /* the report's "probes" */
     uint32_t plast_array;
     uint64_t plast_element;
     struct probe_job *probe_job; /* a full probe evaluated beside the run, or NULL */

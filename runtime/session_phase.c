@@ -159,6 +159,7 @@ void session_phases_start(session *s)
     p->model = SIZE_MAX;
     s->nphases = 1;
     s->old_probes = 0;
+    s->probes_taken = s->probes_profiled = 0;
     pcs_free(&s->phase_pcs);
     pcs_free(&s->pending_pcs);
     pc_set w;
@@ -302,6 +303,8 @@ static void apply(session *s, struct probe_job *j)
         return;
     }
     s->old_probes = j->skipped ? s->old_probes + 1 : 0;
+    s->probes_taken++;
+    s->probes_profiled += !j->skipped;
     if (!j->opinion) {
         pcs_join(&s->phase_pcs, &j->pcs);
         return;

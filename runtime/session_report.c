@@ -133,6 +133,13 @@ static void write_phases(json_writer *w, const session *s)
     char name[64];
     json_key(w, "phases_probed");
     json_bool(w, s->probed);
+    json_key(w, "probes");
+    json_begin_object(w);
+    json_key(w, "taken");
+    json_u64(w, s->probes_taken);
+    json_key(w, "profiled");
+    json_u64(w, s->probes_profiled);
+    json_end_object(w);
     json_key(w, "phases");
     json_begin_array(w);
     for (int i = 0; i < s->nphases; i++) {
@@ -1249,6 +1256,13 @@ static void nothing_extra(json_writer *w, void *ctx)
     json_null(w);
     json_key(w, "phases_probed");
     json_bool(w, false);
+    json_key(w, "probes");
+    json_begin_object(w);
+    json_key(w, "taken");
+    json_u64(w, 0);
+    json_key(w, "profiled");
+    json_u64(w, 0);
+    json_end_object(w);
     json_key(w, "phases");
     json_begin_array(w);
     json_end_array(w);

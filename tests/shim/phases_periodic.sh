@@ -3,7 +3,8 @@
 # land on different stretches of the same two loops, and their weak matches
 # scatter over the patterns (three phases were found here before the rule
 # below); none of them runs code the window's phase has not run, so the
-# run is one phase: probed, and the window's pattern stands.
+# run is one phase: probed, and the window's pattern stands, and its old
+# code is profiled only now and then.
 #   sh phases_periodic.sh SHIM WORKDIR PROGRAM MESH PASSES
 EMM_TEST_DECIDE=1
 . "$(dirname "$0")/lib.sh"
@@ -18,4 +19,12 @@ grep -q '"phases_probed": true' "$EMM_REPORT" || fail "report: phases_probed is 
   cat "$WORK/periodic.shim.err" >&2; fail "the summary lists phases of a periodic run"; }
 n=$(grep -c '"start":' "$EMM_REPORT")
 [ "$n" = 1 ] || { cat "$EMM_REPORT" >&2; fail "report: $n phases, expected the window's only"; }
-echo "periodic: one phase, probed"
+# Its probes run the window's code: most are not profiled (one in four in a
+# row is, for a strong match).
+probes=$(/usr/bin/python3 -c '
+import json, sys
+p = json.load(open(sys.argv[1]))["probes"]
+if not (p["taken"] >= 4 and 0 < p["profiled"] <= (p["taken"] + 3) // 4):
+    sys.exit("report: probes %s: expected at least 4, one in four of them profiled" % p)
+print("%d probes, %d profiled" % (p["taken"], p["profiled"]))' "$EMM_REPORT") || fail "$probes"
+echo "periodic: one phase, probed ($probes)"
