@@ -6,8 +6,8 @@
 # examples/smooth.c on a generated mesh of FACES faces (default 100,000),
 # PASSES Laplacian passes (default 10), the sancov build under
 #   emm run --capture sancov --compare baselines
-# (the window decided, every probe of the run profiled, the contest of 64
-# candidates, the phases, direct reads and the reference cache simulated
+# (the window decided, the run probed for phases, the contest of every
+# candidate, the phases, direct reads and the reference cache simulated
 # over the whole run), against the plain build's native run of the same
 # input, in this one command: median of 3 wall times, and of 3 CPU times
 # (user + system, all threads) where /usr/bin/time exists. The same run as
