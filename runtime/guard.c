@@ -62,6 +62,7 @@ struct emm_guard {
     size_t split;       /* pages split (split_pages), under the lock */
     size_t page;
     int peek;           /* process_vm_readv reads this process (last_word) */
+    unsigned protecting; /* atomic: handlers that may protect a page (emm_guard_step_done) */
     emm_sigaction_fn real;             /* the C library's sigaction */
     struct sigaction saved_segv, saved_trap; /* the program's handlers */
 };
@@ -202,6 +203,19 @@ void emm_guard_protect(emm_guard *g, uintptr_t base, size_t bytes, void *map, si
     pthread_mutex_unlock(&g->lock);
 }
 
+/* Waits until no handler may still protect a page: one that checked
+ * before the caller's change (the watching flag cleared, a region gone) and
+ * has yet to protect its page or open it again. After that, no page the
+ * caller opens is protected behind its back — which a thread of the shim's
+ * own, that reads the program's arrays with SIGSEGV blocked (the decision),
+ * would not survive. Not from a handler. */
+static void quiesce(emm_guard *g)
+{
+    __atomic_thread_fence(__ATOMIC_SEQ_CST);
+    while (__atomic_load_n(&g->protecting, __ATOMIC_SEQ_CST) != 0)
+        sched_yield();
+}
+
 void emm_guard_unprotect(emm_guard *g, uintptr_t base)
 {
     pthread_mutex_lock(&g->lock);
@@ -209,6 +223,10 @@ void emm_guard_unprotect(emm_guard *g, uintptr_t base)
     if (r) {
         open_region(g, r);
         r->base = 0;
+        /* A handler that checked the region before it left may have
+         * protected a page of it since: it opens it again (its check
+         * after), and is waited for. */
+        quiesce(g);
     }
     pthread_mutex_unlock(&g->lock);
 }
@@ -217,8 +235,10 @@ void emm_guard_lift(emm_guard *g)
 {
     pthread_mutex_lock(&g->lock);
     /* Before the pages open: a handler that protects a page again after
-     * this store sees it and opens the page (emm_guard_step_done). */
+     * this store sees it and opens the page (emm_guard_step_done), and one
+     * that checked before it is waited for. */
     __atomic_store_n(&g->watching, 0, __ATOMIC_SEQ_CST);
+    quiesce(g);
     FOR_REGIONS(g, c, r)
         if (r->base) {
             open_region(g, r);
@@ -277,14 +297,19 @@ int emm_guard_retry(const emm_guard *g, uintptr_t a, uintptr_t *retried)
 
 void emm_guard_step_done(emm_guard *g, emm_guard_region *r, uintptr_t page)
 {
-    if (!emm_guard_watching(g) || __atomic_load_n(&r->io, __ATOMIC_RELAXED) != 0)
-        return;
-    int in;
-    mprotect((void *)page, g->page, PROT_NONE);
-    /* The window closed meanwhile (emm_guard_lift) or the region left: its
-     * pages stay open. */
-    if (!__atomic_load_n(&g->watching, __ATOMIC_SEQ_CST) || emm_guard_find(g, page, &in) != r)
-        mprotect((void *)page, g->page, PROT_READ | PROT_WRITE);
+    /* Counted from before its check to after its last mprotect, so that
+     * emm_guard_lift and emm_guard_unprotect can wait for it (quiesce). */
+    __atomic_add_fetch(&g->protecting, 1, __ATOMIC_SEQ_CST);
+    if (__atomic_load_n(&g->watching, __ATOMIC_SEQ_CST) &&
+        __atomic_load_n(&r->io, __ATOMIC_RELAXED) == 0) {
+        int in;
+        mprotect((void *)page, g->page, PROT_NONE);
+        /* The window closed meanwhile (emm_guard_lift) or the region left:
+         * its pages stay open. */
+        if (!__atomic_load_n(&g->watching, __ATOMIC_SEQ_CST) || emm_guard_find(g, page, &in) != r)
+            mprotect((void *)page, g->page, PROT_READ | PROT_WRITE);
+    }
+    __atomic_sub_fetch(&g->protecting, 1, __ATOMIC_SEQ_CST);
 }
 
 /* --- stepping in a slot ------------------------------------------------- */
