@@ -127,19 +127,26 @@ static bool phase_pays(const session *s, const program_phase *p)
            p->best_span + session_switch_cycles(s) < p->chosen_span;
 }
 
+/* "probes" (docs/report.md): the probes taken after the window, and those
+ * profiled. */
+static void write_probes(json_writer *w, uint64_t taken, uint64_t profiled)
+{
+    json_key(w, "probes");
+    json_begin_object(w);
+    json_key(w, "taken");
+    json_u64(w, taken);
+    json_key(w, "profiled");
+    json_u64(w, profiled);
+    json_end_object(w);
+}
+
 /* "phases" (docs/report.md): the program's phases as the probes found them. */
 static void write_phases(json_writer *w, const session *s)
 {
     char name[64];
     json_key(w, "phases_probed");
     json_bool(w, s->probed);
-    json_key(w, "probes");
-    json_begin_object(w);
-    json_key(w, "taken");
-    json_u64(w, s->probes_taken);
-    json_key(w, "profiled");
-    json_u64(w, s->probes_profiled);
-    json_end_object(w);
+    write_probes(w, s->probes_taken, s->probes_profiled);
     json_key(w, "phases");
     json_begin_array(w);
     for (int i = 0; i < s->nphases; i++) {
@@ -1256,13 +1263,7 @@ static void nothing_extra(json_writer *w, void *ctx)
     json_null(w);
     json_key(w, "phases_probed");
     json_bool(w, false);
-    json_key(w, "probes");
-    json_begin_object(w);
-    json_key(w, "taken");
-    json_u64(w, 0);
-    json_key(w, "profiled");
-    json_u64(w, 0);
-    json_end_object(w);
+    write_probes(w, 0, 0);
     json_key(w, "phases");
     json_begin_array(w);
     json_end_array(w);
