@@ -1248,16 +1248,14 @@ int check_bounds_hold(const emm_machine *m, const emm_sweep *S, const uint8_t *p
  * early could have ranked first or second, S is swept again in full, so
  * the outcome is the full sweep's.
  * Returns EMM_OK leaving *out alone when the recipe names no traversal;
- * errors are out of memory only. *window: the window's sweep W when it was
- * made (the caller frees it; the neighbours' costs read the same), or NULL. */
+ * errors are out of memory only. */
 static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info,
                                 const emm_mesh *mesh, const struct synth_arrays *arrays,
                                 const emm_trace_record *recs, size_t n, const char *name,
                                 const emm_threads *threads, emm_model_share *share,
                                 decide_cache *cache, uint64_t visits, emm_window_decision *out,
-                                emm_sweep **window, emm_error *err)
+                                emm_error *err)
 {
-    *window = NULL;
     const char *recipe = check_recipe(out);
     if (visits == 0 || visits > EMM_DECIDE_SYNTH_VISITS)
         visits = EMM_DECIDE_SYNTH_VISITS;
@@ -1324,7 +1322,7 @@ done:
         emm_sweep_free(S);
         free(partial);
     }
-    *window = W;
+    emm_sweep_free(W);
     return st;
 }
 
@@ -1443,21 +1441,16 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
                                   size_t n, const size_t near[EMM_DECIDE_NEIGHBOURS],
                                   const double dist[EMM_DECIDE_NEIGHBOURS], size_t k,
                                   const emm_threads *threads, emm_model_share *share,
-                                  const emm_sweep *window, emm_window_decision *out,
-                                  emm_error *err)
+                                  emm_window_decision *out, emm_error *err)
 {
     if (k == 0)
         return EMM_OK;
-    /* The window's sweep, the pattern check's when it made one (the same
-     * records, strategies and machine: the same cycles). */
+    /* The window's sweep. */
     emm_sweep *own = NULL;
-    const emm_sweep *W = window;
     emm_error e;
-    if (!W) {
-        if (sweep_records_shared(m, info, recs, n, threads, share, true, &own, &e) != EMM_OK)
-            return e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
-        W = own;
-    }
+    if (sweep_records_shared(m, info, recs, n, threads, share, true, &own, &e) != EMM_OK)
+        return e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
+    const emm_sweep *W = own;
     /* The window again on a smaller local store (EMM_DECIDE_WINDOW_STORE_SHIFT),
      * as full as the run will keep it; its strategies are the same sweep's,
      * index for index. Without it (a store too small to halve), the
@@ -1584,7 +1577,6 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
             return EMM_OK;
         struct synth_arrays arrays;
         emm_mesh *mesh = NULL;
-        emm_sweep *window = NULL;
         bool own_mesh = false;
         st = EMM_OK;
         if (info->geometry.nt > 0 && program_arrays(info, &arrays))
@@ -1604,18 +1596,17 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
                 (k = pick_neighbours(t, m, info, f, near, dist)) == SIZE_MAX)
                 st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
             if (st == EMM_OK && k > 0) {
-                st = neighbour_costs(t, m, info, recs, n, near, dist, k, threads, share, NULL,
-                                     out, err);
+                st = neighbour_costs(t, m, info, recs, n, near, dist, k, threads, share, out,
+                                     err);
                 if (out->neighbours)
                     out->how = EMM_DECIDED_CHECKED;
             }
             if (st == EMM_OK && !out->neighbours)
                 st = check_pattern(m, info, mesh, &arrays, recs, n, name, threads, share, cache,
-                                   opt ? opt->synth_visits : 0, out, &window, err);
+                                   opt ? opt->synth_visits : 0, out, err);
         }
         if (own_mesh)
             emm_mesh_free(mesh);
-        emm_sweep_free(window);
         /* A sample's strategy the machine does not have (a cache label on a
          * machine without one) is no answer: the window decides. */
         if (st != EMM_OK || out->how == EMM_DECIDED_CHECKED ||
