@@ -75,27 +75,17 @@ emm_status emm_layout_fill_sides(emm_layout *l, const char *name, emm_error *err
     return EMM_OK;
 }
 
-/* The bounding box of the vertices triangles use, and the layout's space:
- * as many axes as its kind declares, those along which the box is largest
- * (core/geom.h: the one choice every layer makes; all three in space). */
-static void choose_space(emm_layout *l, const double *xyz, const int32_t *tri)
+/* The layout's space: as many axes as its kind declares, those along which
+ * the bounding box of the vertices triangles use is largest (core/geom.h:
+ * the one choice every layer makes; all three in space). */
+static void choose_space(emm_layout *l, const emm_layout_geometry *g)
 {
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < 3 * l->nt; i++) {
-        const double *p = xyz + 3 * (size_t)tri[i];
-        for (int a = 0; a < 3; a++) {
-            if (p[a] < lo[a])
-                lo[a] = p[a];
-            if (p[a] > hi[a])
-                hi[a] = p[a];
-        }
-    }
     l->dims = l->ops->dims;
     assert(l->dims >= 2 && l->dims <= EMM_MAX_DIMS);
-    emm_axes_largest(lo, hi, l->dims, l->axes);
+    emm_axes_largest(g->lo, g->hi, l->dims, l->axes);
     for (uint32_t k = 0; k < l->dims; k++) {
-        l->lo[k] = lo[l->axes[k]];
-        l->hi[k] = hi[l->axes[k]];
+        l->lo[k] = g->lo[l->axes[k]];
+        l->hi[k] = g->hi[l->axes[k]];
     }
 }
 
@@ -301,12 +291,19 @@ static void fill_sizes(emm_layout *l)
     l->cells_bytes = off;
 }
 
-static emm_status validate(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
-                           const emm_layout_options *opt, const char *name, emm_error *err)
+void emm_layout_geometry_free(emm_layout_geometry *g)
 {
-    if (opt->cell == 0)
-        return emm_fail(err, EMM_ERR_INVALID, "%s: a layout needs at least 1 triangle per cell",
-                        name);
+    for (int a = 0; a < 3; a++) {
+        free(g->centroid[a]);
+        g->centroid[a] = NULL;
+    }
+}
+
+emm_status emm_layout_geometry_init(emm_layout_geometry *g, const double *xyz, size_t nv,
+                                    const int32_t *tri, size_t nt, const char *name,
+                                    emm_error *err)
+{
+    memset(g, 0, sizeof *g);
     if (nt == 0)
         return emm_fail(err, EMM_ERR_INVALID, "%s: no triangles to lay out", name);
     if (nt > MAX_TRIANGLES || nv > (size_t)INT32_MAX)
@@ -323,13 +320,36 @@ static emm_status validate(const double *xyz, size_t nv, const int32_t *tri, siz
             return emm_fail(err, EMM_ERR_MESH,
                             "%s: triangle %zu refers to vertex %lld; the mesh has %zu vertices",
                             name, i / 3, (long long)tri[i], nv);
+    g->tri = tri;
+    g->nv = nv;
+    g->nt = nt;
+    for (int a = 0; a < 3; a++) {
+        g->lo[a] = INFINITY;
+        g->hi[a] = -INFINITY;
+        if (!(g->centroid[a] = malloc(nt * sizeof *g->centroid[a]))) {
+            emm_layout_geometry_free(g);
+            return emm_layout_nomem(err, name);
+        }
+    }
+    for (size_t t = 0; t < nt; t++) {
+        const double *p[3] = {xyz + 3 * (size_t)tri[3 * t], xyz + 3 * (size_t)tri[3 * t + 1],
+                              xyz + 3 * (size_t)tri[3 * t + 2]};
+        for (int a = 0; a < 3; a++) {
+            for (int k = 0; k < 3; k++) {
+                if (p[k][a] < g->lo[a])
+                    g->lo[a] = p[k][a];
+                if (p[k][a] > g->hi[a])
+                    g->hi[a] = p[k][a];
+            }
+            g->centroid[a][t] = (p[0][a] + p[1][a] + p[2][a]) / 3.0;
+        }
+    }
     return EMM_OK;
 }
 
-/* Builds without the local-store check; inputs are validated. */
-static emm_status build_once(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
-                             const emm_layout_options *opt, const char *name, emm_layout **out,
-                             emm_error *err)
+/* Builds without the local-store check; the geometry is checked. */
+static emm_status build_once(const emm_layout_geometry *g, const emm_layout_options *opt,
+                             const char *name, emm_layout **out, emm_error *err)
 {
     emm_status st = EMM_OK;
     emm_layout *l = calloc(1, sizeof *l);
@@ -337,11 +357,11 @@ static emm_status build_once(const double *xyz, size_t nv, const int32_t *tri, s
         return emm_layout_nomem(err, name);
     l->opt = *opt;
     l->ops = kinds[opt->kind];
-    l->nv = nv;
-    l->nt = nt;
-    choose_space(l, xyz, tri);
+    l->nv = g->nv;
+    l->nt = g->nt;
+    choose_space(l, g);
 
-    double *c[EMM_MAX_DIMS] = {NULL, NULL, NULL};
+    const double *c[EMM_MAX_DIMS] = {NULL, NULL, NULL};
     /* Cells divide the bounding box: past ±1e300 its extent, or a sum of
      * three coordinates, can overflow to infinity and every cell index
      * would be meaningless (a fuzzed trace's geometry found this). */
@@ -351,39 +371,26 @@ static emm_status build_once(const double *xyz, size_t nv, const int32_t *tri, s
                           name);
             goto done;
         }
-    l->tri_cell = malloc(nt * sizeof *l->tri_cell);
-    bool got = l->tri_cell != NULL;
-    for (uint32_t k = 0; k < l->dims; k++) {
-        c[k] = malloc(nt * sizeof *c[k]);
-        got = got && c[k];
-    }
-    if (!got) {
+    l->tri_cell = malloc(g->nt * sizeof *l->tri_cell);
+    if (!l->tri_cell) {
         st = emm_layout_nomem(err, name);
         goto done;
     }
-    for (size_t t = 0; t < nt; t++) {
-        const int32_t *v = tri + 3 * t;
-        for (uint32_t k = 0; k < l->dims; k++) {
-            int a = l->axes[k];
-            c[k][t] = (xyz[3 * (size_t)v[0] + a] + xyz[3 * (size_t)v[1] + a] +
-                       xyz[3 * (size_t)v[2] + a]) / 3.0;
-        }
-    }
-    st = l->ops->build(l, (const double *const *)c, name, err);
+    for (uint32_t k = 0; k < l->dims; k++)
+        c[k] = g->centroid[l->axes[k]];
+    st = l->ops->build(l, c, name, err);
     if (st == EMM_OK && l->ops->compact)
         st = drop_empty(l, name, err);
     if (st == EMM_OK)
         st = fill_triangles(l, name, err);
     if (st == EMM_OK)
-        st = fill_vertices(l, tri, name, err);
+        st = fill_vertices(l, g->tri, name, err);
     if (st == EMM_OK && l->dims == 3 && !l->opt.vertex_cells)
         st = fill_ring(l, name, err);
     if (st == EMM_OK)
         fill_sizes(l);
 
 done:
-    for (uint32_t k = 0; k < EMM_MAX_DIMS; k++)
-        free(c[k]);
     if (st != EMM_OK) {
         emm_layout_free(l);
         return st;
@@ -410,9 +417,8 @@ static uint32_t floor_pow2(uint64_t x)
     return p;
 }
 
-emm_status emm_layout_fit_cell(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
-                               const emm_layout *l, uint64_t local, uint32_t *suggest,
-                               const char *name, emm_error *err)
+emm_status emm_layout_fit_cell(const emm_layout_geometry *g, const emm_layout *l, uint64_t local,
+                               uint32_t *suggest, const char *name, emm_error *err)
 {
     uint64_t bytes = l->cells[largest_cell(l)].bytes;
     uint64_t fit = (uint64_t)((double)l->opt.cell * (double)local / (double)bytes);
@@ -424,7 +430,7 @@ emm_status emm_layout_fit_cell(const double *xyz, size_t nv, const int32_t *tri,
         o.cell = s;
         o.local_store = 0;
         emm_layout *trial = NULL;
-        emm_status st = build_once(xyz, nv, tri, nt, &o, name, &trial, err);
+        emm_status st = build_once(g, &o, name, &trial, err);
         if (st != EMM_OK)
             return st;
         int fits = trial->cells[largest_cell(trial)].bytes <= local;
@@ -459,29 +465,27 @@ emm_status emm_layout_too_large(const emm_layout *l, emm_fetch_kind fetch, uint6
 
 /* The error for a cell larger than the local store, with a CELL that fits
  * (emm_layout_fit_cell). */
-static emm_status too_large(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
-                            const emm_layout *l, const char *name, emm_error *err)
+static emm_status too_large(const emm_layout_geometry *g, const emm_layout *l, const char *name,
+                            emm_error *err)
 {
     uint32_t suggest = 0;
-    emm_status st =
-        emm_layout_fit_cell(xyz, nv, tri, nt, l, l->opt.local_store, &suggest, name, err);
+    emm_status st = emm_layout_fit_cell(g, l, l->opt.local_store, &suggest, name, err);
     if (st != EMM_OK)
         return st;
     return emm_layout_too_large(l, l->opt.fetch, l->opt.local_store, suggest, name, err);
 }
 
-emm_status emm_layout_build(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
-                            const emm_layout_options *opt, const char *name, emm_layout **out,
-                            emm_error *err)
+emm_status emm_layout_build_from(const emm_layout_geometry *g, const emm_layout_options *opt,
+                                 const char *name, emm_layout **out, emm_error *err)
 {
-    assert(opt && out && (xyz || nv == 0) && (tri || nt == 0));
+    assert(opt && out && g);
     assert(opt->kind > EMM_LAYOUT_ORIGINAL && opt->kind < EMM_LAYOUT_COUNT);
     *out = NULL;
     if (!name)
         name = "mesh";
-    emm_status st = validate(xyz, nv, tri, nt, opt, name, err);
-    if (st != EMM_OK)
-        return st;
+    if (opt->cell == 0)
+        return emm_fail(err, EMM_ERR_INVALID, "%s: a layout needs at least 1 triangle per cell",
+                        name);
     emm_layout_options o = *opt;
     if (o.vertex_bytes == 0)
         o.vertex_bytes = EMM_THESIS_VERTEX_BYTES;
@@ -490,16 +494,36 @@ emm_status emm_layout_build(const double *xyz, size_t nv, const int32_t *tri, si
     if (o.pointer_bytes == 0)
         o.pointer_bytes = EMM_LAYOUT_POINTER_BYTES;
     emm_layout *l = NULL;
-    st = build_once(xyz, nv, tri, nt, &o, name, &l, err);
+    emm_status st = build_once(g, &o, name, &l, err);
     if (st != EMM_OK)
         return st;
     if (o.local_store > 0 && l->cells[largest_cell(l)].bytes > o.local_store) {
-        st = too_large(xyz, nv, tri, nt, l, name, err);
+        st = too_large(g, l, name, err);
         emm_layout_free(l);
         return st;
     }
     *out = l;
     return EMM_OK;
+}
+
+emm_status emm_layout_build(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
+                            const emm_layout_options *opt, const char *name, emm_layout **out,
+                            emm_error *err)
+{
+    assert(opt && out && (xyz || nv == 0) && (tri || nt == 0));
+    *out = NULL;
+    if (!name)
+        name = "mesh";
+    if (opt->cell == 0)
+        return emm_fail(err, EMM_ERR_INVALID, "%s: a layout needs at least 1 triangle per cell",
+                        name);
+    emm_layout_geometry g;
+    emm_status st = emm_layout_geometry_init(&g, xyz, nv, tri, nt, name, err);
+    if (st != EMM_OK)
+        return st;
+    st = emm_layout_build_from(&g, opt, name, out, err);
+    emm_layout_geometry_free(&g);
+    return st;
 }
 
 const emm_layout_options *emm_layout_get_options(const emm_layout *l)

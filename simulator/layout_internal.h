@@ -103,14 +103,36 @@ struct emm_layout {
     uint32_t *cell_of;         /* nraw: the cell of each of the kind's, or EMM_LAYOUT_NONE */
 };
 
+/* What every layout of one mesh starts from, found once: the geometry
+ * checked (finite coordinates, vertex ids in range), the bounding box of the
+ * vertices triangles use, and each triangle's centroid on every axis. A
+ * share (share.h) keeps one for all the layouts of a trace, which cut the
+ * same triangles by kind and cell size. It refers to tri (3 vertex ids a
+ * triangle), which must outlive it; xyz is read by init only. */
+typedef struct emm_layout_geometry {
+    const int32_t *tri;
+    size_t nv, nt;
+    double lo[3], hi[3];
+    double *centroid[3]; /* nt each */
+} emm_layout_geometry;
+
+/* Checks the geometry and fills g; on failure (an invalid mesh, memory) g
+ * holds nothing to free. */
+emm_status emm_layout_geometry_init(emm_layout_geometry *g, const double *xyz, size_t nv,
+                                    const int32_t *tri, size_t nt, const char *name,
+                                    emm_error *err);
+void emm_layout_geometry_free(emm_layout_geometry *g);
+/* emm_layout_build over a checked geometry. */
+emm_status emm_layout_build_from(const emm_layout_geometry *g, const emm_layout_options *opt,
+                                 const char *name, emm_layout **out, emm_error *err);
+
 /* A CELL for l's kind whose every cell fits `local` bytes: cell bytes grow
  * about linearly with CELL, which gives a first guess, and the guess is
  * halved until a build of it fits (largest grid cells do not shrink exactly
  * in proportion); *suggest 0 when none does. The geometry is l's. Fails
  * only when a trial build does. */
-emm_status emm_layout_fit_cell(const double *xyz, size_t nv, const int32_t *tri, size_t nt,
-                               const emm_layout *l, uint64_t local, uint32_t *suggest,
-                               const char *name, emm_error *err);
+emm_status emm_layout_fit_cell(const emm_layout_geometry *g, const emm_layout *l, uint64_t local,
+                               uint32_t *suggest, const char *name, emm_error *err);
 /* The error for l's largest cell exceeding `local` bytes, naming `suggest`
  * (emm_layout_fit_cell) with `fetch` as the strategy to use instead. */
 emm_status emm_layout_too_large(const emm_layout *l, emm_fetch_kind fetch, uint64_t local,

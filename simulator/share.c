@@ -38,6 +38,9 @@ struct emm_model_share {
     size_t n, cap;
     int32_t *tri;
     bool tri_done;
+    /* The geometry every layout starts from, found on the first build. */
+    emm_layout_geometry geometry;
+    bool geometry_done;
     bool keep; /* layouts stay built until the share goes */
 };
 
@@ -73,9 +76,44 @@ void emm_model_share_unref(emm_model_share *sh)
     free(sh->e);
     free(sh->fits);
     free(sh->tri);
+    emm_layout_geometry_free(&sh->geometry);
     pthread_cond_destroy(&sh->built);
     pthread_mutex_destroy(&sh->mu);
     free(sh);
+}
+
+/* The triangles' vertex ids, copied from t once (under sh->mu); NULL when
+ * memory runs out. */
+static const int32_t *triangles(emm_model_share *sh, const emm_trace_info *t)
+{
+    const emm_trace_geometry *g = &t->geometry;
+    if (!sh->tri_done) {
+        sh->tri = malloc((g->nt ? 3 * (size_t)g->nt : 1) * sizeof *sh->tri);
+        if (sh->tri && g->nt)
+            memcpy(sh->tri, g->tri, 3 * (size_t)g->nt * sizeof *sh->tri);
+        sh->tri_done = sh->tri != NULL;
+    }
+    return sh->tri;
+}
+
+/* The share's geometry, found once (under sh->mu), over its own copy of
+ * the triangles, which lives as long as the share. */
+static emm_status geometry(emm_model_share *sh, const emm_trace_info *t, const char *name,
+                           const emm_layout_geometry **out, emm_error *err)
+{
+    const emm_trace_geometry *g = &t->geometry;
+    if (!sh->geometry_done) {
+        const int32_t *tri = g->nt ? triangles(sh, t) : g->tri;
+        if (!tri)
+            return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+        emm_status st = emm_layout_geometry_init(&sh->geometry, g->xyz, (size_t)g->nv, tri,
+                                                 (size_t)g->nt, name, err);
+        if (st != EMM_OK)
+            return st;
+        sh->geometry_done = true;
+    }
+    *out = &sh->geometry;
+    return EMM_OK;
 }
 
 static bool same_key(const emm_layout_options *a, const emm_layout_options *b)
@@ -89,8 +127,15 @@ emm_status emm_model_share_layout(emm_model_share *sh, const emm_trace_info *t,
                                   const emm_layout_options *opt, const char *name,
                                   const emm_layout **out, emm_error *err)
 {
-    const emm_trace_geometry *g = &t->geometry;
     pthread_mutex_lock(&sh->mu);
+    const emm_layout_geometry *g = NULL;
+    if (opt->cell > 0) { /* a cell of 0 is emm_layout_build_from's error */
+        emm_status gst = geometry(sh, t, name, &g, err);
+        if (gst != EMM_OK) {
+            pthread_mutex_unlock(&sh->mu);
+            return gst;
+        }
+    }
     size_t i = 0;
     while (i < sh->n && !same_key(&sh->e[i].opt, opt))
         i++;
@@ -134,8 +179,9 @@ emm_status emm_model_share_layout(emm_model_share *sh, const emm_trace_info *t,
     /* Built outside the lock: other layouts build meanwhile. */
     emm_layout *l = NULL;
     emm_error e;
-    emm_status st = emm_layout_build(g->xyz, (size_t)g->nv, g->tri, (size_t)g->nt, opt, name, &l,
-                                     &e);
+    emm_status st = g ? emm_layout_build_from(g, opt, name, &l, &e)
+                      : emm_fail(&e, EMM_ERR_INVALID,
+                                 "%s: a layout needs at least 1 triangle per cell", name);
 
     pthread_mutex_lock(&sh->mu);
     struct entry *en = &sh->e[i]; /* the array may have moved */
@@ -172,15 +218,8 @@ void emm_model_share_release(emm_model_share *sh, const emm_layout *l)
 const int32_t *emm_model_share_triangles(emm_model_share *sh, const emm_trace_info *t,
                                          emm_error *err)
 {
-    const emm_trace_geometry *g = &t->geometry;
     pthread_mutex_lock(&sh->mu);
-    if (!sh->tri_done) {
-        sh->tri = malloc((g->nt ? 3 * (size_t)g->nt : 1) * sizeof *sh->tri);
-        if (sh->tri && g->nt)
-            memcpy(sh->tri, g->tri, 3 * (size_t)g->nt * sizeof *sh->tri);
-        sh->tri_done = sh->tri != NULL;
-    }
-    const int32_t *tri = sh->tri;
+    const int32_t *tri = triangles(sh, t);
     pthread_mutex_unlock(&sh->mu);
     if (!tri)
         emm_fail(err, EMM_ERR_NOMEM, "out of memory for the triangles' vertex ids");
@@ -201,10 +240,13 @@ emm_status emm_model_share_fit(emm_model_share *sh, const emm_trace_info *t, con
         }
     pthread_mutex_unlock(&sh->mu);
 
+    const emm_layout_geometry *g = NULL;
+    emm_status st = geometry(sh, t, name, &g, err);
+    pthread_mutex_unlock(&sh->mu);
+    if (st != EMM_OK)
+        return st;
     /* Found outside the lock: two models may both search, and agree. */
-    const emm_trace_geometry *g = &t->geometry;
-    emm_status st = emm_layout_fit_cell(g->xyz, (size_t)g->nv, g->tri, (size_t)g->nt, l, local,
-                                        suggest, name, err);
+    st = emm_layout_fit_cell(g, l, local, suggest, name, err);
     if (st != EMM_OK)
         return st;
     pthread_mutex_lock(&sh->mu);
