@@ -31,6 +31,14 @@ static bool mesh_read(const session *s, const emm_trace_record *r)
     return !r->write && s->info.arrays[r->array].kind != EMM_ARRAY_RAW;
 }
 
+/* Slots of the direct-mapped memories of program counters below. */
+#define PC_MEMO 256u
+
+static size_t pc_slot(uint64_t pc)
+{
+    return (size_t)(pc ^ pc >> 8 ^ pc >> 16) & (PC_MEMO - 1);
+}
+
 static int cmp_pc(const void *a, const void *b)
 {
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
@@ -48,11 +56,11 @@ static bool pcs_of(const session *s, const emm_trace_record *recs, size_t n, pc_
         return false;
     /* A loop's few counters repeat: a small direct-mapped memory of those
      * seen keeps most repeats out of the sort. */
-    uint64_t recent[64] = {0};
+    uint64_t recent[PC_MEMO] = {0};
     size_t m = 0;
     for (size_t i = 0; i < n; i++) {
         uint64_t pc = recs[i].pc;
-        uint64_t *slot = &recent[(pc ^ pc >> 6 ^ pc >> 12) & 63];
+        uint64_t *slot = &recent[pc_slot(pc)];
         if (pc && *slot != pc && mesh_read(s, &recs[i])) {
             *slot = pc;
             v[m++] = pc;
@@ -112,11 +120,22 @@ static double new_code(const session *s, const pc_set *set, const emm_trace_reco
                        size_t n)
 {
     size_t known = 0, fresh = 0;
-    for (size_t i = 0; i < n; i++)
-        if (recs[i].pc && mesh_read(s, &recs[i])) {
-            known++;
-            fresh += !pcs_has(set, recs[i].pc);
+    /* A loop's few counters repeat: each slot remembers a counter and
+     * whether set has it, and the search runs once per change of slot. */
+    uint64_t memo_pc[PC_MEMO] = {0};
+    bool memo_new[PC_MEMO];
+    for (size_t i = 0; i < n; i++) {
+        uint64_t pc = recs[i].pc;
+        if (!pc || !mesh_read(s, &recs[i]))
+            continue;
+        size_t k = pc_slot(pc);
+        if (memo_pc[k] != pc) {
+            memo_pc[k] = pc;
+            memo_new[k] = !pcs_has(set, pc);
         }
+        known++;
+        fresh += memo_new[k];
+    }
     return known ? (double)fresh / (double)known : -1;
 }
 
@@ -427,19 +446,37 @@ static void launch_probe(session *s)
 
 void session_phases_see(session *s, const emm_trace_record *recs, size_t n)
 {
-    for (size_t k = 0; k < n && s->probing; k++) {
-        const emm_trace_record *r = &recs[k];
-        bool element = !r->write && s->info.arrays[r->array].kind != EMM_ARRAY_RAW &&
-                       (!s->pany || r->array != s->plast_array ||
-                        r->element != s->plast_element);
-        if (element) {
-            s->pany = true;
-            s->plast_array = r->array;
-            s->plast_element = r->element;
-        }
+    /* The element read last, in locals: the gap between probes, most of
+     * the run, only counts element reads. */
+    const emm_trace_array *arrays = s->info.arrays;
+    bool any = s->pany;
+    uint32_t last_array = s->plast_array;
+    uint64_t last_element = s->plast_element;
+    for (size_t k = 0; k < n && s->probing;) {
+        bool element;
         if (s->gap > 0) {
-            s->gap -= element;
+            uint64_t gap = s->gap;
+            for (; k < n && gap > 0; k++) {
+                const emm_trace_record *r = &recs[k];
+                element = !r->write && arrays[r->array].kind != EMM_ARRAY_RAW &&
+                          (!any || r->array != last_array || r->element != last_element);
+                if (element) {
+                    any = true;
+                    last_array = r->array;
+                    last_element = r->element;
+                }
+                gap -= element;
+            }
+            s->gap = gap;
             continue;
+        }
+        const emm_trace_record *r = &recs[k];
+        element = !r->write && arrays[r->array].kind != EMM_ARRAY_RAW &&
+                  (!any || r->array != last_array || r->element != last_element);
+        if (element) {
+            any = true;
+            last_array = r->array;
+            last_element = r->element;
         }
         if (s->pn == 0)
             s->probe_start = s->accesses - n + k;
@@ -455,6 +492,7 @@ void session_phases_see(session *s, const emm_trace_record *recs, size_t n)
         }
         s->probe[s->pn++] = *r;
         s->probe_reads += element;
+        k++;
         if (s->probe_reads >= s->probe_len) {
             launch_probe(s);
             s->pn = 0;
@@ -462,6 +500,9 @@ void session_phases_see(session *s, const emm_trace_record *recs, size_t n)
             s->gap = SESSION_PROBE_GAP * s->probe_len;
         }
     }
+    s->pany = any;
+    s->plast_array = last_array;
+    s->plast_element = last_element;
     /* A probe's outcome lands a fixed number of records after it filled, at
      * the end of a batch, so that what it finds does not depend on how
      * fast it was evaluated. */
