@@ -123,12 +123,23 @@ typedef struct late_array {
 #define SESSION_PHASE_NEW_CODE 0.5
 /* A probe of the current phase's code (less than SESSION_PHASE_NEW_CODE of
  * new code) can argue for a phase only by a strong match: its profile, most
- * of a probe's cost, is worked out only for every (SESSION_PROBE_OLD_SKIP +
- * 1)th such probe in a row. */
-#define SESSION_PROBE_OLD_SKIP 3
+ * of a probe's cost, is worked out only when its moves are new to the
+ * phase (below), and otherwise for every (SESSION_PROBE_OLD_SKIP + 1)th
+ * such probe in a row. */
+#define SESSION_PROBE_OLD_SKIP 15
 /* The program counters a phase's set keeps at most (past it, the set stops
  * growing, and unseen code counts as new). */
 #define SESSION_PHASE_PCS_MAX 65536u
+/* A probe's moves (session_phase.c, moves_of): the share of its element
+ * reads in each power-of-two band of id distance from the read before. A
+ * probe of old code whose moves lie within SESSION_PROBE_MOVED (half the L1
+ * distance) of moves the current phase already showed — the window's, or
+ * a probe's that was profiled and found the phase's own pattern — has not
+ * moved and is left unprofiled, but for one in SESSION_PROBE_OLD_SKIP + 1
+ * in a row; the phase remembers the last SESSION_MOVE_REFS such moves. */
+#define SESSION_MOVE_BUCKETS 34
+#define SESSION_MOVE_REFS 8
+#define SESSION_PROBE_MOVED 0.1
 
 /* Distinct program counters (sorted; 0, unknown, left out). */
 typedef struct pc_set {
@@ -375,6 +386,9 @@ typedef struct session {
     pc_set phase_pcs;    /* the code of the current phase's mesh reads (window and probes) */
     pc_set pending_pcs;  /* and of the pending probe's, until it is confirmed or dropped */
     uint32_t old_probes; /* probes in a row of old code left unprofiled */
+    double moves[SESSION_MOVE_REFS][SESSION_MOVE_BUCKETS]; /* the current phase's moves */
+    uint32_t nmoves, moves_next;
+    double pending_moves[SESSION_MOVE_BUCKETS]; /* the pending probe's */
     uint64_t probes_taken, probes_profiled; /* the report's "probes" */
     uint32_t plast_array;
     uint64_t plast_element;

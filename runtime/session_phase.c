@@ -6,8 +6,9 @@
  * the probe filled (the detection) — and when two probes in a row find the
  * same pattern, other than the current phase's, a phase begins at the
  * first of them; a weak match counts only when its probe runs new code
- * (SESSION_PHASE_NEW_CODE), and a probe of old code is profiled only now
- * and then (SESSION_PROBE_OLD_SKIP). Its best candidate is decided on the probe as the
+ * (SESSION_PHASE_NEW_CODE), and a probe of old code is profiled only when
+ * its moves are new to the phase (SESSION_PROBE_MOVED) or now and then
+ * (SESSION_PROBE_OLD_SKIP). Its best candidate is decided on the probe as the
  * window's was (emm_decide_features) and, when it differs from the chosen
  * strategy, simulated from the detection on in a model of its own that starts cold:
  * exactly what switching strategy would do (the local store flushed). At
@@ -15,6 +16,7 @@
  * the same span plus the cost of re-laying out the mesh. */
 #include "session_internal.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -139,6 +141,74 @@ static double new_code(const session *s, const pc_set *set, const emm_trace_reco
     return known ? (double)fresh / (double)known : -1;
 }
 
+/* The probe's moves, in a cheap form (docs/profile.md "Phases"): the
+ * share of its element reads that move by 2^b - 1 to 2^(b+1) - 2 ids from
+ * the element read before in the same array, for each b (bucket 0: the
+ * same element, read again after another array's). */
+static void moves_of(const session *s, const emm_trace_record *recs, size_t n,
+                     double h[SESSION_MOVE_BUCKETS])
+{
+    uint64_t count[SESSION_MOVE_BUCKETS] = {0}, total = 0;
+    uint64_t last[2] = {0, 0};
+    uint32_t last_array[2] = {UINT32_MAX, UINT32_MAX};
+    for (size_t i = 0; i < n; i++) {
+        const emm_trace_record *r = &recs[i];
+        if (!mesh_read(s, r))
+            continue;
+        /* The last element of each of the two arrays read most recently. */
+        int k = r->array == last_array[0] ? 0 : r->array == last_array[1] ? 1 : -1;
+        if (k < 0) {
+            last_array[1] = last_array[0];
+            last[1] = last[0];
+            last_array[0] = r->array;
+            last[0] = r->element;
+            continue;
+        }
+        if (k == 0 && r->element == last[0])
+            continue; /* the same element's further loads */
+        uint64_t d = r->element > last[k] ? r->element - last[k] : last[k] - r->element;
+        int b = 0;
+        while (b + 1 < SESSION_MOVE_BUCKETS && d + 1 >= (uint64_t)2 << b)
+            b++;
+        count[b]++;
+        total++;
+        last[k] = r->element;
+        if (k == 1) {
+            last_array[1] = last_array[0];
+            last[1] = last[0];
+            last_array[0] = r->array;
+            last[0] = r->element;
+        }
+    }
+    for (int b = 0; b < SESSION_MOVE_BUCKETS; b++)
+        h[b] = total ? (double)count[b] / (double)total : 0;
+}
+
+/* Whether moves h are new to the current phase: farther than
+ * SESSION_PROBE_MOVED (half the L1 distance: 0 the same, 1 disjoint) from
+ * every moves it remembers. */
+static bool moved(const session *s, const double h[SESSION_MOVE_BUCKETS])
+{
+    for (uint32_t r = 0; r < s->nmoves; r++) {
+        double d = 0;
+        for (int k = 0; k < SESSION_MOVE_BUCKETS; k++)
+            d += fabs(s->moves[r][k] - h[k]);
+        if (d / 2 <= SESSION_PROBE_MOVED)
+            return false;
+    }
+    return true;
+}
+
+/* Moves h become the current phase's (the oldest forgotten past
+ * SESSION_MOVE_REFS). */
+static void remember_moves(session *s, const double h[SESSION_MOVE_BUCKETS])
+{
+    memcpy(s->moves[s->moves_next], h, sizeof s->moves[0]);
+    s->moves_next = (s->moves_next + 1) % SESSION_MOVE_REFS;
+    if (s->nmoves < SESSION_MOVE_REFS)
+        s->nmoves++;
+}
+
 static uint64_t model_total(const session *s, size_t i)
 {
     emm_model *m = emm_runner_model(s->runner, i);
@@ -179,6 +249,10 @@ void session_phases_start(session *s)
     s->nphases = 1;
     s->old_probes = 0;
     s->probes_taken = s->probes_profiled = 0;
+    s->nmoves = s->moves_next = 0;
+    double h[SESSION_MOVE_BUCKETS];
+    moves_of(s, s->window, s->wn, h);
+    remember_moves(s, h);
     pcs_free(&s->phase_pcs);
     pcs_free(&s->pending_pcs);
     pc_set w;
@@ -251,6 +325,7 @@ struct probe_job {
     bool skipped;           /* old code, not profiled: no opinion */
     bool argues;            /* its pattern is a new phase's (new, and a strong match or new code) */
     pc_set pcs;             /* the code of its mesh reads */
+    double moves[SESSION_MOVE_BUCKETS]; /* its moves (moves_of) */
     bool decided;           /* the best candidate of a new phase is in wd */
     emm_window_decision wd;
 };
@@ -271,10 +346,12 @@ static void evaluate(void *ctx)
     if (!pcs_of(s, j->recs, j->n, &j->pcs))
         goto off;
     /* The current phase's code argues for a new phase only by a strong
-     * match, which one probe in SESSION_PROBE_OLD_SKIP + 1 is profiled for. */
+     * match, which a probe is profiled for when its moves are new to the
+     * phase, and one in SESSION_PROBE_OLD_SKIP + 1 in a row otherwise. */
     double fresh = new_code(s, &s->phase_pcs, j->recs, j->n);
     bool old_code = fresh >= 0 && fresh < SESSION_PHASE_NEW_CODE;
-    if (old_code && !j->sample) {
+    moves_of(s, j->recs, j->n, j->moves);
+    if (old_code && !j->sample && !moved(s, j->moves)) {
         j->skipped = true;
         goto done;
     }
@@ -325,6 +402,10 @@ static void apply(session *s, struct probe_job *j)
     s->probes_taken++;
     s->probes_profiled += !j->skipped;
     if (!j->opinion) {
+        /* Moves a profile has nothing to say about (a sweep) are as much
+         * the phase's as its code is. */
+        if (!j->skipped)
+            remember_moves(s, j->moves);
         pcs_join(&s->phase_pcs, &j->pcs);
         return;
     }
@@ -333,6 +414,9 @@ static void apply(session *s, struct probe_job *j)
     /* A probe that does not argue for a new phase is the current phase's,
      * and so is the code of a pending probe it does not confirm. */
     if (!j->argues || s->nphases == SESSION_MAX_PHASES) {
+        if (s->pending[0])
+            remember_moves(s, s->pending_moves);
+        remember_moves(s, j->moves);
         s->pending[0] = 0;
         pcs_join(&s->phase_pcs, &s->pending_pcs);
         pcs_join(&s->phase_pcs, &j->pcs);
@@ -342,6 +426,9 @@ static void apply(session *s, struct probe_job *j)
      * like another pattern. The second in a row with the same new pattern
      * confirms it, and the phase starts at the first. */
     if (strcmp(pattern, s->pending) != 0) {
+        if (s->pending[0])
+            remember_moves(s, s->pending_moves);
+        memcpy(s->pending_moves, j->moves, sizeof s->pending_moves);
         snprintf(s->pending, sizeof s->pending, "%s", pattern);
         s->pending_start = j->start;
         pcs_join(&s->phase_pcs, &s->pending_pcs);
@@ -357,6 +444,9 @@ static void apply(session *s, struct probe_job *j)
     s->pending_pcs.pc = NULL;
     s->pending_pcs.n = 0;
     pcs_join(&s->phase_pcs, &j->pcs);
+    s->nmoves = s->moves_next = 0;
+    remember_moves(s, s->pending_moves);
+    remember_moves(s, j->moves);
     close_phase(s, cur);
     program_phase *p = &s->phases[s->nphases++];
     memset(p, 0, sizeof *p);
