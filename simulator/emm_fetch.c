@@ -80,8 +80,8 @@ typedef struct pager {
     uint32_t frames, used;
     uint64_t tri_off, vert_off, cell_off, cell_entry;
     uint64_t node_off;              /* a tree's nodes, 16 bytes each */
-    uint32_t *path_start;           /* ncells + 1: each cell's descent in path */
-    uint32_t *path;                 /* the pages of the nodes each descent reads, root
+    const uint32_t *path_start;     /* ncells + 1: each cell's descent in path (shared) */
+    const uint32_t *path;           /* the pages of the nodes each descent reads, root
                                        first, a page that the node before was on left out
                                        (touching it again changes nothing) */
     uint32_t npages;
@@ -736,8 +736,6 @@ static void fetch_destroy(emm_model *model)
     free(m->cell_dma);
     free(m->scheme_state);
     free(m->pg.page_frame);
-    free(m->pg.path_start);
-    free(m->pg.path);
     free(m->pg.frame_page);
     free(m->pg.prev);
     free(m->pg.next);
@@ -811,6 +809,63 @@ static emm_status plan_local_store(fetch_model *m, const emm_machine_params *p,
     return emm_layout_too_large(m->layout, o->fetch, m->budget, suggest, where, err);
 }
 
+/* The pages each cell's descent reads (pager.path_start, pager.path): the
+ * same for every model over one layout and page size, so built once for
+ * them all (emm_model_share_derived). */
+struct paths {
+    uint32_t *start, *path;
+};
+
+static void free_paths(void *p)
+{
+    struct paths *d = p;
+    if (d) {
+        free(d->start);
+        free(d->path);
+    }
+    free(d);
+}
+
+/* Each descent's nodes, as pages of `page` bytes from node_off on, a page
+ * the node before was on left out: one descent at a time into a list that
+ * grows. */
+static emm_status build_paths(const emm_layout *l, uint64_t page, uint64_t node_off, void **out,
+                              emm_error *err)
+{
+    uint32_t nodes[EMM_LAYOUT_MAX_DEPTH + 1];
+    size_t cap = (size_t)l->ncells * 4 + EMM_LAYOUT_MAX_DEPTH + 1, w = 0;
+    struct paths *d = calloc(1, sizeof *d);
+    if (d) {
+        d->start = malloc(((size_t)l->ncells + 1) * sizeof *d->start);
+        d->path = malloc(cap * sizeof *d->path);
+    }
+    if (!d || !d->start || !d->path)
+        goto nomem;
+    for (uint32_t c = 0; c < l->ncells; c++) {
+        uint32_t k = l->ops->path_nodes(l, c, nodes);
+        if (w + k > cap) {
+            uint32_t *more = realloc(d->path, 2 * cap * sizeof *d->path);
+            if (!more)
+                goto nomem;
+            d->path = more;
+            cap *= 2;
+        }
+        d->start[c] = (uint32_t)w;
+        for (uint32_t i = 0, last = NONE; i < k; i++) {
+            uint64_t off = node_off + 16 * (uint64_t)nodes[i];
+            uint32_t pg = (uint32_t)(off / page);
+            if (pg != last)
+                d->path[w++] = last = pg;
+        }
+    }
+    d->start[l->ncells] = (uint32_t)w;
+    *out = d;
+    return EMM_OK;
+nomem:
+    free_paths(d);
+    return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the paged tables");
+}
+
 static emm_status alloc_pager(fetch_model *m, const char *name, emm_error *err)
 {
     pager *g = &m->pg;
@@ -821,33 +876,13 @@ static emm_status alloc_pager(fetch_model *m, const char *name, emm_error *err)
     g->cell_entry = m->indexed ? EMM_INDEXED_CELL_BYTES : 8;
     g->node_off = g->cell_off + 8 * (uint64_t)l->ncells;
     if (!m->indexed && l->ops->path_nodes) {
-        /* Each descent's nodes, as pages, a page the node before was on
-         * left out: one descent at a time into a list that grows. */
-        uint32_t nodes[EMM_LAYOUT_MAX_DEPTH + 1];
-        size_t cap = (size_t)l->ncells * 4 + EMM_LAYOUT_MAX_DEPTH + 1, w = 0;
-        g->path_start = malloc(((size_t)l->ncells + 1) * sizeof *g->path_start);
-        g->path = malloc(cap * sizeof *g->path);
-        if (!g->path_start || !g->path)
-            return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the paged tables", name);
-        for (uint32_t c = 0; c < l->ncells; c++) {
-            uint32_t k = l->ops->path_nodes(l, c, nodes);
-            if (w + k > cap) {
-                uint32_t *more = realloc(g->path, 2 * cap * sizeof *g->path);
-                if (!more)
-                    return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the paged tables",
-                                    name);
-                g->path = more;
-                cap *= 2;
-            }
-            g->path_start[c] = (uint32_t)w;
-            for (uint32_t i = 0, last = NONE; i < k; i++) {
-                uint64_t off = g->node_off + 16 * (uint64_t)nodes[i];
-                uint32_t page = (uint32_t)(off / g->page);
-                if (page != last)
-                    g->path[w++] = last = page;
-            }
-        }
-        g->path_start[l->ncells] = (uint32_t)w;
+        const struct paths *d = NULL;
+        emm_error e;
+        if (emm_model_share_derived(m->share, l, g->page, g->node_off, build_paths, free_paths,
+                                    (const void **)&d, &e) != EMM_OK)
+            return emm_fail(err, e.status, "%s: %s", name, e.message);
+        g->path_start = d->start;
+        g->path = d->path;
     }
     uint64_t npages = (m->lookup_bytes + g->page - 1) / g->page;
     if (npages > UINT32_MAX - 1)

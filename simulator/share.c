@@ -28,8 +28,18 @@ struct fit {
     uint32_t suggest;
 };
 
+/* Data derived from a layout (emm_model_share_derived). */
+struct derived {
+    const emm_layout *layout;
+    uint64_t a, b;
+    void *data;
+    void (*destroy)(void *);
+};
+
 struct emm_model_share {
     int refs; /* atomic */
+    struct derived *d;
+    size_t nd, capd;
     struct fit *fits;
     size_t nfits, capfits;
     pthread_mutex_t mu;
@@ -71,6 +81,9 @@ void emm_model_share_unref(emm_model_share *sh)
 {
     if (!sh || __atomic_sub_fetch(&sh->refs, 1, __ATOMIC_ACQ_REL) != 0)
         return;
+    for (size_t i = 0; i < sh->nd; i++)
+        sh->d[i].destroy(sh->d[i].data);
+    free(sh->d);
     for (size_t i = 0; i < sh->n; i++)
         emm_layout_free(sh->e[i].layout);
     free(sh->e);
@@ -201,6 +214,19 @@ emm_status emm_model_share_layout(emm_model_share *sh, const emm_trace_info *t,
     return st;
 }
 
+/* Frees what was derived from layout l (under sh->mu). */
+static void drop_derived(emm_model_share *sh, const emm_layout *l)
+{
+    size_t m = 0;
+    for (size_t i = 0; i < sh->nd; i++) {
+        if (sh->d[i].layout == l)
+            sh->d[i].destroy(sh->d[i].data);
+        else
+            sh->d[m++] = sh->d[i];
+    }
+    sh->nd = m;
+}
+
 void emm_model_share_release(emm_model_share *sh, const emm_layout *l)
 {
     emm_layout *gone = NULL;
@@ -210,9 +236,40 @@ void emm_model_share_release(emm_model_share *sh, const emm_layout *l)
             gone = sh->e[i].layout;
             sh->e[i].layout = NULL;
             sh->e[i].state = READY;
+            drop_derived(sh, gone);
         }
     pthread_mutex_unlock(&sh->mu);
     emm_layout_free(gone);
+}
+
+emm_status emm_model_share_derived(emm_model_share *sh, const emm_layout *l, uint64_t a,
+                                   uint64_t b, emm_share_build_fn build, void (*destroy)(void *),
+                                   const void **out, emm_error *err)
+{
+    pthread_mutex_lock(&sh->mu);
+    for (size_t i = 0; i < sh->nd; i++)
+        if (sh->d[i].layout == l && sh->d[i].a == a && sh->d[i].b == b &&
+            sh->d[i].destroy == destroy) {
+            *out = sh->d[i].data;
+            pthread_mutex_unlock(&sh->mu);
+            return EMM_OK;
+        }
+    void *data = NULL;
+    emm_status st = EMM_OK;
+    if (sh->nd == sh->capd) {
+        size_t cap = sh->capd ? 2 * sh->capd : 16;
+        struct derived *nd = realloc(sh->d, cap * sizeof *nd);
+        if (!nd)
+            st = emm_fail(err, EMM_ERR_NOMEM, "out of memory for a layout's tables");
+        else
+            sh->d = nd, sh->capd = cap;
+    }
+    if (st == EMM_OK && (st = build(l, a, b, &data, err)) == EMM_OK) {
+        sh->d[sh->nd++] = (struct derived){l, a, b, data, destroy};
+        *out = data;
+    }
+    pthread_mutex_unlock(&sh->mu);
+    return st;
 }
 
 const int32_t *emm_model_share_triangles(emm_model_share *sh, const emm_trace_info *t,

@@ -41,6 +41,16 @@ emm_status emm_model_share_fit(emm_model_share *sh, const emm_trace_info *t, con
                                uint64_t local, uint32_t *suggest, const char *name,
                                emm_error *err);
 
+/* Data derived from layout l alone for the key (a, b) — a model's tables
+ * that every model over l would compute alike — built by `build` on the
+ * first request, under the share's lock, and kept as long as l is: *out is
+ * shared and read-only, freed by `destroy`. Fails only as build does. */
+typedef emm_status (*emm_share_build_fn)(const emm_layout *l, uint64_t a, uint64_t b, void **out,
+                                         emm_error *err);
+emm_status emm_model_share_derived(emm_model_share *sh, const emm_layout *l, uint64_t a,
+                                   uint64_t b, emm_share_build_fn build, void (*destroy)(void *),
+                                   const void **out, emm_error *err);
+
 /* The triangles' vertex ids, 3 per triangle, copied from t once; NULL
  * (with err) when memory runs out. Lives as long as the share. */
 const int32_t *emm_model_share_triangles(emm_model_share *sh, const emm_trace_info *t,
