@@ -5,10 +5,13 @@
  * finished the round. */
 #include "pool.h"
 
+#include <errno.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdbool.h>
 #include <stdlib.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 struct emm_pool {
@@ -97,6 +100,20 @@ int emm_thread_start(pthread_t *tid, void *(*fn)(void *), void *arg)
     return e;
 }
 
+void emm_thread_beside(void)
+{
+    int saved = errno;
+    id_t tid = (id_t)syscall(SYS_gettid);
+    errno = 0;
+    int now = getpriority(PRIO_PROCESS, tid);
+    if (errno == 0) {
+        int want = now + EMM_BESIDE_NICE > 19 ? 19 : now + EMM_BESIDE_NICE;
+        if (want > now)
+            (void)setpriority(PRIO_PROCESS, tid, want);
+    }
+    errno = saved;
+}
+
 /* Starts the helpers, once. */
 static void start(emm_pool *p)
 {
@@ -154,6 +171,7 @@ static void *task_main(void *arg)
     emm_task *k = arg;
     if (k->t.on_start)
         k->t.on_start(k->t.ctx);
+    emm_thread_beside();
     k->fn(k->ctx);
     return NULL;
 }
