@@ -130,14 +130,16 @@ typedef struct late_array {
 /* The program counters a phase's set keeps at most (past it, the set stops
  * growing, and unseen code counts as new). */
 #define SESSION_PHASE_PCS_MAX 65536u
-/* A probe's moves (session_phase.c, moves_of): the share of its element
- * reads in each power-of-two band of id distance from the read before. A
- * probe of old code whose moves lie within SESSION_PROBE_MOVED (half the L1
- * distance) of moves the current phase already showed — the window's, or
+/* A probe's moves (session_phase.c, moves_of): for vertices and for
+ * triangles, the share of its element reads in each power-of-two band of id
+ * distance from the read of that kind before. A probe of old code whose
+ * moves lie within SESSION_PROBE_MOVED (the larger of the two kinds' half
+ * L1 distances) of moves the current phase already showed — the window's, or
  * a probe's that was profiled and found the phase's own pattern — has not
  * moved and is left unprofiled, but for one in SESSION_PROBE_OLD_SKIP + 1
  * in a row; the phase remembers the last SESSION_MOVE_REFS such moves. */
 #define SESSION_MOVE_BUCKETS 34
+#define SESSION_MOVE_SIZE (2 * SESSION_MOVE_BUCKETS)
 #define SESSION_MOVE_REFS 8
 #define SESSION_PROBE_MOVED 0.1
 
@@ -386,9 +388,9 @@ typedef struct session {
     pc_set phase_pcs;    /* the code of the current phase's mesh reads (window and probes) */
     pc_set pending_pcs;  /* and of the pending probe's, until it is confirmed or dropped */
     uint32_t old_probes; /* probes in a row of old code left unprofiled */
-    double moves[SESSION_MOVE_REFS][SESSION_MOVE_BUCKETS]; /* the current phase's moves */
+    double moves[SESSION_MOVE_REFS][SESSION_MOVE_SIZE]; /* the current phase's moves */
     uint32_t nmoves, moves_next;
-    double pending_moves[SESSION_MOVE_BUCKETS]; /* the pending probe's */
+    double pending_moves[SESSION_MOVE_SIZE]; /* the pending probe's */
     uint64_t probes_taken, probes_profiled; /* the report's "probes" */
     uint32_t plast_array;
     uint64_t plast_element;

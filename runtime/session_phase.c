@@ -141,67 +141,74 @@ static double new_code(const session *s, const pc_set *set, const emm_trace_reco
     return known ? (double)fresh / (double)known : -1;
 }
 
-/* The probe's moves, in a cheap form (docs/profile.md "Phases"): the
- * share of its element reads that move by 2^b - 1 to 2^(b+1) - 2 ids from
- * the element read before in the same array, for each b (bucket 0: the
- * same element, read again after another array's). */
+/* The probe's moves, in a cheap form (docs/profile.md "Phases"): for each
+ * kind of mesh array (vertices, triangles), the share of its element reads
+ * that move by 2^b - 1 to 2^(b+1) - 2 ids from the element of that kind
+ * read before, for each band b (a record's further loads, the same
+ * element again, are no move). h[kind * SESSION_MOVE_BUCKETS + b]; a kind
+ * not read has all zeros. */
 static void moves_of(const session *s, const emm_trace_record *recs, size_t n,
-                     double h[SESSION_MOVE_BUCKETS])
+                     double h[SESSION_MOVE_SIZE])
 {
-    uint64_t count[SESSION_MOVE_BUCKETS] = {0}, total = 0;
+    uint64_t count[SESSION_MOVE_SIZE] = {0}, total[2] = {0, 0};
     uint64_t last[2] = {0, 0};
-    uint32_t last_array[2] = {UINT32_MAX, UINT32_MAX};
+    bool any[2] = {false, false};
     for (size_t i = 0; i < n; i++) {
         const emm_trace_record *r = &recs[i];
         if (!mesh_read(s, r))
             continue;
-        /* The last element of each of the two arrays read most recently. */
-        int k = r->array == last_array[0] ? 0 : r->array == last_array[1] ? 1 : -1;
-        if (k < 0) {
-            last_array[1] = last_array[0];
-            last[1] = last[0];
-            last_array[0] = r->array;
-            last[0] = r->element;
+        int k = s->info.arrays[r->array].kind == EMM_ARRAY_TRIANGLES;
+        if (any[k] && r->element == last[k])
             continue;
+        if (any[k]) {
+            uint64_t d = r->element > last[k] ? r->element - last[k] : last[k] - r->element;
+            int b = 0;
+            while (b + 1 < SESSION_MOVE_BUCKETS && d + 1 >= (uint64_t)2 << b)
+                b++;
+            count[k * SESSION_MOVE_BUCKETS + b]++;
+            total[k]++;
         }
-        if (k == 0 && r->element == last[0])
-            continue; /* the same element's further loads */
-        uint64_t d = r->element > last[k] ? r->element - last[k] : last[k] - r->element;
-        int b = 0;
-        while (b + 1 < SESSION_MOVE_BUCKETS && d + 1 >= (uint64_t)2 << b)
-            b++;
-        count[b]++;
-        total++;
+        any[k] = true;
         last[k] = r->element;
-        if (k == 1) {
-            last_array[1] = last_array[0];
-            last[1] = last[0];
-            last_array[0] = r->array;
-            last[0] = r->element;
-        }
     }
-    for (int b = 0; b < SESSION_MOVE_BUCKETS; b++)
-        h[b] = total ? (double)count[b] / (double)total : 0;
+    for (int k = 0; k < 2; k++)
+        for (int b = 0; b < SESSION_MOVE_BUCKETS; b++)
+            h[k * SESSION_MOVE_BUCKETS + b] =
+                total[k] ? (double)count[k * SESSION_MOVE_BUCKETS + b] / (double)total[k] : 0;
+}
+
+/* How far apart two probes' moves are: over the kinds, the largest half L1
+ * distance of their bands (0 the same, 1 disjoint; 1 for a kind one of them
+ * reads and the other does not). */
+static double moves_apart(const double *a, const double *b)
+{
+    double worst = 0;
+    for (int k = 0; k < 2; k++) {
+        double d = 0, sa = 0, sb = 0;
+        for (int i = k * SESSION_MOVE_BUCKETS; i < (k + 1) * SESSION_MOVE_BUCKETS; i++) {
+            d += fabs(a[i] - b[i]);
+            sa += a[i];
+            sb += b[i];
+        }
+        d = (sa > 0) != (sb > 0) ? 1 : d / 2;
+        worst = d > worst ? d : worst;
+    }
+    return worst;
 }
 
 /* Whether moves h are new to the current phase: farther than
- * SESSION_PROBE_MOVED (half the L1 distance: 0 the same, 1 disjoint) from
- * every moves it remembers. */
-static bool moved(const session *s, const double h[SESSION_MOVE_BUCKETS])
+ * SESSION_PROBE_MOVED (moves_apart) from every moves it remembers. */
+static bool moved(const session *s, const double h[SESSION_MOVE_SIZE])
 {
-    for (uint32_t r = 0; r < s->nmoves; r++) {
-        double d = 0;
-        for (int k = 0; k < SESSION_MOVE_BUCKETS; k++)
-            d += fabs(s->moves[r][k] - h[k]);
-        if (d / 2 <= SESSION_PROBE_MOVED)
+    for (uint32_t r = 0; r < s->nmoves; r++)
+        if (moves_apart(s->moves[r], h) <= SESSION_PROBE_MOVED)
             return false;
-    }
     return true;
 }
 
 /* Moves h become the current phase's (the oldest forgotten past
  * SESSION_MOVE_REFS). */
-static void remember_moves(session *s, const double h[SESSION_MOVE_BUCKETS])
+static void remember_moves(session *s, const double h[SESSION_MOVE_SIZE])
 {
     memcpy(s->moves[s->moves_next], h, sizeof s->moves[0]);
     s->moves_next = (s->moves_next + 1) % SESSION_MOVE_REFS;
@@ -250,7 +257,7 @@ void session_phases_start(session *s)
     s->old_probes = 0;
     s->probes_taken = s->probes_profiled = 0;
     s->nmoves = s->moves_next = 0;
-    double h[SESSION_MOVE_BUCKETS];
+    double h[SESSION_MOVE_SIZE];
     moves_of(s, s->window, s->wn, h);
     remember_moves(s, h);
     pcs_free(&s->phase_pcs);
@@ -325,7 +332,7 @@ struct probe_job {
     bool skipped;           /* old code, not profiled: no opinion */
     bool argues;            /* its pattern is a new phase's (new, and a strong match or new code) */
     pc_set pcs;             /* the code of its mesh reads */
-    double moves[SESSION_MOVE_BUCKETS]; /* its moves (moves_of) */
+    double moves[SESSION_MOVE_SIZE]; /* its moves (moves_of) */
     bool decided;           /* the best candidate of a new phase is in wd */
     emm_window_decision wd;
 };

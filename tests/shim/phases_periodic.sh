@@ -19,8 +19,8 @@ grep -q '"phases_probed": true' "$EMM_REPORT" || fail "report: phases_probed is 
   cat "$WORK/periodic.shim.err" >&2; fail "the summary lists phases of a periodic run"; }
 n=$(grep -c '"start":' "$EMM_REPORT")
 [ "$n" = 1 ] || { cat "$EMM_REPORT" >&2; fail "report: $n phases, expected the window's only"; }
-# Its probes run the window's code: most are not profiled (one in four in a
-# row is, for a strong match).
+# Its probes run the window's code and move as it does: most are not profiled
+# (a probe whose moves are new, or one in 16 in a row, is).
 probes=$(/usr/bin/python3 -c '
 import json, sys
 p = json.load(open(sys.argv[1]))["probes"]
