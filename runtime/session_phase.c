@@ -541,40 +541,44 @@ static void launch_probe(session *s)
     j->task = emm_task_start(&s->threads, evaluate, j);
 }
 
+/* The element read last, kept by the caller. */
+struct last_read {
+    bool any;
+    uint32_t array;
+    uint64_t element;
+};
+
+/* Whether r reads an element of the mesh other than the one read last (a
+ * record's further loads are one element read), which it then is. */
+static inline bool element_read(const emm_trace_array *arrays, const emm_trace_record *r,
+                                struct last_read *l)
+{
+    bool element = !r->write && arrays[r->array].kind != EMM_ARRAY_RAW &&
+                   (!l->any || r->array != l->array || r->element != l->element);
+    if (element) {
+        l->any = true;
+        l->array = r->array;
+        l->element = r->element;
+    }
+    return element;
+}
+
 void session_phases_see(session *s, const emm_trace_record *recs, size_t n)
 {
     /* The element read last, in locals: the gap between probes, most of
      * the run, only counts element reads. */
     const emm_trace_array *arrays = s->info.arrays;
-    bool any = s->pany;
-    uint32_t last_array = s->plast_array;
-    uint64_t last_element = s->plast_element;
+    struct last_read l = {s->pany, s->plast_array, s->plast_element};
     for (size_t k = 0; k < n && s->probing;) {
-        bool element;
         if (s->gap > 0) {
             uint64_t gap = s->gap;
-            for (; k < n && gap > 0; k++) {
-                const emm_trace_record *r = &recs[k];
-                element = !r->write && arrays[r->array].kind != EMM_ARRAY_RAW &&
-                          (!any || r->array != last_array || r->element != last_element);
-                if (element) {
-                    any = true;
-                    last_array = r->array;
-                    last_element = r->element;
-                }
-                gap -= element;
-            }
+            for (; k < n && gap > 0; k++)
+                gap -= element_read(arrays, &recs[k], &l);
             s->gap = gap;
             continue;
         }
         const emm_trace_record *r = &recs[k];
-        element = !r->write && arrays[r->array].kind != EMM_ARRAY_RAW &&
-                  (!any || r->array != last_array || r->element != last_element);
-        if (element) {
-            any = true;
-            last_array = r->array;
-            last_element = r->element;
-        }
+        bool element = element_read(arrays, r, &l);
         if (s->pn == 0)
             s->probe_start = s->accesses - n + k;
         if (s->pn == s->pcap) {
@@ -597,9 +601,9 @@ void session_phases_see(session *s, const emm_trace_record *recs, size_t n)
             s->gap = SESSION_PROBE_GAP * s->probe_len;
         }
     }
-    s->pany = any;
-    s->plast_array = last_array;
-    s->plast_element = last_element;
+    s->pany = l.any;
+    s->plast_array = l.array;
+    s->plast_element = l.element;
     /* A probe's outcome lands a fixed number of records after it filled, at
      * the end of a batch, so that what it finds does not depend on how
      * fast it was evaluated. */
