@@ -171,7 +171,6 @@ static void *task_main(void *arg)
     emm_task *k = arg;
     if (k->t.on_start)
         k->t.on_start(k->t.ctx);
-    emm_thread_beside();
     k->fn(k->ctx);
     return NULL;
 }

@@ -19,10 +19,11 @@
 int emm_thread_start(pthread_t *tid, void *(*fn)(void *), void *arg);
 
 /* How much lower a thread of emm's that works beside the program is
- * scheduled (a nice value added to its own): the run's models (the
- * runner's pipeline) and the phase probes (emm_task_start). The program's thread, which produces what they consume,
- * then comes first when they compete for a core, instead of waiting its
- * turn among them; what they compute does not depend on when it runs. */
+ * scheduled (a nice value added to its own): every thread a session starts
+ * (runtime/session.c, beside_start). The program's thread, which produces
+ * what they consume, then comes first when they compete for a core,
+ * instead of waiting its turn among them; what they compute does not
+ * depend on when it runs. */
 #define EMM_BESIDE_NICE 5
 
 /* Lowers the calling thread's priority by EMM_BESIDE_NICE (up to nice 19);
@@ -52,8 +53,7 @@ void emm_pool_for(emm_pool *p, size_t n, void (*fn)(void *ctx, size_t i), void *
 void emm_pool_free(emm_pool *p);
 
 /* One piece of work beside the caller's: fn(ctx) on a thread of its own,
- * started as the pool's helpers are (signals blocked, on_start first),
- * scheduled below the caller (emm_thread_beside).
+ * started as the pool's helpers are (signals blocked, on_start first).
  * Returns NULL — and has run fn(ctx) on the calling thread before
  * returning — when `t` allows one thread only, or no thread can be had:
  * either way the work is done once emm_task_join returns. */

@@ -27,6 +27,7 @@
 #include <unistd.h>
 
 #include "error.h"
+#include "pool.h"
 
 /* Records converted per model call after the decision: large enough that
  * handing a chunk to the runner's threads costs under 1%. */
@@ -38,6 +39,19 @@
 #define SESSION_ITERATION_RECORDS (1u << 20)
 
 static const struct session_transport engine_transport;
+
+/* The start of a thread the session starts (the decision's helpers, the
+ * run's model workers, the phase probes): the caller's hook, then the
+ * thread is scheduled below the program (emm_thread_beside), whose records
+ * it works on, so that the program goes first when they compete for a
+ * core. */
+static void beside_start(void *ctx)
+{
+    const session *s = ctx;
+    if (s->caller_threads.on_start)
+        s->caller_threads.on_start(s->caller_threads.ctx);
+    emm_thread_beside();
+}
 
 emm_status session_engine_new(const emm_session_config *sc, emm_session **out, emm_error *err)
 {
@@ -66,7 +80,10 @@ emm_status session_engine_new(const emm_session_config *sc, emm_session **out, e
     s->program = strdup(sc->program ? sc->program : "program");
     s->capture = sc->capture;
     s->expect = sc->expect & (1u << EMM_ARRAY_VERTICES | 1u << EMM_ARRAY_TRIANGLES);
+    s->caller_threads = sc->threads;
     s->threads = sc->threads;
+    s->threads.on_start = beside_start;
+    s->threads.ctx = s;
     s->chunk = malloc(SESSION_CHUNK * sizeof *s->chunk);
     if (!s->program || !s->chunk) {
         st = emm_fail(err, EMM_ERR_NOMEM, "session: out of memory");

@@ -243,7 +243,8 @@ typedef struct session {
     struct timespec wclock; /* CLOCK_MONOTONIC at the first record (session_window_clock) */
     uint64_t wraw;       /* records given until the decision */
     double wseconds;     /* from the first record to the decision; < 0: not timed */
-    emm_threads threads;
+    emm_threads threads;  /* the caller's, with on_start wrapped (session.c, beside_start) */
+    emm_threads caller_threads; /* the caller's as given */
     emm_machine *machine;
     emm_table *table;    /* NULL: no table (a configured strategy without one) */
 

@@ -92,7 +92,6 @@ static void *pipe_worker(void *arg)
     struct pipe *p = r->pipe;
     if (p->t.on_start)
         p->t.on_start(p->t.ctx);
-    emm_thread_beside();
     pthread_mutex_lock(&p->mu);
     for (;;) {
         size_t k = SIZE_MAX;
