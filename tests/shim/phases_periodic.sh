@@ -25,6 +25,6 @@ probes=$(/usr/bin/python3 -c '
 import json, sys
 p = json.load(open(sys.argv[1]))["probes"]
 if not (p["taken"] >= 4 and 0 < p["profiled"] <= (p["taken"] + 3) // 4):
-    sys.exit("report: probes %s: expected at least 4, one in four of them profiled" % p)
+    sys.exit("report: probes %s: expected at least 4, at most one in four of them profiled" % p)
 print("%d probes, %d profiled" % (p["taken"], p["profiled"]))' "$EMM_REPORT") || fail "$probes"
 echo "periodic: one phase, probed ($probes)"
