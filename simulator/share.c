@@ -295,8 +295,6 @@ emm_status emm_model_share_fit(emm_model_share *sh, const emm_trace_info *t, con
             pthread_mutex_unlock(&sh->mu);
             return EMM_OK;
         }
-    pthread_mutex_unlock(&sh->mu);
-
     const emm_layout_geometry *g = NULL;
     emm_status st = geometry(sh, t, name, &g, err);
     pthread_mutex_unlock(&sh->mu);
