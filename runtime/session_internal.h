@@ -223,6 +223,13 @@ typedef struct session_part {
 } session_part;
 
 /* The engine behind an emm_session handle in this process. */
+/* The element read last (session_phase.c, element_read). */
+struct last_read {
+    bool any;
+    uint32_t array;
+    uint64_t element;
+};
+
 typedef struct session {
     emm_session handle;  /* first: the public handle is the engine's address */
     /* A program in another process (emm_session_config.memory): the tagged
@@ -383,7 +390,7 @@ typedef struct session {
     emm_trace_record *probe;
     size_t pn, pcap;
     uint64_t probe_reads, probe_len, gap, probe_start;
-    bool pany;
+    struct last_read plast; /* the element read last, for the probes' count */
     char pending[EMM_TABLE_NAME_MAX]; /* a probe's new pattern awaiting a second probe */
     uint64_t pending_start;
     pc_set phase_pcs;    /* the code of the current phase's mesh reads (window and probes) */
@@ -393,8 +400,6 @@ typedef struct session {
     uint32_t nmoves, moves_next;
     double pending_moves[SESSION_MOVE_SIZE]; /* the pending probe's */
     uint64_t probes_taken, probes_profiled; /* the report's "probes" */
-    uint32_t plast_array;
-    uint64_t plast_element;
     struct probe_job *probe_job; /* a full probe evaluated beside the run, or NULL */
     uint64_t probe_apply; /* the accesses after which its outcome is applied */
     uint64_t dropped;    /* records of arrays left out of the trace */

@@ -541,13 +541,6 @@ static void launch_probe(session *s)
     j->task = emm_task_start(&s->threads, evaluate, j);
 }
 
-/* The element read last, kept by the caller. */
-struct last_read {
-    bool any;
-    uint32_t array;
-    uint64_t element;
-};
-
 /* Whether r reads an element of the mesh other than the one read last (a
  * record's further loads are one element read), which it then is. */
 static inline bool element_read(const emm_trace_array *arrays, const emm_trace_record *r,
@@ -568,7 +561,7 @@ void session_phases_see(session *s, const emm_trace_record *recs, size_t n)
     /* The element read last, in locals: the gap between probes, most of
      * the run, only counts element reads. */
     const emm_trace_array *arrays = s->info.arrays;
-    struct last_read l = {s->pany, s->plast_array, s->plast_element};
+    struct last_read l = s->plast;
     for (size_t k = 0; k < n && s->probing;) {
         if (s->gap > 0) {
             uint64_t gap = s->gap;
@@ -601,9 +594,7 @@ void session_phases_see(session *s, const emm_trace_record *recs, size_t n)
             s->gap = SESSION_PROBE_GAP * s->probe_len;
         }
     }
-    s->pany = l.any;
-    s->plast_array = l.array;
-    s->plast_element = l.element;
+    s->plast = l;
     /* A probe's outcome lands a fixed number of records after it filled, at
      * the end of a batch, so that what it finds does not depend on how
      * fast it was evaluated. */

@@ -475,6 +475,14 @@ static emm_status too_large(const emm_layout_geometry *g, const emm_layout *l, c
     return emm_layout_too_large(l, l->opt.fetch, l->opt.local_store, suggest, name, err);
 }
 
+emm_status emm_layout_check_cell(const emm_layout_options *opt, const char *name, emm_error *err)
+{
+    if (opt->cell == 0)
+        return emm_fail(err, EMM_ERR_INVALID, "%s: a layout needs at least 1 triangle per cell",
+                        name);
+    return EMM_OK;
+}
+
 emm_status emm_layout_build_from(const emm_layout_geometry *g, const emm_layout_options *opt,
                                  const char *name, emm_layout **out, emm_error *err)
 {
@@ -483,9 +491,9 @@ emm_status emm_layout_build_from(const emm_layout_geometry *g, const emm_layout_
     *out = NULL;
     if (!name)
         name = "mesh";
-    if (opt->cell == 0)
-        return emm_fail(err, EMM_ERR_INVALID, "%s: a layout needs at least 1 triangle per cell",
-                        name);
+    emm_status cst = emm_layout_check_cell(opt, name, err);
+    if (cst != EMM_OK)
+        return cst;
     emm_layout_options o = *opt;
     if (o.vertex_bytes == 0)
         o.vertex_bytes = EMM_THESIS_VERTEX_BYTES;
@@ -514,9 +522,9 @@ emm_status emm_layout_build(const double *xyz, size_t nv, const int32_t *tri, si
     *out = NULL;
     if (!name)
         name = "mesh";
-    if (opt->cell == 0)
-        return emm_fail(err, EMM_ERR_INVALID, "%s: a layout needs at least 1 triangle per cell",
-                        name);
+    emm_status cst = emm_layout_check_cell(opt, name, err);
+    if (cst != EMM_OK)
+        return cst;
     emm_layout_geometry g;
     emm_status st = emm_layout_geometry_init(&g, xyz, nv, tri, nt, name, err);
     if (st != EMM_OK)

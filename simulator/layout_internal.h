@@ -122,6 +122,8 @@ emm_status emm_layout_geometry_init(emm_layout_geometry *g, const double *xyz, s
                                     const int32_t *tri, size_t nt, const char *name,
                                     emm_error *err);
 void emm_layout_geometry_free(emm_layout_geometry *g);
+/* The options' one check that needs no geometry: a CELL of at least 1. */
+emm_status emm_layout_check_cell(const emm_layout_options *opt, const char *name, emm_error *err);
 /* emm_layout_build over a checked geometry. */
 emm_status emm_layout_build_from(const emm_layout_geometry *g, const emm_layout_options *opt,
                                  const char *name, emm_layout **out, emm_error *err);

@@ -142,12 +142,12 @@ emm_status emm_model_share_layout(emm_model_share *sh, const emm_trace_info *t,
 {
     pthread_mutex_lock(&sh->mu);
     const emm_layout_geometry *g = NULL;
-    if (opt->cell > 0) { /* a cell of 0 is emm_layout_build_from's error */
-        emm_status gst = geometry(sh, t, name, &g, err);
-        if (gst != EMM_OK) {
-            pthread_mutex_unlock(&sh->mu);
-            return gst;
-        }
+    emm_status gst = emm_layout_check_cell(opt, name, err);
+    if (gst == EMM_OK)
+        gst = geometry(sh, t, name, &g, err);
+    if (gst != EMM_OK) {
+        pthread_mutex_unlock(&sh->mu);
+        return gst;
     }
     size_t i = 0;
     while (i < sh->n && !same_key(&sh->e[i].opt, opt))
@@ -192,9 +192,7 @@ emm_status emm_model_share_layout(emm_model_share *sh, const emm_trace_info *t,
     /* Built outside the lock: other layouts build meanwhile. */
     emm_layout *l = NULL;
     emm_error e;
-    emm_status st = g ? emm_layout_build_from(g, opt, name, &l, &e)
-                      : emm_fail(&e, EMM_ERR_INVALID,
-                                 "%s: a layout needs at least 1 triangle per cell", name);
+    emm_status st = emm_layout_build_from(g, opt, name, &l, &e);
 
     pthread_mutex_lock(&sh->mu);
     struct entry *en = &sh->e[i]; /* the array may have moved */
