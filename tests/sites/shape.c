@@ -93,6 +93,37 @@ int main(void)
     show("half-edges", &s);
     CHECK(s.kind == SHAPE_HALFEDGE && !shape_rule(&s, 0, &kind, body, sizeof body));
 
+    /* tetgen's tetrahedra: 56-byte records of seven addresses (of other
+     * records, of vertices), one record in nine holding small numbers
+     * instead. The
+     * same records at two addresses — one whose addresses' low words are
+     * small, as a layout randomised by the system sometimes puts them —
+     * read the same: addresses, not index-like low words. */
+    enum { TETS = 4095 }; /* 56 x TETS: a multiple of 12, as tetgen's block is */
+    static const uint64_t bases[2] = {0x7f1200000010ull, 0x7f1298547010ull};
+    char told[2][1024];
+    unsigned char *tet = malloc((size_t)TETS * 56);
+    for (int b = 0; b < 2; b++) {
+        uint32_t ts = 5;
+        for (unsigned i = 0; i < TETS; i++)
+            for (unsigned w = 0; w < 7; w++) {
+                /* Four neighbours, their low bits a face; three vertices
+                 * of another pool of the same region. */
+                uint64_t v = i % 9 == 3  ? 7u * (i / 9 + 1)
+                             : w < 4     ? (bases[b] + 56u * (rnd(&ts) % TETS)) | (rnd(&ts) % 4)
+                                         : bases[b] + 0x1000000u + 48u * (rnd(&ts) % TETS);
+                memcpy(tet + 56 * i + 8 * w, &v, 8);
+            }
+        REQUIRE(shape_from_bytes(tet, (size_t)TETS * 56, (size_t)TETS * 56, (size_t)TETS * 56, &s));
+        show(b ? "addresses, high in their 4 GiB" : "addresses, low in their 4 GiB", &s);
+        shape_describe(&s, told[b], sizeof told[b]);
+        bool all = s.stride == 56 && s.nf == 7;
+        for (int f = 0; f < s.nf; f++)
+            all = all && s.f[f].cls == 'p' && s.f[f].size == 8;
+        CHECK(all);
+    }
+    CHECK(strcmp(told[0], told[1]) == 0);
+
     /* From accesses: a program reads the 16-byte neighbour records'
      * three ints (three instructions, records by index) and their bytes
      * (one instruction a byte): 16-byte records, fields at 0, 4, 8 and 1-byte
@@ -134,6 +165,7 @@ int main(void)
     free(text);
     free(he);
     free(xyz);
+    free(tet);
     free(acc);
     return check_done();
 }
