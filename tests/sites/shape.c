@@ -95,10 +95,9 @@ int main(void)
 
     /* tetgen's tetrahedra: 56-byte records of seven addresses (of other
      * records, of vertices), one record in nine holding small numbers
-     * instead. The
-     * same records at two addresses — one whose addresses' low words are
-     * small, as a layout randomised by the system sometimes puts them —
-     * read the same: addresses, not index-like low words. */
+     * instead. The same records at two addresses — one whose addresses'
+     * low words are small, as a layout randomised by the system sometimes
+     * puts them — read the same: addresses, not index-like low words. */
     enum { TETS = 4095 }; /* 56 x TETS: a multiple of 12, as tetgen's block is */
     static const uint64_t bases[2] = {0x7f1200000010ull, 0x7f1298547010ull};
     char told[2][1024];
