@@ -11,12 +11,20 @@
  * Instrumentation, per superblock:
  * - Every memory access (loads, stores, guarded ones, CAS, load-linked and
  *   store-conditional, dirty helpers' memory effects) gets an inline test
- *   against at most WINDOWS intervals that cover the tagged ranges; only an
- *   access inside one calls the helper, which checks the exact ranges and
- *   appends a record with the instruction's address. Accesses outside
- *   every tagged array, nearly all of a program's, cost a subtraction and a
- *   comparison per window: cheaper than Cachegrind, which calls a helper
- *   for every access.
+ *   against the intervals that cover the tagged ranges; only an access
+ *   inside one calls the helper, which checks the exact ranges and appends
+ *   a record with the instruction's address. Accesses outside every tagged
+ *   array, nearly all of a program's, cost a subtraction and a comparison
+ *   per interval: cheaper than Cachegrind, which calls a helper for every
+ *   access.
+ * - One interval first, covering every tagged range and what lies between
+ *   them; a second interval costs every access of the program another test
+ *   (on a smoothing loop, a tenth of the run). An access between the ranges
+ *   calls the helper for nothing (a miss); once misses outnumber records
+ *   and pass MISSES_FOR_TWO, the ranges are covered by WINDOWS intervals
+ *   instead (closing the smallest gaps), and the code is translated again
+ *   to test them, once in a run, at the next client request that drains
+ *   or changes the ranges (more_windows).
  * - Each superblock of code that is not emm's adds one to `work`, the
  *   record's count of work since the previous one (sancov counts edges),
  *   in the program's threads only: the threads the session starts while
@@ -52,6 +60,10 @@
  * this many (closing the smallest gaps), and the helper tests them
  * exactly. A mesh program tags two or three arrays. */
 #define WINDOWS 2
+/* Misses (helper calls outside every tagged range) before a second
+ * interval is worth its test on every access, when they also outnumber
+ * the records. */
+#define MISSES_FOR_TWO (1ULL << 20)
 /* Bytes below the stack pointer left alone when a thread is sent to drain:
  * the x86-64 red zone, and the return address. */
 #define RED_ZONE 128
@@ -61,6 +73,10 @@ static ULong range_lo[MAX_RANGES], range_hi[MAX_RANGES];
 static UInt nranges;
 /* Read by the instrumented code. */
 static ULong win_lo[WINDOWS], win_len[WINDOWS];
+/* The intervals the instrumentation tests (1, then WINDOWS once misses
+ * call for it), and whether the helper asked for the switch. */
+static UInt nwin = 1;
+static Bool want_more_windows;
 static ULong need_drain;
 static ULong work;
 /* `work` when the shim began feeding the session (BUSY). */
@@ -88,7 +104,7 @@ static Addr drain_entry;
 
 /* --emm-stats=yes: what the capture did, at exit. */
 static Bool show_stats;
-static ULong stat_records, stat_drains, stat_diverted, stat_over_peak;
+static ULong stat_records, stat_drains, stat_diverted, stat_over_peak, stat_misses;
 
 /* ---- the records ------------------------------------------------------- */
 
@@ -123,6 +139,9 @@ static VG_REGPARM(3) void hit(Addr a, UWord bytes_write, Addr pc)
             return;
         }
     }
+    stat_misses++;
+    if (nwin < WINDOWS && stat_misses >= MISSES_FOR_TWO && stat_misses > stat_records)
+        want_more_windows = True;
 }
 
 /* The buffer was consumed: the overflow's oldest records move into it. */
@@ -136,7 +155,7 @@ static ULong refill(void)
     return n;
 }
 
-/* Merges the sorted ranges into WINDOWS intervals by closing the smallest
+/* Merges the sorted ranges into nwin intervals by closing the smallest
  * gaps between neighbours. */
 static void set_windows(void)
 {
@@ -146,7 +165,7 @@ static void set_windows(void)
         lo[i] = range_lo[i];
         hi[i] = range_hi[i];
     }
-    while (k > WINDOWS) {
+    while (k > nwin) {
         UInt best = 0;
         for (UInt i = 1; i + 1 < k; i++)
             if (lo[i + 1] - hi[i] < lo[best + 1] - hi[best])
@@ -183,6 +202,21 @@ static void set_ranges(const ULong *lo, const ULong *hi, UWord count)
     set_windows();
 }
 
+/* The switch to WINDOWS intervals the helper asked for, at a client
+ * request (outside translated code, which it discards): at the next drain
+ * or change of the ranges. Not a drain of its own: the session reads the
+ * program's memory at a drain, and the drains stay where the buffer puts
+ * them, switch or not. */
+static void more_windows(void)
+{
+    if (!want_more_windows || nwin == WINDOWS)
+        return;
+    want_more_windows = False;
+    nwin = WINDOWS;
+    set_windows();
+    VG_(discard_translations_safely)((Addr)0x1000, ~(SizeT)0x1000, "emm.windows");
+}
+
 static Bool client_request(ThreadId tid, UWord *arg, UWord *ret)
 {
     (void)tid;
@@ -206,9 +240,11 @@ static Bool client_request(ThreadId tid, UWord *arg, UWord *ret)
         *ret = 1;
         break;
     case EMM_VG_RANGES:
+        more_windows();
         set_ranges((const ULong *)arg[1], (const ULong *)arg[2], arg[3]);
         break;
     case EMM_VG_TAKE:
+        more_windows();
         stat_diverted += need_drain != 0;
         stat_drains++;
         need_drain = 0;
@@ -304,7 +340,7 @@ static void record_access(IRSB *sb, struct sb_state *s, IRExpr *addr, Int bytes,
     if (bytes <= 0)
         return;
     if (!s->loaded) {
-        for (UInt w = 0; w < WINDOWS; w++) {
+        for (UInt w = 0; w < nwin; w++) {
             s->lo[w] = load64(sb, &win_lo[w]);
             s->len[w] = load64(sb, &win_len[w]);
         }
@@ -313,7 +349,7 @@ static void record_access(IRSB *sb, struct sb_state *s, IRExpr *addr, Int bytes,
     if (addr->tag != Iex_RdTmp && addr->tag != Iex_Const)
         addr = IRExpr_RdTmp(assign(sb, Ity_I64, addr));
     IRTemp in = IRTemp_INVALID;
-    for (UInt w = 0; w < WINDOWS; w++) {
+    for (UInt w = 0; w < nwin; w++) {
         IRTemp d = assign(sb, Ity_I64, IRExpr_Binop(Iop_Sub64, addr, IRExpr_RdTmp(s->lo[w])));
         IRTemp c = assign(sb, Ity_I1,
                           IRExpr_Binop(Iop_CmpLT64U, IRExpr_RdTmp(d), IRExpr_RdTmp(s->len[w])));
@@ -496,8 +532,9 @@ static void fini(Int exitcode)
     (void)exitcode;
     if (show_stats)
         VG_(umsg)("emm tool: %llu records, %llu drains (%llu with the buffer full), "
-                  "overflow peak %llu records\n",
-                  stat_records, stat_drains, stat_diverted, stat_over_peak);
+                  "overflow peak %llu records, %llu misses, %u interval%s tested\n",
+                  stat_records, stat_drains, stat_diverted, stat_over_peak, stat_misses, nwin,
+                  nwin == 1 ? "" : "s");
 }
 
 static void pre_clo_init(void)
