@@ -256,10 +256,10 @@ int main(int argc, char **argv)
            100 * mean, 100 * max_regret);
     printf("against the reference cache: worst %+.2f%%; %zu cases more than 5%% slower than it\n",
            100 * max_vs_cache, worse_than_cache);
-    printf("the run's contest (halving to %u finalists) over the whole trace: %zu of %zu answers "
+    printf("the run's contest (halving to %u finalist%s) over the whole trace: %zu of %zu answers "
            "slower than the best candidate (what --finalists all answers); mean regret %.2f%%, "
            "largest %.2f%%\n",
-           finalists, missed, contests, contests ? 100 * sum_contest / (double)contests : 0,
+           finalists, finalists == 1 ? "" : "s", missed, contests, contests ? 100 * sum_contest / (double)contests : 0,
            100 * max_contest);
     printf("  (the prediction, which runs to the end beside the finalists, was the best in %zu of "
            "them; of the other %zu, the contest found the best in %zu)\n",

@@ -349,12 +349,13 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
         "also simulate direct reads and the cache (baselines), the whole sweep (all) or nothing",
         {{0}}}, parse_compare},
     [EMM_CONFIG_FINALISTS] = {{"EMM_FINALISTS", "--finalists", "N",
-        "a count from 0 to 64, or all", "2",
+        "a count from 0 to 64, or all", "1",
         "when the whole run is captured, every candidate runs from the window on and the\n"
         "slower half is dropped at 2, 4, 8, ... windows until N remain, then a finalist more\n"
         "than 25% behind the leader, so far and since the last check, is stopped; the fastest\n"
-        "of those that ran to the end is the answer (all: none is dropped, every candidate is\n"
-        "simulated over the whole run; 0: the window's prediction stands, as in the thesis)",
+        "of those that ran to the end (the finalists, the prediction and direct reads) is the\n"
+        "answer (all: none is dropped, every candidate is simulated over the whole run; 0: the\n"
+        "window's prediction stands, as in the thesis)",
         {{0}}}, parse_finalists},
     [EMM_CONFIG_PHASES] = {{"EMM_PHASES", NULL, NULL, "0 or 1", "1",
         "1: when the whole run is captured, probe it after the window for the program's\n"

@@ -287,8 +287,9 @@ typedef enum emm_config_key {
 
 #define EMM_CONFIG_PATH_MAX 4096
 /* Candidates that run to the end of the run to confirm the window's
- * prediction when EMM_FINALISTS is unset (docs/profile.md "The contest"). */
-#define EMM_CONFIG_DEFAULT_FINALISTS 2u
+ * prediction when EMM_FINALISTS is unset, beside the prediction and direct
+ * reads, which always do (docs/profile.md "The contest"). */
+#define EMM_CONFIG_DEFAULT_FINALISTS 1u
 /* EMM_FINALISTS=all: every candidate runs to the end of the run, none is
  * dropped (the answer is then the fastest of all of them over the run, at
  * the cost of simulating every one: as EMM_COMPARE=all). */
