@@ -259,8 +259,8 @@ int main(int argc, char **argv)
     printf("the run's contest (halving to %u finalist%s) over the whole trace: %zu of %zu answers "
            "slower than the best candidate (what --finalists all answers); mean regret %.2f%%, "
            "largest %.2f%%\n",
-           finalists, finalists == 1 ? "" : "s", missed, contests, contests ? 100 * sum_contest / (double)contests : 0,
-           100 * max_contest);
+           finalists, finalists == 1 ? "" : "s", missed, contests,
+           contests ? 100 * sum_contest / (double)contests : 0, 100 * max_contest);
     printf("  (the prediction, which runs to the end beside the finalists, was the best in %zu of "
            "them; of the other %zu, the contest found the best in %zu)\n",
            contests - pred_off, pred_off, fixed);

@@ -349,7 +349,7 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
         "also simulate direct reads and the cache (baselines), the whole sweep (all) or nothing",
         {{0}}}, parse_compare},
     [EMM_CONFIG_FINALISTS] = {{"EMM_FINALISTS", "--finalists", "N",
-        "a count from 0 to 64, or all", "1",
+        "a count from 0 to 64, or all", EMM_CONFIG_DEFAULT_FINALISTS_TEXT,
         "when the whole run is captured, every candidate runs from the window on and the\n"
         "slower half is dropped at 2, 4, 8, ... windows until N remain, then a finalist more\n"
         "than 25% behind the leader, so far and since the last check, is stopped; the fastest\n"

@@ -222,7 +222,6 @@ typedef struct session_part {
     uint64_t accesses;   /* simulated */
 } session_part;
 
-/* The engine behind an emm_session handle in this process. */
 /* The element read last (session_phase.c, element_read). */
 struct last_read {
     bool any;
@@ -230,6 +229,7 @@ struct last_read {
     uint64_t element;
 };
 
+/* The engine behind an emm_session handle in this process. */
 typedef struct session {
     emm_session handle;  /* first: the public handle is the engine's address */
     /* A program in another process (emm_session_config.memory): the tagged

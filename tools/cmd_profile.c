@@ -427,7 +427,7 @@ int emm_cmd_profile(int argc, char **argv)
                  "finalists more than 25% behind the leader, so far and since the last check, "
                  "stopped; the "
                  "fastest of those that ran to the end is the answer; all: none is dropped; 0: "
-                 "the window's prediction stands (default 1)"},
+                 "the window's prediction stands (default " EMM_CONFIG_DEFAULT_FINALISTS_TEXT ")"},
         {.name = "--learn", .metavar = "NAME", .kind = OPT_TEXT, .dst = &a.learn,
          .help = "append the profile as sample NAME to the user table (--table or $EMM_TABLE, "
                  "created when missing) with the contest's answer over the whole trace, or, "

@@ -56,9 +56,10 @@
 #include "protocol.h"
 
 #define MAX_RANGES 64
-/* Intervals tested inline per access; the tagged ranges are merged into
- * this many (closing the smallest gaps), and the helper tests them
- * exactly. A mesh program tags two or three arrays. */
+/* Intervals tested inline per access at most (one until misses call for
+ * more: more_windows); the tagged ranges are merged into that many
+ * (closing the smallest gaps), and the helper tests them exactly. A mesh
+ * program tags two or three arrays. */
 #define WINDOWS 2
 /* Misses (helper calls outside every tagged range) before a second
  * interval is worth its test on every access, when they also outnumber
