@@ -1167,19 +1167,30 @@ static bool names_traversal(const emm_window_decision *out)
     return emm_synth_recipe_parse(check_recipe(out), &so, &e) == EMM_OK;
 }
 
-/* The table's pattern, checked on this mesh and this window (docs/profile.md
- * "The decision"): the nearest sample's canonical traversal (its recipe,
- * or its class's for a sample from a program) is synthesised over the
- * program's own mesh and arrays and swept (S: the long run the pattern
- * predicts on this mesh and machine), the window is swept too (W: what the
- * program did, cold, in its first accesses), and the strategy with the
- * least S/S_best is taken, W breaking ties (measured: weighing W in,
- * as (S/S_best)·(W/W_best), doubled the regret on traces not in the table:
- * a window is too short to see cells reused) — unless, on a machine with a
- * cache, the long run says it loses to the cache and it is not at least
- * 1/EMM_DECIDE_CACHE_MARGIN times better than the cache over both.
- * Returns EMM_OK leaving *out alone when the recipe names no traversal;
- * errors are out of memory only. */
+/* The feature distance from the window to the check's traversal made on
+ * this mesh for as many element accesses (what pick_class measures, and
+ * shares through the cache): *d, left alone when the traversal cannot be
+ * made. Errors are out of memory only. */
+static emm_status check_distance_of(const emm_mesh *mesh, const emm_trace_info *info,
+                                    const struct synth_arrays *arrays,
+                                    const emm_trace_record *recs, size_t n,
+                                    const double f[EMM_FEATURES], size_t accesses,
+                                    const char *name, const emm_threads *threads,
+                                    decide_cache *cache, const emm_window_decision *out,
+                                    double *d, emm_error *err)
+{
+    uint64_t visits = accesses < info->geometry.nt ? accesses : info->geometry.nt;
+    emm_synth_options so;
+    emm_error e;
+    double g[EMM_FEATURES];
+    emm_status st = synth_options(mesh, arrays, check_recipe(out), recs, n, visits, &so, &e);
+    if (st == EMM_OK)
+        st = synth_features(cache, mesh, info, arrays, &so, accesses, name, threads, g, &e);
+    if (st == EMM_OK)
+        *d = emm_feature_distance(f, g);
+    return st == EMM_ERR_NOMEM ? emm_fail(err, st, "%s", e.message) : EMM_OK;
+}
+
 /* The pattern check's ranking (check_pattern): the candidates (ran in both
  * sweeps, offered), and the least and second least score S/S_best, W
  * breaking ties. */
@@ -1381,14 +1392,18 @@ static bool any_in_space(const emm_strategy *s, size_t n)
 /* The neighbours: the samples nearest f among the runs measured on this
  * machine, at most EMM_DECIDE_NEIGHBOURS (their indices in near, their
  * distances in dist, nearest first; one sample a run), and only when the
- * window is no canonical pattern's (farther than EMM_DECIDE_CANONICAL_NEAR
- * from every sample without costs: those traversals the check predicts
- * nearly exactly) and its nearest run is within EMM_DECIDE_NEIGHBOUR_GATE
- * times the nearest such sample's distance. Returns how many; SIZE_MAX
- * without memory. */
+ * window is no canonical pattern's and its nearest run is within
+ * EMM_DECIDE_NEIGHBOUR_GATE times the nearest sample without costs. The
+ * window is a canonical pattern's (those traversals the check predicts
+ * nearly exactly) when it lies within EMM_DECIDE_CANONICAL_NEAR of a sample
+ * without costs and the check's own traversal, made on this mesh, lies as
+ * near it (check_distance, its feature distance from the window; INFINITY
+ * when it could not be made): a window near a sample made on another mesh
+ * that the pattern, made on this one, does not resemble is another
+ * program's. Returns how many; SIZE_MAX without memory. */
 static size_t pick_neighbours(const emm_table *t, const emm_machine *m,
                               const emm_trace_info *info, const double f[EMM_FEATURES],
-                              size_t near[EMM_DECIDE_NEIGHBOURS],
+                              double check_distance, size_t near[EMM_DECIDE_NEIGHBOURS],
                               double dist[EMM_DECIDE_NEIGHBOURS])
 {
     char id[17];
@@ -1422,7 +1437,8 @@ static size_t pick_neighbours(const emm_table *t, const emm_machine *m,
     qsort(c, nc, sizeof *c, by_distance);
     for (size_t j = 0; j < nc && k < EMM_DECIDE_NEIGHBOURS; j++) {
         if (k == 0 && !(c[j].d <= EMM_DECIDE_NEIGHBOUR_GATE * canonical &&
-                        canonical > EMM_DECIDE_CANONICAL_NEAR))
+                        (canonical > EMM_DECIDE_CANONICAL_NEAR ||
+                         !(check_distance <= EMM_DECIDE_CANONICAL_NEAR))))
             break;
         bool seen = false;
         for (size_t q = 0; q < k && !seen; q++)
@@ -1592,8 +1608,12 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
              * without a recipe, stands as in the thesis): the check's long
              * run, most of a decision's cost, would not count, and is made
              * only when they decide nothing. */
+            double check_distance = INFINITY;
+            if (st == EMM_OK && names_traversal(out))
+                st = check_distance_of(mesh, info, &arrays, recs, n, f, accesses, name, threads,
+                                       cache, out, &check_distance, err);
             if (st == EMM_OK && names_traversal(out) &&
-                (k = pick_neighbours(t, m, info, f, near, dist)) == SIZE_MAX)
+                (k = pick_neighbours(t, m, info, f, check_distance, near, dist)) == SIZE_MAX)
                 st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
             if (st == EMM_OK && k > 0) {
                 st = neighbour_costs(t, m, info, recs, n, near, dist, k, threads, share, out,

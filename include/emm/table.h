@@ -66,7 +66,8 @@ extern "C" {
  * sample without costs (a canonical pattern's). */
 #define EMM_DECIDE_NEIGHBOUR_GATE 2.5
 /* A window this near a sample without costs (a canonical pattern's) is that
- * pattern: the check decides, not the neighbours. */
+ * pattern — when the pattern's traversal, made on the program's own mesh,
+ * lies this near the window too: the check decides, not the neighbours. */
 #define EMM_DECIDE_CANONICAL_NEAR 0.35
 /* A profile whose nearest sample is farther than this (Euclidean, in
  * feature space) is novel. See docs/profile.md for how it was chosen. */
