@@ -19,7 +19,8 @@
  * writes a JSON line a case for studying predictors offline: the window's
  * features, its cold sweep (after the leading sweep, as the decision's)
  * on the machine and on its local store shifted right by 1 to 4 bits
- * (window_1 ... window_4), the whole run's listing, the window's revisits
+ * (window_1 ... window_4), the leading sweep's own cold sweep (lead, when
+ * the window follows one), the whole run's listing, the window's revisits
  * and the bytes of the distinct elements it touches, and the mesh's bytes
  * against the local store. A benchmark, not a test. */
 #include <stdio.h>
@@ -191,6 +192,13 @@ static void dump_case(FILE *f, const char *prog, const char *name, const char *m
         emm_sweep_free(w);
     }
     fprintf(f, "}");
+    /* The leading sweep alone, cold: part of the run the decision leaves out. */
+    if (skip > 0 && emm_sweep_records(m, info, recs, skip, NULL, &w, &err) == EMM_OK) {
+        fprintf(f, ", \"lead\": {");
+        dump_sweep(f, w);
+        fprintf(f, "}");
+        emm_sweep_free(w);
+    }
     /* The same window on smaller local stores (a quarter, a sixteenth...):
      * a cold window leaves most of the store empty where the run fills it. */
     uint64_t lb = emm_machine_get(m, "local.bytes");

@@ -670,7 +670,8 @@ static emm_status profile_window(session *s, emm_error *err)
 static emm_status choose(session *s, emm_error *err)
 {
     emm_window_decision wd;
-    emm_decide_options opt = {.threads = &s->threads};
+    /* The leading sweep the profile left out is the run's too. */
+    emm_decide_options opt = {.threads = &s->threads, .lead = s->window, .nlead = s->wskip};
     emm_status st = decide_features_shared(s->table, s->machine, &s->info, s->window + s->wskip,
                                            s->wn - s->wskip, s->features, s->nD, s->program, &opt,
                                            s->layouts, s->decisions, &wd, err);

@@ -693,8 +693,11 @@ static const char *how_predicted(const session *s)
         return "the best candidate of the sweep on the window";
     case FROM_CHECKED:
         return s->has_wd && s->wd.neighbours
-                   ? "the costs of the runs measured on this machine nearest the window, "
-                     "weighed with the window"
+                   ? s->wd.lead_records
+                         ? "the costs of the runs measured on this machine nearest the window, "
+                           "weighed with the window, and the leading sweep's own cycles"
+                         : "the costs of the runs measured on this machine nearest the window, "
+                           "weighed with the window"
                    : "the table's pattern simulated over this mesh on this machine";
     default:
         return "the nearest sample's strategy";

@@ -1348,6 +1348,11 @@ done:
  * local store shifted right by EMM_DECIDE_WINDOW_STORE_SHIFT (a cold window
  * fills less of the store than the run): the neighbours say what the run
  * rewards, the window what this program's accesses cost. A strategy no neighbour lists is no candidate.
+ * When the window follows a leading sweep (lead[0..nlead)), the run pays it
+ * too: each score becomes that sweep's cycles under the strategy plus the
+ * score over the least times the rest of the run, priced at the window's
+ * best cycles scaled to EMM_DECIDE_REST_PER_TRIANGLE element accesses a
+ * triangle (accesses: the window's).
  * Leaves *out alone when no sample qualifies; errors are out of memory
  * only. */
 static bool same_strategy(const emm_strategy *a, const emm_strategy *b)
@@ -1454,7 +1459,8 @@ static size_t pick_neighbours(const emm_table *t, const emm_machine *m,
 
 static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
                                   const emm_trace_info *info, const emm_trace_record *recs,
-                                  size_t n, const size_t near[EMM_DECIDE_NEIGHBOURS],
+                                  size_t n, size_t accesses, const emm_trace_record *lead,
+                                  size_t nlead, const size_t near[EMM_DECIDE_NEIGHBOURS],
                                   const double dist[EMM_DECIDE_NEIGHBOURS], size_t k,
                                   const emm_threads *threads, emm_model_share *share,
                                   emm_window_decision *out, emm_error *err)
@@ -1496,8 +1502,15 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
             if (Ws->ran[i] && (double)Ws->result[i].total < wsb)
                 wsb = (double)Ws->result[i].total;
         }
-    size_t pick = SIZE_MAX, second = SIZE_MAX, scored = 0;
-    double score = INFINITY, score2 = INFINITY;
+    double *val = malloc((W->count ? W->count : 1) * sizeof *val), vmin = INFINITY;
+    if (!val) {
+        emm_sweep_free(small);
+        emm_sweep_free(own);
+        return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the neighbours' costs");
+    }
+    size_t scored = 0;
+    for (size_t i = 0; i < W->count; i++)
+        val[i] = INFINITY;
     for (size_t i = 0; i < W->count && wb > 0 && isfinite(wb) && wsb > 0 && isfinite(wsb); i++) {
         const emm_strategy *st = &W->result[i].strategy;
         if (!W->ran[i] || !Ws->ran[i] || !emm_machine_offers(m, st))
@@ -1520,23 +1533,56 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
         scored++;
         /* The window's cost, the worse of the whole store and the smaller. */
         double wr = fmax((double)W->result[i].total / wb, (double)Ws->result[i].total / wsb);
-        double v = exp(logsum / (double)k) * pow(wr, EMM_DECIDE_WINDOW_WEIGHT);
-        if (v < score) {
+        val[i] = exp(logsum / (double)k) * pow(wr, EMM_DECIDE_WINDOW_WEIGHT);
+        if (val[i] < vmin)
+            vmin = val[i];
+    }
+    /* A leading sweep is part of the run: the scores become cycles, the
+     * rest of the run priced at the best's window cycles scaled to
+     * EMM_DECIDE_REST_PER_TRIANGLE element accesses a triangle, each
+     * strategy's own sweep cycles added. */
+    emm_sweep *L = NULL;
+    if (lead && nlead > 0 && isfinite(vmin) && accesses > 0 &&
+        sweep_records_shared(m, info, lead, nlead, threads, share, true, &L, &e) != EMM_OK) {
+        if (e.status == EMM_ERR_NOMEM) {
+            free(val);
+            emm_sweep_free(small);
+            emm_sweep_free(own);
+            return emm_fail(err, e.status, "%s", e.message);
+        }
+        L = NULL;
+    }
+    bool priced_lead = L && L->count == W->count;
+    if (priced_lead) {
+        double rest = wb * EMM_DECIDE_REST_PER_TRIANGLE * (double)info->geometry.nt /
+                      (double)accesses;
+        for (size_t i = 0; i < W->count; i++)
+            val[i] = L->ran[i] && isfinite(val[i])
+                         ? (double)L->result[i].total + val[i] / vmin * rest
+                         : INFINITY;
+    }
+    emm_sweep_free(L);
+    size_t pick = SIZE_MAX, second = SIZE_MAX;
+    double score = INFINITY, score2 = INFINITY;
+    for (size_t i = 0; i < W->count; i++) {
+        if (val[i] < score) {
             score2 = score;
             second = pick;
-            score = v;
+            score = val[i];
             pick = i;
-        } else if (v < score2) {
-            score2 = v;
+        } else if (val[i] < score2) {
+            score2 = val[i];
             second = i;
         }
     }
+    free(val);
     if (pick != SIZE_MAX) {
         out->strategy = W->result[pick].strategy;
         out->cycles = W->result[pick].total;
         out->candidates = scored;
         out->neighbours = k;
         out->neighbour_distance = dist[k - 1];
+        out->lead_records = priced_lead ? nlead : 0;
         set_runner_up(out, second == SIZE_MAX ? NULL : &W->result[second], score2 / score - 1);
     }
     emm_sweep_free(small);
@@ -1616,7 +1662,8 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
                 (k = pick_neighbours(t, m, info, f, check_distance, near, dist)) == SIZE_MAX)
                 st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
             if (st == EMM_OK && k > 0) {
-                st = neighbour_costs(t, m, info, recs, n, near, dist, k, threads, share, out,
+                st = neighbour_costs(t, m, info, recs, n, accesses, opt ? opt->lead : NULL,
+                                     opt ? opt->nlead : 0, near, dist, k, threads, share, out,
                                      err);
                 if (out->neighbours)
                     out->how = EMM_DECIDED_CHECKED;
@@ -1681,5 +1728,8 @@ emm_status emm_decide_window(const emm_table *t, const emm_machine *m, const emm
     if (st != EMM_OK)
         return st;
     /* The window proper starts after the leading sweep, as the session's does. */
-    return emm_decide_features(t, m, info, recs + skip, n - skip, f, np, name, opt, out, err);
+    emm_decide_options o = opt ? *opt : (emm_decide_options){0};
+    o.lead = recs;
+    o.nlead = skip;
+    return emm_decide_features(t, m, info, recs + skip, n - skip, f, np, name, &o, out, err);
 }

@@ -256,11 +256,14 @@ static int profile(void *p)
     if (w.simulated)
         printf("simulated: %zu strategies on the window; best %llu cycles\n", w.candidates,
                (unsigned long long)w.cycles);
-    else if (w.neighbours)
+    else if (w.neighbours) {
         printf("measured:  the %zu nearest runs measured on this machine (within %.3f), their "
                "costs\n           with the window's, %zu strategies\n",
                w.neighbours, w.neighbour_distance, w.candidates);
-    else if (w.how == EMM_DECIDED_CHECKED)
+        if (w.lead_records)
+            printf("           and the leading sweep's %zu records, the run's too\n",
+                   w.lead_records);
+    } else if (w.how == EMM_DECIDED_CHECKED)
         printf("checked:   %s over this mesh (%zu visits) and the window, %zu strategies\n",
                w.table.synth, w.synth_visits, w.candidates);
     if (!(finalists > 0 && m))

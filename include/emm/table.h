@@ -62,6 +62,14 @@ extern "C" {
  * 35.8 % off the run's best on average on the whole store, 22.0 % on half
  * of it, 28.9 % on a quarter); a strategy must be cheap on both, ... */
 #define EMM_DECIDE_WINDOW_STORE_SHIFT 1
+/* ... plus, when the window follows a leading sweep (an index-order pass
+ * over the mesh, which the profile leaves out and the run pays too), that
+ * sweep's own cycles: the scores become cycles, the least score's being
+ * the window's best cycles scaled to this many element accesses a triangle
+ * of the mesh (the rest of the run, short: make predict's runs make 7 to
+ * 186 records a triangle after their sweep; 4 to 16 gave the same cases
+ * over 30 %), ... */
+#define EMM_DECIDE_REST_PER_TRIANGLE 8
 /* ... when the nearest of them lies within this factor of the nearest
  * sample without costs (a canonical pattern's). */
 #define EMM_DECIDE_NEIGHBOUR_GATE 2.5
@@ -247,6 +255,9 @@ typedef struct emm_window_decision {
      * measured on this machine, their count, and the farthest's distance. */
     size_t neighbours;
     double neighbour_distance;
+    /* The records of the leading sweep whose cycles the neighbours' score
+     * added (EMM_DECIDE_REST_PER_TRIANGLE), 0 when none. */
+    size_t lead_records;
 } emm_window_decision;
 
 /* Frees what a decision holds (its classes) and leaves them empty; a
@@ -269,6 +280,9 @@ typedef struct emm_decide_options {
     const emm_threads *threads; /* NULL: the online CPUs, no start hook */
     uint64_t synth_visits;      /* the pattern check's long run, at most this many visits;
                                    0: EMM_DECIDE_SYNTH_VISITS */
+    const emm_trace_record *lead; /* the leading sweep the window proper follows (the
+                                     profile leaves it out, the run pays it), or NULL */
+    size_t nlead;                 /* its records */
 } emm_decide_options;
 
 /* The session's decision on a window (thesis §5, and beyond it: see
