@@ -1397,19 +1397,13 @@ static bool any_in_space(const emm_strategy *s, size_t n)
 /* The neighbours: the samples nearest f among the runs measured on this
  * machine, at most EMM_DECIDE_NEIGHBOURS (their indices in near, their
  * distances in dist, nearest first; one sample a run), and only when the
- * window is no canonical pattern's and its nearest run is within
- * EMM_DECIDE_NEIGHBOUR_GATE times the nearest sample without costs. The
- * window is a canonical pattern's (those traversals the check predicts
- * nearly exactly) when it lies within EMM_DECIDE_CANONICAL_NEAR of a sample
- * without costs and the check's own traversal, made on this mesh, lies as
- * near it (check_distance, its feature distance from the window; INFINITY
- * when it could not be made): a window near a sample made on another mesh
- * that the pattern, made on this one, does not resemble is another
- * program's. Returns how many; SIZE_MAX without memory. */
+ * nearest run is within EMM_DECIDE_NEIGHBOUR_GATE times the nearest sample
+ * without costs (a canonical pattern's), whose distance goes to *canonical.
+ * Returns how many; SIZE_MAX without memory. */
 static size_t pick_neighbours(const emm_table *t, const emm_machine *m,
                               const emm_trace_info *info, const double f[EMM_FEATURES],
-                              double check_distance, size_t near[EMM_DECIDE_NEIGHBOURS],
-                              double dist[EMM_DECIDE_NEIGHBOURS])
+                              size_t near[EMM_DECIDE_NEIGHBOURS],
+                              double dist[EMM_DECIDE_NEIGHBOURS], double *canonical_out)
 {
     char id[17];
     emm_table_machine_id(m, id);
@@ -1441,9 +1435,7 @@ static size_t pick_neighbours(const emm_table *t, const emm_machine *m,
     }
     qsort(c, nc, sizeof *c, by_distance);
     for (size_t j = 0; j < nc && k < EMM_DECIDE_NEIGHBOURS; j++) {
-        if (k == 0 && !(c[j].d <= EMM_DECIDE_NEIGHBOUR_GATE * canonical &&
-                        (canonical > EMM_DECIDE_CANONICAL_NEAR ||
-                         !(check_distance <= EMM_DECIDE_CANONICAL_NEAR))))
+        if (k == 0 && !(c[j].d <= EMM_DECIDE_NEIGHBOUR_GATE * canonical))
             break;
         bool seen = false;
         for (size_t q = 0; q < k && !seen; q++)
@@ -1454,6 +1446,7 @@ static size_t pick_neighbours(const emm_table *t, const emm_machine *m,
         dist[k++] = c[j].d;
     }
     free(c);
+    *canonical_out = canonical;
     return k;
 }
 
@@ -1654,13 +1647,21 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
              * without a recipe, stands as in the thesis): the check's long
              * run, most of a decision's cost, would not count, and is made
              * only when they decide nothing. */
-            double check_distance = INFINITY;
-            if (st == EMM_OK && names_traversal(out))
+            double canonical = INFINITY, check_distance = INFINITY;
+            if (st == EMM_OK && names_traversal(out) &&
+                (k = pick_neighbours(t, m, info, f, near, dist, &canonical)) == SIZE_MAX)
+                st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+            /* A window near a canonical sample is that pattern's (the check
+             * predicts those traversals nearly exactly) when the pattern,
+             * made on this mesh, lies as near it: the samples were made on
+             * other meshes, and a window the pattern does not resemble here
+             * is another program's. */
+            if (st == EMM_OK && k > 0 && canonical <= EMM_DECIDE_CANONICAL_NEAR) {
                 st = check_distance_of(mesh, info, &arrays, recs, n, f, accesses, name, threads,
                                        cache, out, &check_distance, err);
-            if (st == EMM_OK && names_traversal(out) &&
-                (k = pick_neighbours(t, m, info, f, check_distance, near, dist)) == SIZE_MAX)
-                st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+                if (check_distance <= EMM_DECIDE_CANONICAL_NEAR)
+                    k = 0;
+            }
             if (st == EMM_OK && k > 0) {
                 st = neighbour_costs(t, m, info, recs, n, accesses, opt ? opt->lead : NULL,
                                      opt ? opt->nlead : 0, near, dist, k, threads, share, out,
