@@ -1349,7 +1349,8 @@ done:
  * fills less of the store than the run): the neighbours say what the run
  * rewards, the window what this program's accesses cost. A strategy no neighbour lists is no candidate.
  * When the window follows a leading sweep (lead[0..nlead)), the run pays it
- * too: each score becomes that sweep's cycles under the strategy plus the
+ * too: each score becomes that sweep's cycles under the strategy (its first
+ * EMM_DECIDE_LEAD_SAMPLE records swept, scaled to its length) plus the
  * score over the least times the rest of the run, priced at the window's
  * best cycles scaled to EMM_DECIDE_REST_PER_TRIANGLE element accesses a
  * triangle (accesses: the window's).
@@ -1535,8 +1536,9 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
      * EMM_DECIDE_REST_PER_TRIANGLE element accesses a triangle, each
      * strategy's own sweep cycles added. */
     emm_sweep *L = NULL;
+    size_t nl = nlead < EMM_DECIDE_LEAD_SAMPLE ? nlead : EMM_DECIDE_LEAD_SAMPLE;
     if (lead && nlead > 0 && isfinite(vmin) && accesses > 0 &&
-        sweep_records_shared(m, info, lead, nlead, threads, share, true, &L, &e) != EMM_OK) {
+        sweep_records_shared(m, info, lead, nl, threads, share, true, &L, &e) != EMM_OK) {
         if (e.status == EMM_ERR_NOMEM) {
             free(val);
             emm_sweep_free(small);
@@ -1551,7 +1553,8 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
                       (double)accesses;
         for (size_t i = 0; i < W->count; i++)
             val[i] = L->ran[i] && isfinite(val[i])
-                         ? (double)L->result[i].total + val[i] / vmin * rest
+                         ? (double)L->result[i].total * ((double)nlead / (double)nl) +
+                               val[i] / vmin * rest
                          : INFINITY;
     }
     emm_sweep_free(L);
