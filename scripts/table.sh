@@ -4,10 +4,10 @@
 # own traces — region growing, long and short curves, random access, and
 # the traversal programs of bench/predict_traversals.c (walks, flood fill,
 # 8-seed growth, scans in three orders, smoothing) — recorded under
-# `emm run` on three generated planar meshes (one randomly numbered) and a
-# sphere that neither the tests, the demo nor `make predict` use (seeds 5–8;
-# the default mesh is seed 1), as the thesis' Table 5.1 holds profiles of
-# its applications.
+# `emm run` on three generated planar meshes (one randomly numbered) and
+# three with depth (a 16k and a 32k sphere, a 24k torus) that neither the
+# tests, the demo nor `make predict` use (seeds 5–10; the default mesh is
+# seed 1), as the thesis' Table 5.1 holds profiles of its applications.
 #
 # usage: scripts/table.sh [BUILD_DIR] [OUTPUT]   (defaults: build data/table.txt)
 set -eu
@@ -19,16 +19,19 @@ work=$(mktemp -d "${TMPDIR:-/tmp}/emm-table-XXXXXX")
 trap 'rm -rf "$work"' EXIT INT TERM
 
 set --
-# faces:seed:density:order (density - : a sphere)
+# faces:seed:density:order (density - : a sphere; torus: a torus)
 for mesh in 12000:5:clustered:made 24000:6:uniform:random 16000:7:clustered:made \
-            16000:8:-:made; do
+            16000:8:-:made 24000:9:torus:made 32000:10:-:made; do
     faces=${mesh%%:*}
     rest=${mesh#*:}
     seed=${rest%%:*}
     rest=${rest#*:}
     density=${rest%%:*}
     order=${rest#*:}
-    if [ "$density" = - ]; then
+    if [ "$density" = torus ]; then
+        "$bin/emm" mesh gen --surface torus --faces "$faces" --seed "$seed" --order "$order" \
+            -o "$work/mesh-$seed.off" >/dev/null
+    elif [ "$density" = - ]; then
         "$bin/emm" mesh gen --surface sphere --faces "$faces" --seed "$seed" --order "$order" \
             -o "$work/mesh-$seed.off" >/dev/null
     else
