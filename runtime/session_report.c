@@ -692,13 +692,12 @@ static const char *how_predicted(const session *s)
     case FROM_SIMULATION:
         return "the best candidate of the sweep on the window";
     case FROM_CHECKED:
-        return s->has_wd && s->wd.neighbours
-                   ? s->wd.lead_records
-                         ? "the costs of the runs measured on this machine nearest the window, "
-                           "weighed with the window, and the leading sweep's own cycles"
-                         : "the costs of the runs measured on this machine nearest the window, "
-                           "weighed with the window"
-                   : "the table's pattern simulated over this mesh on this machine";
+#define NEIGHBOURS "the costs of the runs measured on this machine nearest the window, " \
+                   "weighed with the window"
+        if (!(s->has_wd && s->wd.neighbours))
+            return "the table's pattern simulated over this mesh on this machine";
+        return s->wd.lead_records ? NEIGHBOURS ", and the leading sweep's own cycles" : NEIGHBOURS;
+#undef NEIGHBOURS
     default:
         return "the nearest sample's strategy";
     }

@@ -1349,11 +1349,7 @@ done:
  * fills less of the store than the run): the neighbours say what the run
  * rewards, the window what this program's accesses cost. A strategy no neighbour lists is no candidate.
  * When the window follows a leading sweep (lead[0..nlead)), the run pays it
- * too: each score becomes that sweep's cycles under the strategy (its first
- * EMM_DECIDE_LEAD_SAMPLE records swept, scaled to its length) plus the
- * score over the least times the rest of the run, priced at the window's
- * best cycles scaled to EMM_DECIDE_REST_PER_TRIANGLE element accesses a
- * triangle (accesses: the window's).
+ * too: price_lead turns the scores into cycles with it.
  * Leaves *out alone when no sample qualifies; errors are out of memory
  * only. */
 static bool same_strategy(const emm_strategy *a, const emm_strategy *b)
@@ -1451,6 +1447,41 @@ static size_t pick_neighbours(const emm_table *t, const emm_machine *m,
     return k;
 }
 
+/* The leading sweep lead[0..nlead) is the run's too (neighbour_costs): the
+ * scores val[0..count) of the window's sweep, least vmin, become cycles —
+ * the sweep's own under each strategy (its first EMM_DECIDE_LEAD_SAMPLE
+ * records swept cold, scaled to its length) plus the score over vmin times
+ * the rest of the run, priced at the window's best cycles wb scaled from
+ * the window's `accesses` to EMM_DECIDE_REST_PER_TRIANGLE element accesses a
+ * triangle. A strategy the sweep could not simulate is no candidate.
+ * *priced: nlead when it was priced, 0 when the sweep could not be made
+ * (the scores stand). Errors are out of memory only. */
+static emm_status price_lead(const emm_machine *m, const emm_trace_info *info,
+                             const emm_trace_record *lead, size_t nlead, size_t accesses,
+                             const emm_threads *threads, emm_model_share *share, size_t count,
+                             double wb, double vmin, double *val, size_t *priced,
+                             emm_error *err)
+{
+    *priced = 0;
+    emm_sweep *L = NULL;
+    emm_error e;
+    size_t nl = nlead < EMM_DECIDE_LEAD_SAMPLE ? nlead : EMM_DECIDE_LEAD_SAMPLE;
+    if (sweep_records_shared(m, info, lead, nl, threads, share, true, &L, &e) != EMM_OK)
+        return e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
+    if (L->count == count) {
+        double rest = wb * EMM_DECIDE_REST_PER_TRIANGLE * (double)info->geometry.nt /
+                      (double)accesses;
+        for (size_t i = 0; i < count; i++)
+            val[i] = L->ran[i] && isfinite(val[i])
+                         ? (double)L->result[i].total * ((double)nlead / (double)nl) +
+                               val[i] / vmin * rest
+                         : INFINITY;
+        *priced = nlead;
+    }
+    emm_sweep_free(L);
+    return EMM_OK;
+}
+
 static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
                                   const emm_trace_info *info, const emm_trace_record *recs,
                                   size_t n, size_t accesses, const emm_trace_record *lead,
@@ -1496,18 +1527,18 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
             if (Ws->ran[i] && (double)Ws->result[i].total < wsb)
                 wsb = (double)Ws->result[i].total;
         }
+    size_t scored = 0, nled = 0;
     double *val = malloc((W->count ? W->count : 1) * sizeof *val), vmin = INFINITY;
+    emm_status st = EMM_OK;
     if (!val) {
-        emm_sweep_free(small);
-        emm_sweep_free(own);
-        return emm_fail(err, EMM_ERR_NOMEM, "out of memory for the neighbours' costs");
+        st = emm_fail(err, EMM_ERR_NOMEM, "out of memory for the neighbours' costs");
+        goto done;
     }
-    size_t scored = 0;
     for (size_t i = 0; i < W->count; i++)
         val[i] = INFINITY;
     for (size_t i = 0; i < W->count && wb > 0 && isfinite(wb) && wsb > 0 && isfinite(wsb); i++) {
-        const emm_strategy *st = &W->result[i].strategy;
-        if (!W->ran[i] || !Ws->ran[i] || !emm_machine_offers(m, st))
+        const emm_strategy *s = &W->result[i].strategy;
+        if (!W->ran[i] || !Ws->ran[i] || !emm_machine_offers(m, s))
             continue;
         double logsum = 0;
         size_t listed = 0;
@@ -1515,7 +1546,7 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
             const emm_table_sample *nb = &t->s[near[j]];
             double cost = EMM_DECIDE_UNLISTED * nb->cost[nb->ncosts - 1];
             for (uint32_t q = 0; q < nb->ncosts; q++)
-                if (same_strategy(&nb->cost_strategy[q], st)) {
+                if (same_strategy(&nb->cost_strategy[q], s)) {
                     cost = nb->cost[q];
                     listed++;
                     break;
@@ -1531,33 +1562,10 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
         if (val[i] < vmin)
             vmin = val[i];
     }
-    /* A leading sweep is part of the run: the scores become cycles, the
-     * rest of the run priced at the best's window cycles scaled to
-     * EMM_DECIDE_REST_PER_TRIANGLE element accesses a triangle, each
-     * strategy's own sweep cycles added. */
-    emm_sweep *L = NULL;
-    size_t nl = nlead < EMM_DECIDE_LEAD_SAMPLE ? nlead : EMM_DECIDE_LEAD_SAMPLE;
     if (lead && nlead > 0 && isfinite(vmin) && accesses > 0 &&
-        sweep_records_shared(m, info, lead, nl, threads, share, true, &L, &e) != EMM_OK) {
-        if (e.status == EMM_ERR_NOMEM) {
-            free(val);
-            emm_sweep_free(small);
-            emm_sweep_free(own);
-            return emm_fail(err, e.status, "%s", e.message);
-        }
-        L = NULL;
-    }
-    bool priced_lead = L && L->count == W->count;
-    if (priced_lead) {
-        double rest = wb * EMM_DECIDE_REST_PER_TRIANGLE * (double)info->geometry.nt /
-                      (double)accesses;
-        for (size_t i = 0; i < W->count; i++)
-            val[i] = L->ran[i] && isfinite(val[i])
-                         ? (double)L->result[i].total * ((double)nlead / (double)nl) +
-                               val[i] / vmin * rest
-                         : INFINITY;
-    }
-    emm_sweep_free(L);
+        (st = price_lead(m, info, lead, nlead, accesses, threads, share, W->count, wb, vmin,
+                         val, &nled, err)) != EMM_OK)
+        goto done;
     size_t pick = SIZE_MAX, second = SIZE_MAX;
     double score = INFINITY, score2 = INFINITY;
     for (size_t i = 0; i < W->count; i++) {
@@ -1571,19 +1579,20 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
             second = i;
         }
     }
-    free(val);
     if (pick != SIZE_MAX) {
         out->strategy = W->result[pick].strategy;
         out->cycles = W->result[pick].total;
         out->candidates = scored;
         out->neighbours = k;
         out->neighbour_distance = dist[k - 1];
-        out->lead_records = priced_lead ? nlead : 0;
+        out->lead_records = nled;
         set_runner_up(out, second == SIZE_MAX ? NULL : &W->result[second], score2 / score - 1);
     }
+done:
+    free(val);
     emm_sweep_free(small);
     emm_sweep_free(own);
-    return EMM_OK;
+    return st;
 }
 
 emm_status emm_decide_features(const emm_table *t, const emm_machine *m,

@@ -289,9 +289,11 @@ typedef enum emm_config_key {
 /* Candidates that run to the end of the run to confirm the window's
  * prediction when EMM_FINALISTS is unset, beside the prediction and direct
  * reads, which always do (docs/profile.md "The contest"). */
-#define EMM_CONFIG_DEFAULT_FINALISTS 1u
+#define EMM_CONFIG_DEFAULT_FINALISTS 1
 /* The same, as the help texts print it (emm run's and emm profile's). */
-#define EMM_CONFIG_DEFAULT_FINALISTS_TEXT "1"
+#define EMM_CONFIG_TEXT_(x) #x
+#define EMM_CONFIG_TEXT(x) EMM_CONFIG_TEXT_(x)
+#define EMM_CONFIG_DEFAULT_FINALISTS_TEXT EMM_CONFIG_TEXT(EMM_CONFIG_DEFAULT_FINALISTS)
 /* EMM_FINALISTS=all: every candidate runs to the end of the run, none is
  * dropped (the answer is then the fastest of all of them over the run, at
  * the cost of simulating every one: as EMM_COMPARE=all). */

@@ -16,6 +16,10 @@ check() { # check NAME EXPECTED-STATUS COMMAND...
 has() { # has NAME FILE TEXT
     if ! grep -q -- "$3" "$2"; then echo "FAIL $1: '$3' not in $2:"; cat "$2"; fail=1; fi
 }
+record() { # record TRACE MESH PROGRAM [ARG]: PROGRAM [ARG] MESH under emm run's sancov capture
+    trace=$1 mesh=$2; shift 2
+    "$EMM" run --quiet --capture sancov --trace "$trace" -- "$@" "$mesh" >/dev/null
+}
 
 "$MAKE" grid grid.emmt && "$MAKE" walk walk.emmt && "$MAKE" raw raw.emmt || exit 1
 unset EMM_TABLE
@@ -139,8 +143,7 @@ has learn-none out.txt "learnt: *nothing"
 BIN=$(dirname "$EMM")
 if [ -x "$BIN/predict_traversals.sancov" ]; then
     "$EMM" mesh gen --faces 4000 --seed 77 -o walk4k.off >/dev/null &&
-        "$EMM" run --quiet --capture sancov --trace walk4k.emmt -- \
-            "$BIN/predict_traversals.sancov" walk walk4k.off >/dev/null || exit 1
+        record walk4k.emmt walk4k.off "$BIN/predict_traversals.sancov" walk || exit 1
     check costs 0 "$EMM" profile walk4k.emmt --finalists 0
     has costs out.txt "^measured: *the 16 nearest runs measured on this machine"
     check costs-other-machine 0 "$EMM" profile walk4k.emmt --finalists 0 --set local.bytes=128K
@@ -158,8 +161,7 @@ fi
 # (whose long run chose 128-triangle cells, 37 % slower than the run's best).
 if [ -x "$BIN/region_growing.sancov" ]; then
     "$EMM" mesh gen --faces 30000 --seed 42 --density uniform -o grow30k.off >/dev/null &&
-        "$EMM" run --quiet --capture sancov --trace grow30k.emmt -- \
-            "$BIN/region_growing.sancov" grow30k.off >/dev/null || exit 1
+        record grow30k.emmt grow30k.off "$BIN/region_growing.sancov" || exit 1
     check check-unlike 0 "$EMM" profile grow30k.emmt --finalists 0
     has check-unlike out.txt "^measured: *the 16 nearest runs measured on this machine"
     if grep -q "^checked:" out.txt; then echo "FAIL check-unlike: decided by the check"; fail=1; fi
@@ -175,8 +177,7 @@ fi
 # serve the curves but make the sweep dear).
 if [ -x "$BIN/curve_tracing.sancov" ]; then
     "$EMM" mesh gen --faces 10000 --seed 41 --density clustered -o curves10k.off >/dev/null &&
-        "$EMM" run --quiet --capture sancov --trace curves10k.emmt -- \
-            "$BIN/curve_tracing.sancov" --short curves10k.off >/dev/null || exit 1
+        record curves10k.emmt curves10k.off "$BIN/curve_tracing.sancov" --short || exit 1
     check lead 0 "$EMM" profile curves10k.emmt --finalists 0
     has lead out.txt "^ *and the leading sweep's [0-9]* records, the run's too"
     predicted=$(sed -n 's/^strategy: *//p' out.txt)
