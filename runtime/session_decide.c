@@ -667,14 +667,25 @@ static emm_status profile_window(session *s, emm_error *err)
 /* The decision (runtime/table.c, docs/profile.md "The decision"): the
  * nearest sample, its pattern simulated over this mesh and weighed with the
  * window, or the sweep on the window when the profile is novel. */
+/* The window's records past its leading sweep that the decision sees: up
+ * to where its element reads filled it (wunit), as emm profile reads them
+ * off the trace. The records of the capture's batch that came after join
+ * the window (they are simulated in order) but are the run's: a capture
+ * with larger batches (valgrind's) would otherwise decide on more. */
+static size_t window_decided(const session *s)
+{
+    size_t end = s->wunit > s->wskip && s->wunit <= s->wn ? s->wunit : s->wn;
+    return end > s->wskip ? end - s->wskip : 0;
+}
+
 static emm_status choose(session *s, emm_error *err)
 {
     emm_window_decision wd;
     /* The leading sweep the profile left out is the run's too. */
     emm_decide_options opt = {.threads = &s->threads, .lead = s->window, .nlead = s->wskip};
     emm_status st = decide_features_shared(s->table, s->machine, &s->info, s->window + s->wskip,
-                                           s->wn - s->wskip, s->features, s->nD, s->program, &opt,
-                                           s->layouts, s->decisions, &wd, err);
+                                           window_decided(s), s->features, s->nD, s->program,
+                                           &opt, s->layouts, s->decisions, &wd, err);
     if (st != EMM_OK)
         return st;
     s->chosen = wd.strategy;
@@ -698,7 +709,7 @@ static emm_status choose_on_window(session *s, emm_error *err)
     emm_decide_options opt = {.threads = &s->threads};
     double f[EMM_FEATURES] = {0};
     emm_status st = decide_features_shared(NULL, s->machine, &s->info, s->window + s->wskip,
-                                           s->wn - s->wskip, f, s->nD, s->program, &opt,
+                                           window_decided(s), f, s->nD, s->program, &opt,
                                            s->layouts, s->decisions, &wd, err);
     if (st != EMM_OK)
         return st;
