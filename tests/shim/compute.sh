@@ -5,9 +5,9 @@
 #   sancov   its sancov build under --capture sancov,
 #   sancovvg that build under --capture valgrind,
 #   charged  the sancov build with compute.per_work = 1.
-# The first three give the same answer and total cycles within 2% (the
-# two builds make the same loads; one binary the same records under both
-# captures), stdout as natively, and reports whose compute says "per
+# The first three give the same answer, the same prediction and total
+# cycles within 2% (the two builds make the same loads; one binary the
+# same records under both captures), stdout as natively, and reports whose compute says "per
 # access" in the capture's unit of work, with every result's compute
 # bucket one cycle per access. The fourth charges the capture's work: its
 # report says so, its compute is accesses plus work, its summary warns.
@@ -84,6 +84,11 @@ for n in ('plain', 'sancov', 'sancovvg'):
 for n in ('plain', 'sancovvg'):
     check(r[n]['strategy'] == r['sancov']['strategy'],
           'the answers differ: %s %s, sancov %s' % (n, r[n]['strategy'], r['sancov']['strategy']))
+    # The window's prediction too: the decision sees the window up to the
+    # read that filled it, however large the capture's batches.
+    check(r[n]['decision']['predicted'] == r['sancov']['decision']['predicted'],
+          'the predictions differ: %s %s, sancov %s'
+          % (n, r[n]['decision']['predicted'], r['sancov']['decision']['predicted']))
     check(abs(total[n] - total['sancov']) <= 0.02 * total['sancov'],
           'total cycles differ by more than 2%%: %s %d, sancov %d' % (n, total[n], total['sancov']))
 # One binary, the same records: the sancov build makes the loads its
