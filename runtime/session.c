@@ -721,7 +721,7 @@ static void window_add(session *s, const emm_raw_access *a, size_t n)
     }
 }
 
-void session_simulate(session *s, const emm_trace_record *recs, size_t n)
+static void simulate_part(session *s, const emm_trace_record *recs, size_t n)
 {
     if (s->contest)
         contest_run(s->contest, recs, n);
@@ -746,6 +746,24 @@ void session_simulate(session *s, const emm_trace_record *recs, size_t n)
     }
     if (s->probing)
         session_phases_see(s, recs, n);
+}
+
+/* The records through the models, the outputs and the probes, cut where a
+ * probe's outcome lands (SESSION_PROBE_LAG records after it filled) and in
+ * parts no longer than that, so that a probe filled in a part lands in a
+ * later one: the phases found are those of the records, not of the
+ * capture's batches. */
+void session_simulate(session *s, const emm_trace_record *recs, size_t n)
+{
+    while (n > 0) {
+        size_t part = n < SESSION_PROBE_LAG ? n : SESSION_PROBE_LAG;
+        if (s->probing && s->probe_job && s->probe_apply > s->accesses &&
+            s->probe_apply - s->accesses < part)
+            part = (size_t)(s->probe_apply - s->accesses);
+        simulate_part(s, recs, part);
+        recs += part;
+        n -= part;
+    }
 }
 
 static void flush_chunk(session *s)

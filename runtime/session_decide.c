@@ -667,14 +667,19 @@ static emm_status profile_window(session *s, emm_error *err)
 /* The decision (runtime/table.c, docs/profile.md "The decision"): the
  * nearest sample, its pattern simulated over this mesh and weighed with the
  * window, or the sweep on the window when the profile is novel. */
+size_t session_window_proper(const session *s)
+{
+    return s->wunit > 0 && s->wunit <= s->wn ? s->wunit : s->wn;
+}
+
 /* The window's records past its leading sweep that the decision sees: up
- * to where its element reads filled it (wunit), as emm profile reads them
- * off the trace. The records of the capture's batch that came after join
- * the window (they are simulated in order) but are the run's: a capture
- * with larger batches (valgrind's) would otherwise decide on more. */
+ * to where its element reads filled it, as emm profile reads them off the
+ * trace. The records of the capture's batch that came after join the
+ * window (they are simulated in order) but are the run's: a capture with
+ * larger batches (valgrind's) would otherwise decide on more. */
 static size_t window_decided(const session *s)
 {
-    size_t end = s->wunit > s->wskip && s->wunit <= s->wn ? s->wunit : s->wn;
+    size_t end = session_window_proper(s);
     return end > s->wskip ? end - s->wskip : 0;
 }
 
@@ -988,8 +993,13 @@ emm_status session_decide_rest(session *s, emm_error *err)
     if ((st = build_models(s, err)) != EMM_OK)
         return st;
     session_outputs_start(s); /* the trace, the timeline, the stall lines */
-    session_simulate(s, s->window, s->wn);
+    /* The window proper, then the probes watch the run: from the record
+     * after the one that filled it, whatever the capture's batches. */
+    size_t proper = session_window_proper(s);
+    session_simulate(s, s->window, proper);
     session_phases_start(s);
+    if (s->wn > proper)
+        session_simulate(s, s->window + proper, s->wn - proper);
     return EMM_OK;
 }
 

@@ -105,9 +105,10 @@ typedef struct late_array {
  * simulated from there on, cold, as a switch would start. */
 #define SESSION_MAX_PHASES 8
 #define SESSION_PROBE_GAP 7
-/* A probe's outcome is applied this many records after it filled (at the
- * end of the batch that passes them): its profile is worked out meanwhile
- * beside the run. */
+/* A probe's outcome is applied this many records after the one that
+ * filled it, to the record (session_simulate cuts its batch there): its
+ * profile is worked out meanwhile beside the run, and what it finds does
+ * not depend on the capture's batches. */
 #define SESSION_PROBE_LAG 262144
 /* A phase's pattern check synthesises its long run at most this many probe
  * lengths (of element accesses) long, an eighth of the window's at the
@@ -567,6 +568,12 @@ static inline bool session_window_only(const session *s)
 {
     return !(emm_capture_caps(s->capture) & EMM_CAP_WHOLE_RUN) || s->deferred;
 }
+
+/* The window's records up to the one whose read filled it (after
+ * freeze_arrays): the window proper, which the decision and the first
+ * phase see. The rest of the capture's batch joined the buffer and is the
+ * run's (docs/profile.md "The window"). */
+size_t session_window_proper(const session *s);
 
 /* The bytes of the traced mesh's records. */
 uint64_t session_mesh_bytes(const session *s);

@@ -257,13 +257,15 @@ void session_phases_start(session *s)
     s->old_probes = 0;
     s->probes_taken = s->probes_profiled = 0;
     s->nmoves = s->moves_next = 0;
+    /* The first phase's moves and code: the window proper's. */
+    size_t proper = session_window_proper(s);
     double h[SESSION_MOVE_SIZE];
-    moves_of(s, s->window, s->wn, h);
+    moves_of(s, s->window, proper, h);
     remember_moves(s, h);
     pcs_free(&s->phase_pcs);
     pcs_free(&s->pending_pcs);
     pc_set w;
-    if (pcs_of(s, s->window, s->wn, &w))
+    if (pcs_of(s, s->window, proper, &w))
         pcs_join(&s->phase_pcs, &w);
     s->probe_len = s->nD;
     s->gap = SESSION_PROBE_GAP * s->probe_len;
@@ -515,9 +517,10 @@ static void finish_probe(session *s)
     free_probe(j);
 }
 
-/* The probe is full: its records go to a job evaluated beside the run, the
+/* The probe filled at access `filled` (the records run when its last
+ * record was): its records go to a job evaluated beside the run, the
  * probe starts empty. Without memory for that, probing ends. */
-static void launch_probe(session *s)
+static void launch_probe(session *s, uint64_t filled)
 {
     finish_probe(s); /* never in flight here: a probe is over in SESSION_PROBE_LAG records */
     struct probe_job *j = calloc(1, sizeof *j);
@@ -537,7 +540,7 @@ static void launch_probe(session *s)
     s->probe = NULL;
     s->pn = s->pcap = 0;
     s->probe_job = j;
-    s->probe_apply = s->accesses + SESSION_PROBE_LAG;
+    s->probe_apply = filled + SESSION_PROBE_LAG;
     j->task = emm_task_start(&s->threads, evaluate, j);
 }
 
@@ -588,16 +591,16 @@ void session_phases_see(session *s, const emm_trace_record *recs, size_t n)
         s->probe_reads += element;
         k++;
         if (s->probe_reads >= s->probe_len) {
-            launch_probe(s);
+            launch_probe(s, s->accesses - n + k);
             s->pn = 0;
             s->probe_reads = 0;
             s->gap = SESSION_PROBE_GAP * s->probe_len;
         }
     }
     s->plast = l;
-    /* A probe's outcome lands a fixed number of records after it filled, at
-     * the end of a batch, so that what it finds does not depend on how
-     * fast it was evaluated. */
+    /* A probe's outcome lands a fixed number of records after it filled
+     * (session_simulate ends a batch there), so that what it finds depends
+     * neither on how fast it was evaluated nor on the capture's batches. */
     if (s->probe_job && s->accesses >= s->probe_apply)
         finish_probe(s);
 }

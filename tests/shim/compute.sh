@@ -7,10 +7,11 @@
 #   charged  the sancov build with compute.per_work = 1.
 # The first three give the same answer, the same prediction and total
 # cycles within 2% (the two builds make the same loads; one binary the
-# same records under both captures), stdout as natively, and reports whose compute says "per
-# access" in the capture's unit of work, with every result's compute
-# bucket one cycle per access. The fourth charges the capture's work: its
-# report says so, its compute is accesses plus work, its summary warns.
+# same records, and the same phases, under both captures), stdout as
+# natively, and reports whose compute says "per access" in the capture's
+# unit of work, with every result's compute bucket one cycle per access.
+# The fourth charges the capture's work: its report says so, its compute
+# is accesses plus work, its summary warns.
 #   sh compute.sh SHIM WORKDIR EMM PLAIN SANCOV_BUILD|- VALGRIND_TOOL(1|0)
 . "$(dirname "$0")/lib.sh"
 unset EMM_STRATEGY EMM_CAPTURE EMM_MACHINE # the session's own answer, on the default machine
@@ -96,6 +97,13 @@ for n in ('plain', 'sancovvg'):
 check(r['sancovvg']['accesses'] == r['sancov']['accesses'],
       'the sancov build made %d records under valgrind, %d under sancov'
       % (r['sancovvg']['accesses'], r['sancov']['accesses']))
+# ... and the same phases: a probe lands a fixed number of records after it
+# filled, whatever the capture's batches (valgrind's are large).
+def phases(x):
+    return [(p['start'], p['pattern'], p.get('best')) for p in x.get('phases') or []]
+check(phases(r['sancovvg']) == phases(r['sancov']) and r['sancovvg']['probes'] == r['sancov']['probes'],
+      'the phases differ: under valgrind %s (probes %s), under sancov %s (probes %s)'
+      % (phases(r['sancovvg']), r['sancovvg']['probes'], phases(r['sancov']), r['sancov']['probes']))
 for b in bad:
     print('FAIL:', b, file=sys.stderr)
 sys.exit(1 if bad else 0)
