@@ -81,8 +81,9 @@ typedef struct emm_session_config {
 /* One captured access, as the capture backends record it: the address, the
  * bytes (low 31 bits) and write flag (bit 31), the work since the previous
  * access (instrumented basic blocks, or 0), and the program counter of the
- * access where the backend knows it (sancov: its hook's return address), or
- * 0. A session that is given program counters writes them, and the
+ * access where the backend knows it, one byte past the access's code
+ * (sancov: its hook's return address; valgrind: the instruction's address
+ * + 1, so that pc - 1 lies in the access's code for both), or 0. A session that is given program counters writes them, and the
  * program's mapped objects, into its trace (emm annotate reads them). */
 typedef struct emm_raw_access {
     uint64_t addr;

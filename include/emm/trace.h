@@ -43,9 +43,11 @@ typedef struct emm_trace_record {
     uint32_t bytes;   /* bytes accessed, 1 .. EMM_TRACE_MAX_ACCESS_BYTES and <= record_size */
     uint32_t work;
     uint8_t write;    /* 0 read, 1 write */
-    uint64_t pc;      /* the program counter of the access (the return address of
-                         the capture's hook), or 0 when the capture does not know it;
-                         emm_trace_module says which object it falls in */
+    uint64_t pc;      /* the program counter of the access, one byte past the
+                         access's code (sancov: its hook's return address;
+                         valgrind: the instruction's address + 1), or 0 when the
+                         capture does not know it; emm_trace_module says which
+                         object it falls in */
 } emm_trace_record;
 
 /* An object mapped in the traced program (its executable, a shared

@@ -360,9 +360,14 @@ static void record_access(IRSB *sb, struct sb_state *s, IRExpr *addr, Int bytes,
     }
     if (guard)
         in = assign(sb, Ity_I1, IRExpr_Binop(Iop_And1, IRExpr_RdTmp(in), guard));
+    /* A record's pc is an address one byte into the access's instruction,
+     * as the sancov hooks' return address is one past their call: the
+     * source lines are looked up one byte back (runtime/srcline.c), which
+     * from the instruction's own address would land in the instruction
+     * before it, on another line or in another inlined function. */
     IRDirty *di = unsafeIRDirty_0_N(
         3, "emm_hit", VG_(fnptr_to_fnentry)(hit),
-        mkIRExprVec_3(addr, u64((ULong)bytes | (write ? EMM_VG_WRITE : 0u)), u64(pc)));
+        mkIRExprVec_3(addr, u64((ULong)bytes | (write ? EMM_VG_WRITE : 0u)), u64(pc + 1)));
     di->guard = IRExpr_RdTmp(in);
     addStmtToIRSB(sb, IRStmt_Dirty(di));
 }

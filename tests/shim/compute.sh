@@ -7,7 +7,7 @@
 #   charged  the sancov build with compute.per_work = 1.
 # The first three give the same answer, the same prediction and total
 # cycles within 2% (the two builds make the same loads; one binary the
-# same records, and the same phases, under both captures), stdout as
+# same records, phases and stall lines under both captures), stdout as
 # natively, and reports whose compute says "per access" in the capture's
 # unit of work, with every result's compute bucket one cycle per access.
 # The fourth charges the capture's work: its report says so, its compute
@@ -24,7 +24,7 @@ if [ "$VGTOOL" != 1 ]; then
 fi
 TAG='vertices:site=read_obj,stride=12,xyz=0:f32;triangles:site=read_obj,stride=12,vidx=0:u32'
 MESH=$WORK/mesh.obj
-"$EMM" mesh gen --faces 5000 --seed 3 -o "$MESH" > /dev/null || fail "emm mesh gen"
+"$EMM" mesh gen --faces 20000 --seed 3 -o "$MESH" > /dev/null || fail "emm mesh gen"
 env -u LD_PRELOAD "$PLAIN" "$MESH" > "$WORK/native.out"; native_rc=$?
 [ $native_rc = 0 ] || fail "flood_walk natively: exit status $native_rc"
 
@@ -104,6 +104,18 @@ def phases(x):
 check(phases(r['sancovvg']) == phases(r['sancov']) and r['sancovvg']['probes'] == r['sancov']['probes'],
       'the phases differ: under valgrind %s (probes %s), under sancov %s (probes %s)'
       % (phases(r['sancovvg']), r['sancovvg']['probes'], phases(r['sancov']), r['sancov']['probes']))
+# ... and the answer's stalls fall in the same functions: a valgrind
+# record's pc lies in its load's instruction as a sancov hook's return
+# address lies past its call (the lines may differ where the compiler gave
+# the load another line than its hook's; line 0 is none).
+def stalls(x):
+    return [(l['function'], l['dma_stall']) for l in x.get('stall_lines') or []]
+check(stalls(r['sancovvg']) == stalls(r['sancov']),
+      'the stall lines differ: under valgrind %s, under sancov %s'
+      % (r['sancovvg'].get('stall_lines'), r['sancov'].get('stall_lines')))
+for n in ('plain', 'sancov', 'sancovvg'):
+    check(all(l['line'] > 0 for l in r[n].get('stall_lines') or []),
+          '%s: a stall line without a line: %s' % (n, r[n].get('stall_lines')))
 for b in bad:
     print('FAIL:', b, file=sys.stderr)
 sys.exit(1 if bad else 0)
