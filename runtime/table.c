@@ -1191,6 +1191,69 @@ static emm_status check_distance_of(const emm_mesh *mesh, const emm_trace_info *
     return st == EMM_ERR_NOMEM ? emm_fail(err, st, "%s", e.message) : EMM_OK;
 }
 
+/* The window lies near a canonical sample, but the checked class's
+ * traversal made on this mesh does not (decide): another canonical class
+ * whose traversal, made on this mesh, lies within EMM_DECIDE_CANONICAL_NEAR
+ * of the window is the window's pattern after all, and the check runs it
+ * (the nearest such; its nearest sample becomes the decision's). *d gets
+ * its distance, left alone when none is that near. Errors are out of
+ * memory only. */
+static emm_status near_class(const emm_table *t, const emm_mesh *mesh, const emm_trace_info *info,
+                             const struct synth_arrays *arrays, const emm_trace_record *recs,
+                             size_t n, const double f[EMM_FEATURES], size_t accesses,
+                             const char *name, const emm_threads *threads, decide_cache *cache,
+                             emm_window_decision *out, double *d, emm_error *err)
+{
+    /* The nearest canonical sample (no costs, a recipe) of each class. */
+    size_t *cand = malloc((t->n ? t->n : 1) * sizeof *cand), nc = 0;
+    if (!cand)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the class check", name);
+    for (size_t i = 0; i < t->n; i++) {
+        const emm_table_sample *x = &t->s[i];
+        if (x->ncosts > 0 || strcmp(x->pattern, out->table.pattern) == 0)
+            continue;
+        size_t k = 0;
+        while (k < nc && strcmp(t->s[cand[k]].pattern, x->pattern) != 0)
+            k++;
+        if (k == nc)
+            cand[nc++] = i;
+        else if (emm_feature_distance(f, x->f) < emm_feature_distance(f, t->s[cand[k]].f))
+            cand[k] = i;
+    }
+    uint64_t visits = accesses < info->geometry.nt ? accesses : info->geometry.nt;
+    size_t best = SIZE_MAX;
+    double bd = EMM_DECIDE_CANONICAL_NEAR;
+    emm_status st = EMM_OK;
+    for (size_t k = 0; k < nc && st == EMM_OK; k++) {
+        emm_synth_options so;
+        emm_error e;
+        double g[EMM_FEATURES];
+        emm_status sst =
+            synth_options(mesh, arrays, sample_recipe(&t->s[cand[k]]), recs, n, visits, &so, &e);
+        if (sst == EMM_OK)
+            sst = synth_features(cache, mesh, info, arrays, &so, accesses, name, threads, g, &e);
+        if (sst == EMM_ERR_NOMEM)
+            st = emm_fail(err, sst, "%s", e.message);
+        else if (sst == EMM_OK && emm_feature_distance(f, g) <= bd) {
+            bd = emm_feature_distance(f, g);
+            best = cand[k];
+        }
+    }
+    if (st == EMM_OK && best != SIZE_MAX) {
+        const emm_table_sample *b = &t->s[best];
+        snprintf(out->table.pattern, sizeof out->table.pattern, "%s", b->pattern);
+        snprintf(out->table.nearest, sizeof out->table.nearest, "%s", b->name);
+        snprintf(out->table.synth, sizeof out->table.synth, "%s", b->synth[0] ? b->synth : "-");
+        out->table.strategy = b->strategy;
+        out->table.distance = emm_feature_distance(f, b->f);
+        out->strategy = b->strategy;
+        out->reclassified = 1;
+        *d = bd;
+    }
+    free(cand);
+    return st;
+}
+
 /* The pattern check's ranking (check_pattern): the candidates (ran in both
  * sweeps, offered), and the least and second least score S/S_best, W
  * breaking ties. */
@@ -1665,12 +1728,15 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
                 st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
             /* A window near a canonical sample is that pattern's (the check
              * predicts those traversals nearly exactly) when the pattern,
-             * made on this mesh, lies as near it: the samples were made on
-             * other meshes, and a window the pattern does not resemble here
-             * is another program's. */
+             * made on this mesh, lies as near it — or when another class's
+             * does (near_class): the samples were made on other meshes, and
+             * a window no pattern resembles here is another program's. */
             if (st == EMM_OK && k > 0 && canonical <= EMM_DECIDE_CANONICAL_NEAR) {
                 st = check_distance_of(mesh, info, &arrays, recs, n, f, accesses, name, threads,
                                        cache, out, &check_distance, err);
+                if (st == EMM_OK && !(check_distance <= EMM_DECIDE_CANONICAL_NEAR))
+                    st = near_class(t, mesh, info, &arrays, recs, n, f, accesses, name, threads,
+                                    cache, out, &check_distance, err);
                 if (check_distance <= EMM_DECIDE_CANONICAL_NEAR)
                     k = 0;
             }
