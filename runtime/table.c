@@ -1068,6 +1068,20 @@ static const char *sample_recipe(const emm_table_sample *t)
     return t->synth[0] && strcmp(t->synth, "-") != 0 ? t->synth : t->pattern;
 }
 
+/* The decision's class becomes sample b's (its nearest sample of that
+ * class): the check runs its traversal. */
+static void reclassify(emm_window_decision *out, const emm_table_sample *b,
+                       const double f[EMM_FEATURES])
+{
+    snprintf(out->table.pattern, sizeof out->table.pattern, "%s", b->pattern);
+    snprintf(out->table.nearest, sizeof out->table.nearest, "%s", b->name);
+    snprintf(out->table.synth, sizeof out->table.synth, "%s", b->synth[0] ? b->synth : "-");
+    out->table.strategy = b->strategy;
+    out->table.distance = emm_feature_distance(f, b->f);
+    out->strategy = b->strategy;
+    out->reclassified = 1;
+}
+
 /* The pattern's class checked on this mesh (docs/profile.md "The
  * decision"): a window may lie near samples of several classes (a scan
  * line is a long straight curve at some scales), and the samples were made
@@ -1137,16 +1151,8 @@ static emm_status pick_class(const emm_table *t, const emm_trace_info *info, con
      * than the nearest sample's class's own on this mesh. */
     if (best != SIZE_MAX && !(bd < EMM_DECIDE_CLASS_SWITCH * mine))
         best = SIZE_MAX;
-    if (best != SIZE_MAX && strcmp(t->s[best].pattern, out->table.pattern) != 0) {
-        const emm_table_sample *b = &t->s[best];
-        snprintf(out->table.pattern, sizeof out->table.pattern, "%s", b->pattern);
-        snprintf(out->table.nearest, sizeof out->table.nearest, "%s", b->name);
-        snprintf(out->table.synth, sizeof out->table.synth, "%s", b->synth[0] ? b->synth : "-");
-        out->table.strategy = b->strategy;
-        out->table.distance = emm_feature_distance(f, b->f);
-        out->strategy = b->strategy;
-        out->reclassified = 1;
-    }
+    if (best != SIZE_MAX && strcmp(t->s[best].pattern, out->table.pattern) != 0)
+        reclassify(out, &t->s[best], f);
 done:
     free(cand);
     return st;
@@ -1240,14 +1246,7 @@ static emm_status near_class(const emm_table *t, const emm_mesh *mesh, const emm
         }
     }
     if (st == EMM_OK && best != SIZE_MAX) {
-        const emm_table_sample *b = &t->s[best];
-        snprintf(out->table.pattern, sizeof out->table.pattern, "%s", b->pattern);
-        snprintf(out->table.nearest, sizeof out->table.nearest, "%s", b->name);
-        snprintf(out->table.synth, sizeof out->table.synth, "%s", b->synth[0] ? b->synth : "-");
-        out->table.strategy = b->strategy;
-        out->table.distance = emm_feature_distance(f, b->f);
-        out->strategy = b->strategy;
-        out->reclassified = 1;
+        reclassify(out, &t->s[best], f);
         *d = bd;
     }
     free(cand);
