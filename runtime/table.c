@@ -1199,11 +1199,12 @@ static emm_status check_distance_of(const emm_mesh *mesh, const emm_trace_info *
 
 /* The window lies near a canonical sample, but the checked class's
  * traversal made on this mesh does not (decide): another canonical class
- * whose traversal, made on this mesh, lies within EMM_DECIDE_CANONICAL_NEAR
- * of the window is the window's pattern after all, and the check runs it
- * (the nearest such; its nearest sample becomes the decision's). *d gets
- * its distance, left alone when none is that near. Errors are out of
- * memory only. */
+ * (its nearest sample within EMM_DECIDE_NEAR_CLASS_REACH times the nearest
+ * canonical sample's distance) whose traversal, made on this mesh, lies
+ * within EMM_DECIDE_CANONICAL_NEAR of the window is the window's pattern
+ * after all, and the check runs it (the nearest such; its nearest sample
+ * becomes the decision's). *d gets its distance, left alone when none is
+ * that near. Errors are out of memory only. */
 static emm_status near_class(const emm_table *t, const emm_mesh *mesh, const emm_trace_info *info,
                              const struct synth_arrays *arrays, const emm_trace_record *recs,
                              size_t n, const double f[EMM_FEATURES], size_t accesses,
@@ -1214,9 +1215,15 @@ static emm_status near_class(const emm_table *t, const emm_mesh *mesh, const emm
     size_t *cand = malloc((t->n ? t->n : 1) * sizeof *cand), nc = 0;
     if (!cand)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the class check", name);
+    double nearest = INFINITY;
+    for (size_t i = 0; i < t->n; i++)
+        if (t->s[i].ncosts == 0 && emm_feature_distance(f, t->s[i].f) < nearest)
+            nearest = emm_feature_distance(f, t->s[i].f);
+    double reach = EMM_DECIDE_NEAR_CLASS_REACH * nearest;
     for (size_t i = 0; i < t->n; i++) {
         const emm_table_sample *x = &t->s[i];
-        if (x->ncosts > 0 || strcmp(x->pattern, out->table.pattern) == 0)
+        if (x->ncosts > 0 || strcmp(x->pattern, out->table.pattern) == 0 ||
+            emm_feature_distance(f, x->f) > reach)
             continue;
         size_t k = 0;
         while (k < nc && strcmp(t->s[cand[k]].pattern, x->pattern) != 0)

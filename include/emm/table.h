@@ -83,6 +83,11 @@ extern "C" {
  * pattern — when the pattern's traversal, made on the program's own mesh,
  * lies this near the window too: the check decides, not the neighbours. */
 #define EMM_DECIDE_CANONICAL_NEAR 0.35
+/* When the checked class's traversal does not lie that near, the other
+ * canonical classes whose nearest sample lies within this many times the
+ * nearest canonical sample's distance are made on the mesh too, and the
+ * nearest of them within EMM_DECIDE_CANONICAL_NEAR is checked instead. */
+#define EMM_DECIDE_NEAR_CLASS_REACH 2.0
 /* A profile whose nearest sample is farther than this (Euclidean, in
  * feature space) is novel. See docs/profile.md for how it was chosen. */
 #define EMM_NOVELTY_THRESHOLD 1.0
