@@ -664,9 +664,6 @@ static emm_status profile_window(session *s, emm_error *err)
     return EMM_OK;
 }
 
-/* The decision (runtime/table.c, docs/profile.md "The decision"): the
- * nearest sample, its pattern simulated over this mesh and weighed with the
- * window, or the sweep on the window when the profile is novel. */
 size_t session_window_proper(const session *s)
 {
     return s->wunit > 0 && s->wunit <= s->wn ? s->wunit : s->wn;
@@ -683,6 +680,9 @@ static size_t window_decided(const session *s)
     return end > s->wskip ? end - s->wskip : 0;
 }
 
+/* The decision (runtime/table.c, docs/profile.md "The decision"): the
+ * nearest sample, its pattern simulated over this mesh and weighed with the
+ * window, or the sweep on the window when the profile is novel. */
 static emm_status choose(session *s, emm_error *err)
 {
     emm_window_decision wd;

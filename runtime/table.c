@@ -1082,6 +1082,52 @@ static void reclassify(emm_window_decision *out, const emm_table_sample *b,
     out->reclassified = 1;
 }
 
+/* The feature distance from the window (features f, `accesses` element
+ * accesses) to the traversal of `recipe` made on this mesh for as many
+ * element accesses (shared through the cache): *d when EMM_OK; another
+ * status when the traversal cannot be made (*e says why: EMM_ERR_NOMEM is
+ * out of memory). */
+static emm_status made_distance(decide_cache *cache, const emm_mesh *mesh,
+                                const emm_trace_info *info, const struct synth_arrays *arrays,
+                                const char *recipe, const emm_trace_record *recs, size_t n,
+                                const double f[EMM_FEATURES], size_t accesses, const char *name,
+                                const emm_threads *threads, double *d, emm_error *e)
+{
+    uint64_t visits = accesses < info->geometry.nt ? accesses : info->geometry.nt;
+    emm_synth_options so;
+    double g[EMM_FEATURES];
+    emm_status st = synth_options(mesh, arrays, recipe, recs, n, visits, &so, e);
+    if (st == EMM_OK)
+        st = synth_features(cache, mesh, info, arrays, &so, accesses, name, threads, g, e);
+    if (st == EMM_OK)
+        *d = emm_feature_distance(f, g);
+    return st;
+}
+
+/* The nearest sample of each class (pattern) among the samples within
+ * `within` of f — only those without costs when `canonical`, none of class
+ * `skip` (may be NULL) — into cand, in the table's order of the classes'
+ * first such sample. Returns how many. */
+static size_t class_nearest(const emm_table *t, const double f[EMM_FEATURES], double within,
+                            bool canonical, const char *skip, size_t *cand)
+{
+    size_t nc = 0;
+    for (size_t i = 0; i < t->n; i++) {
+        const emm_table_sample *x = &t->s[i];
+        double d = emm_feature_distance(f, x->f);
+        if (d > within || (canonical && x->ncosts > 0) || (skip && strcmp(x->pattern, skip) == 0))
+            continue;
+        size_t k = 0;
+        while (k < nc && strcmp(t->s[cand[k]].pattern, x->pattern) != 0)
+            k++;
+        if (k == nc)
+            cand[nc++] = i;
+        else if (d < emm_feature_distance(f, t->s[cand[k]].f))
+            cand[k] = i;
+    }
+    return nc;
+}
+
 /* The pattern's class checked on this mesh (docs/profile.md "The
  * decision"): a window may lie near samples of several classes (a scan
  * line is a long straight curve at some scales), and the samples were made
@@ -1099,21 +1145,11 @@ static emm_status pick_class(const emm_table *t, const emm_trace_info *info, con
     /* The nearest sample of every class that has one within the margin,
      * however many: the classes are sized here, not capped
      * (docs/profile.md "The decision" has what checking them all changed). */
-    size_t *cand = malloc(t->n * sizeof *cand), nc = 0;
+    size_t *cand = malloc((t->n ? t->n : 1) * sizeof *cand);
     if (!cand)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the class check", name);
-    for (size_t i = 0; i < t->n; i++) {
-        double d = emm_feature_distance(f, t->s[i].f);
-        if (d > out->table.distance * EMM_DECIDE_CLASS_MARGIN)
-            continue;
-        size_t k = 0;
-        while (k < nc && strcmp(t->s[cand[k]].pattern, t->s[i].pattern) != 0)
-            k++;
-        if (k == nc)
-            cand[nc++] = i;
-        else if (d < emm_feature_distance(f, t->s[cand[k]].f))
-            cand[k] = i;
-    }
+    size_t nc = class_nearest(t, f, out->table.distance * EMM_DECIDE_CLASS_MARGIN, false, NULL,
+                              cand);
     emm_status st = EMM_OK;
     size_t best = SIZE_MAX;
     double bd = INFINITY, mine = INFINITY;
@@ -1125,25 +1161,22 @@ static emm_status pick_class(const emm_table *t, const emm_trace_info *info, con
     }
     for (size_t k = 0; k < nc; k++) {
         const emm_table_sample *smp = &t->s[cand[k]];
-        double g[EMM_FEATURES];
-        uint64_t visits = accesses < info->geometry.nt ? accesses : info->geometry.nt;
+        double d = -1;
         emm_error e;
-        emm_synth_options so;
-        emm_status sst = synth_options(mesh, arrays, sample_recipe(smp), recs, n, visits, &so, &e);
-        if (sst == EMM_OK)
-            sst = synth_features(cache, mesh, info, arrays, &so, accesses, name, threads, g, &e);
+        emm_status sst = made_distance(cache, mesh, info, arrays, sample_recipe(smp), recs, n, f,
+                                       accesses, name, threads, &d, &e);
         if (sst == EMM_ERR_NOMEM) {
             st = emm_fail(err, sst, "%s", e.message);
             goto done;
         }
         emm_decide_class *c = &out->classes[out->nclasses++];
         c->distance = emm_feature_distance(f, smp->f);
-        c->synth_distance = sst == EMM_OK ? emm_feature_distance(f, g) : -1;
+        c->synth_distance = sst == EMM_OK ? d : -1;
         snprintf(c->pattern, sizeof c->pattern, "%s", smp->pattern);
         if (sst == EMM_OK && strcmp(smp->pattern, out->table.pattern) == 0)
-            mine = emm_feature_distance(f, g);
-        if (sst == EMM_OK && emm_feature_distance(f, g) < bd) {
-            bd = emm_feature_distance(f, g);
+            mine = d;
+        if (sst == EMM_OK && d < bd) {
+            bd = d;
             best = cand[k];
         }
     }
@@ -1185,15 +1218,9 @@ static emm_status check_distance_of(const emm_mesh *mesh, const emm_trace_info *
                                     decide_cache *cache, const emm_window_decision *out,
                                     double *d, emm_error *err)
 {
-    uint64_t visits = accesses < info->geometry.nt ? accesses : info->geometry.nt;
-    emm_synth_options so;
     emm_error e;
-    double g[EMM_FEATURES];
-    emm_status st = synth_options(mesh, arrays, check_recipe(out), recs, n, visits, &so, &e);
-    if (st == EMM_OK)
-        st = synth_features(cache, mesh, info, arrays, &so, accesses, name, threads, g, &e);
-    if (st == EMM_OK)
-        *d = emm_feature_distance(f, g);
+    emm_status st = made_distance(cache, mesh, info, arrays, check_recipe(out), recs, n, f,
+                                  accesses, name, threads, d, &e);
     return st == EMM_ERR_NOMEM ? emm_fail(err, st, "%s", e.message) : EMM_OK;
 }
 
@@ -1211,44 +1238,28 @@ static emm_status near_class(const emm_table *t, const emm_mesh *mesh, const emm
                              const char *name, const emm_threads *threads, decide_cache *cache,
                              emm_window_decision *out, double *d, emm_error *err)
 {
-    /* The nearest canonical sample (no costs, a recipe) of each class. */
-    size_t *cand = malloc((t->n ? t->n : 1) * sizeof *cand), nc = 0;
+    /* The nearest canonical sample (no costs, a recipe) of each other class. */
+    size_t *cand = malloc((t->n ? t->n : 1) * sizeof *cand);
     if (!cand)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the class check", name);
     double nearest = INFINITY;
     for (size_t i = 0; i < t->n; i++)
         if (t->s[i].ncosts == 0 && emm_feature_distance(f, t->s[i].f) < nearest)
             nearest = emm_feature_distance(f, t->s[i].f);
-    double reach = EMM_DECIDE_NEAR_CLASS_REACH * nearest;
-    for (size_t i = 0; i < t->n; i++) {
-        const emm_table_sample *x = &t->s[i];
-        if (x->ncosts > 0 || strcmp(x->pattern, out->table.pattern) == 0 ||
-            emm_feature_distance(f, x->f) > reach)
-            continue;
-        size_t k = 0;
-        while (k < nc && strcmp(t->s[cand[k]].pattern, x->pattern) != 0)
-            k++;
-        if (k == nc)
-            cand[nc++] = i;
-        else if (emm_feature_distance(f, x->f) < emm_feature_distance(f, t->s[cand[k]].f))
-            cand[k] = i;
-    }
-    uint64_t visits = accesses < info->geometry.nt ? accesses : info->geometry.nt;
+    size_t nc = class_nearest(t, f, EMM_DECIDE_NEAR_CLASS_REACH * nearest, true,
+                              out->table.pattern, cand);
     size_t best = SIZE_MAX;
     double bd = EMM_DECIDE_CANONICAL_NEAR;
     emm_status st = EMM_OK;
     for (size_t k = 0; k < nc && st == EMM_OK; k++) {
-        emm_synth_options so;
+        double dk;
         emm_error e;
-        double g[EMM_FEATURES];
-        emm_status sst =
-            synth_options(mesh, arrays, sample_recipe(&t->s[cand[k]]), recs, n, visits, &so, &e);
-        if (sst == EMM_OK)
-            sst = synth_features(cache, mesh, info, arrays, &so, accesses, name, threads, g, &e);
+        emm_status sst = made_distance(cache, mesh, info, arrays, sample_recipe(&t->s[cand[k]]),
+                                       recs, n, f, accesses, name, threads, &dk, &e);
         if (sst == EMM_ERR_NOMEM)
             st = emm_fail(err, sst, "%s", e.message);
-        else if (sst == EMM_OK && emm_feature_distance(f, g) <= bd) {
-            bd = emm_feature_distance(f, g);
+        else if (sst == EMM_OK && dk <= bd) {
+            bd = dk;
             best = cand[k];
         }
     }

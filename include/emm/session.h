@@ -83,8 +83,9 @@ typedef struct emm_session_config {
  * access (instrumented basic blocks, or 0), and the program counter of the
  * access where the backend knows it, one byte past the access's code
  * (sancov: its hook's return address; valgrind: the instruction's address
- * + 1, so that pc - 1 lies in the access's code for both), or 0. A session that is given program counters writes them, and the
- * program's mapped objects, into its trace (emm annotate reads them). */
+ * + 1, so that pc - 1 lies in the access's code for both), or 0. A session
+ * that is given program counters writes them, and the program's mapped
+ * objects, into its trace (emm annotate reads them). */
 typedef struct emm_raw_access {
     uint64_t addr;
     uint32_t bytes_write;
