@@ -24,12 +24,14 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
+#include <poll.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
@@ -361,42 +363,101 @@ static const char *why_not_loaded(const struct program_file *pf, int status)
     return "the loader did not preload libemmshim.so into it";
 }
 
+/* Whether process `name` (a number) is a child of this process named
+ * emm-session that has not ended. */
+static bool is_session_child(const char *name)
+{
+    char path[64], line[256], comm[64] = "", state = 0;
+    long ppid = 0;
+    snprintf(path, sizeof path, "/proc/%.20s/stat", name);
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return false;
+    bool yes = fgets(line, sizeof line, f) &&
+               sscanf(line, "%*d (%63[^)]) %c %ld", comm, &state, &ppid) == 3 &&
+               ppid == (long)getpid() && state != 'Z' && strcmp(comm, "emm-session") == 0;
+    fclose(f);
+    return yes;
+}
+
+/* A child of this process named emm-session that has not ended, or 0: from
+ * the kernel's list of this (single-threaded) process's children, or, where
+ * it has none, from every process in /proc. */
+static pid_t session_child(void)
+{
+    char path[64], pid[24];
+    snprintf(path, sizeof path, "/proc/self/task/%ld/children", (long)getpid());
+    FILE *f = fopen(path, "r");
+    if (f) {
+        pid_t found = 0;
+        while (!found && fscanf(f, "%23s", pid) == 1)
+            if (is_session_child(pid))
+                found = (pid_t)atol(pid);
+        fclose(f);
+        return found;
+    }
+    pid_t found = 0;
+    DIR *d = opendir("/proc");
+    struct dirent *e;
+    while (d && !found && (e = readdir(d)) != NULL)
+        if (e->d_name[0] >= '1' && e->d_name[0] <= '9' && is_session_child(e->d_name))
+            found = (pid_t)atol(e->d_name);
+    if (d)
+        closedir(d);
+    return found;
+}
+
+/* Waits at most ms milliseconds for process pid (a child) to end, without
+ * reaping it: on a descriptor of the process where the kernel has them
+ * (Linux 5.3), else in steps of a millisecond. */
+static void wait_end(pid_t pid, long ms)
+{
+#ifdef SYS_pidfd_open
+    int fd = (int)syscall(SYS_pidfd_open, pid, 0);
+    if (fd >= 0) {
+        struct pollfd p = {.fd = fd, .events = POLLIN};
+        while (poll(&p, 1, (int)ms) < 0 && errno == EINTR) {
+        }
+        close(fd);
+        return;
+    }
+#endif
+    siginfo_t si;
+    struct timespec step = {0, 1000 * 1000};
+    for (long t = 0; t < ms; t++) {
+        si.si_pid = 0;
+        if (waitid(P_PID, (id_t)pid, &si, WEXITED | WNOHANG | WNOWAIT) != 0 || si.si_pid)
+            return;
+        nanosleep(&step, NULL);
+    }
+}
+
 /* The valgrind capture's session processes (emm-session) that outlive the
  * program — it closed their socket with its other descriptors, or died,
- * before finishing with them — write its report when they see the
- * connection end. emm run is the subreaper of the program's processes, so
- * they are its children now: it waits for them, at most 60 s, so that the
- * report is there and the summary printed when it returns. Any other
- * orphan that has ended is reaped on the way; one that runs on is left. */
+ * before finishing with them, or they are still ending — write its report
+ * when they see the connection end. emm run is the subreaper of the
+ * program's processes, so they are its children now: it waits for them, at
+ * most 60 s in all, so that the report is there and the summary printed
+ * when it returns; each is waited for until it ends, not polled (a session
+ * that ends a few milliseconds after the program, freeing its memory, once
+ * cost a 50 ms sleep). Any other orphan that has ended is reaped on the
+ * way; one that runs on is left. */
 static void wait_sessions(void)
 {
-    for (int round = 0; round < 1200; round++) {
+    struct timespec start, now;
+    clock_gettime(CLOCK_MONOTONIC, &start);
+    for (;;) {
         while (waitpid(-1, NULL, WNOHANG) > 0) {
         }
-        bool any = false;
-        DIR *d = opendir("/proc");
-        struct dirent *e;
-        while (d && !any && (e = readdir(d)) != NULL) {
-            char path[64], line[256];
-            if (e->d_name[0] < '1' || e->d_name[0] > '9')
-                continue;
-            snprintf(path, sizeof path, "/proc/%.20s/stat", e->d_name);
-            FILE *f = fopen(path, "r");
-            if (!f)
-                continue;
-            char comm[64] = "", state = 0;
-            long ppid = 0;
-            if (fgets(line, sizeof line, f) &&
-                sscanf(line, "%*d (%63[^)]) %c %ld", comm, &state, &ppid) == 3)
-                any = ppid == (long)getpid() && state != 'Z' && strcmp(comm, "emm-session") == 0;
-            fclose(f);
-        }
-        if (d)
-            closedir(d);
-        if (!any)
+        pid_t s = session_child();
+        if (!s)
             return;
-        struct timespec ts = {0, 50 * 1000 * 1000};
-        nanosleep(&ts, NULL);
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        long left = 60000 - ((now.tv_sec - start.tv_sec) * 1000 +
+                             (now.tv_nsec - start.tv_nsec) / 1000000);
+        if (left <= 0)
+            return;
+        wait_end(s, left);
     }
 }
 
