@@ -227,8 +227,31 @@ static bool is_helper(const char *program)
     return false;
 }
 
+/* The socket of EMM_AGENT_SESSION_VAR when it is this process's (above 2),
+ * else 0. */
+static int session_sock(void)
+{
+    const char *v = getenv(EMM_AGENT_SESSION_VAR);
+    if (!v)
+        return 0;
+    char *end;
+    long fd = strtol(v, &end, 10), pid = *end == ':' ? strtol(end + 1, NULL, 10) : 0;
+    struct stat st;
+    return pid == (long)getpid() && fd > 2 && fd < 65536 && fstat((int)fd, &st) == 0 &&
+                   S_ISSOCK(st.st_mode)
+               ? (int)fd
+               : 0;
+}
+
 int emm_agent_enter(const char *program)
 {
+    /* The session emm run started waits for this process's agent, and
+     * for no process it executes. */
+    int sock = session_sock();
+    if (sock)
+        fcntl(sock, F_SETFD, FD_CLOEXEC);
+    else
+        unsetenv(EMM_AGENT_SESSION_VAR);
     const char *ready = getenv(EMM_AGENT_READY_VAR);
     if (ready) {
         /* Only the process emm run started answers, and only into a pipe: a
@@ -281,9 +304,15 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
 {
     *out = NULL;
     say_open();
+    /* emm run's session for this process: the session's handle takes it
+     * over; every other way it is closed here, and the session ends. */
+    int sock = session_sock();
+    unsetenv(EMM_AGENT_SESSION_VAR);
     emm_agent *a = calloc(1, sizeof *a);
     if (!a || !(a->program = strdup(c->program ? c->program : "program")) ||
         emm_config_copy(&a->cfg, c->config) != EMM_OK) {
+        if (sock)
+            close(sock);
         agent_free(a);
         return emm_fail(err, EMM_ERR_NOMEM, "libemmshim.so: out of memory");
     }
@@ -298,10 +327,14 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
     if (a->cfg.tags.n || a->cfg.list_sites)
         st = agent_rules_new(&a->cfg.tags, a->cfg.list_sites != 0, &a->rules, err);
     if (st != EMM_OK) {
+        if (sock)
+            close(sock);
         agent_free(a);
         return st;
     }
     if (a->cfg.list_sites) {
+        if (sock)
+            close(sock);
         /* List mode: no session, no capture; every large block is noted. */
         if (!(a->sites = emm_sites_new(LIST_MIN, LIST_LOG_MIN))) {
             agent_free(a);
@@ -314,7 +347,9 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
         for (size_t i = 0; i < a->cfg.tags.n; i++)
             expect |= 1u << a->cfg.tags.rule[i].kind;
         emm_session_config sc = {&a->cfg, a->capture, a->program, 0, c->threads, c->server,
-                                 NULL, 0, expect};
+                                 NULL, 0, expect, c->server ? sock : 0};
+        if (sock && !c->server)
+            close(sock);
         st = emm_session_new(&sc, &a->session, err);
         if (st != EMM_OK && sc.server) {
             if (a->cfg.log >= 2 && !a->child)
@@ -328,7 +363,8 @@ emm_status emm_agent_new(const emm_agent_config *c, emm_agent **out, emm_error *
             return st;
         }
         if (sc.server && a->cfg.log >= 2 && !a->child)
-            emm_agent_say("the session runs natively in its own process, %s", sc.server);
+            emm_agent_say("the session runs natively in its own process, %s%s", sc.server,
+                          sc.server_sock ? " (started by emm run)" : "");
         a->min_block = a->rules ? agent_rules_min(a->rules) : SIZE_MAX;
     }
     a->state = EMM_SESSION_PROFILING;

@@ -414,8 +414,12 @@ emm_status session_proxy_new(const emm_session_config *sc, emm_session **out, em
     r->fd = -1;
     r->state = EMM_SESSION_PROFILING;
     snprintf(r->program, sizeof r->program, "%s", sc->program ? sc->program : "program");
-    emm_status st = spawn(sc->server, &r->fd, err);
-    if (st != EMM_OK)
+    /* A session emm run started beside Valgrind, before the program: the
+     * program is spared two forks under Valgrind and the session's start. */
+    emm_status st = EMM_OK;
+    if (sc->server_sock > 2)
+        r->fd = sc->server_sock;
+    else if ((st = spawn(sc->server, &r->fd, err)) != EMM_OK)
         goto fail;
     unsigned char *msg;
     size_t bytes;

@@ -178,7 +178,7 @@ static emm_status serve_new(struct server *v, const struct message *m, emm_error
         return st;
     v->memory = (emm_session_memory){read_program, program_modules, v};
     emm_session_config sc = {&v->cfg, capture, program, table_only, {0, NULL, NULL}, NULL,
-                             &v->memory, pid, expect};
+                             &v->memory, pid, expect, 0};
     return emm_session_new(&sc, &v->s, err);
 }
 

@@ -30,6 +30,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
@@ -461,12 +462,45 @@ static void wait_sessions(void)
     }
 }
 
+/* Starts emm-session at `path` for the valgrind capture's program, while
+ * Valgrind starts: in the program, under Valgrind, its two forks and the
+ * session's own start came before the program's first instruction (about
+ * 60 ms). Its stdin and stdout are /dev/null, its stderr emm run's (the
+ * program's); without LD_PRELOAD. Returns the program's end of its socket
+ * (EMM_AGENT_SESSION_VAR), or 0 when it could not start: the shim then
+ * starts one itself. A program that never takes it over closes it by
+ * ending, and the session ends without a word. */
+static int start_session(const char *path)
+{
+    int sv[2];
+    if (access(path, X_OK) != 0 || socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
+        return 0;
+    pid_t pid = fork();
+    if (pid == 0) {
+        int devnull = open("/dev/null", O_RDWR | O_CLOEXEC);
+        if (devnull >= 0) {
+            dup2(devnull, 0);
+            dup2(devnull, 1);
+        }
+        unsetenv("LD_PRELOAD");
+        if (sv[1] == 3 ? fcntl(3, F_SETFD, 0) == 0 : dup2(sv[1], 3) == 3)
+            execl(path, path, "3", (char *)NULL);
+        _exit(127);
+    }
+    close(sv[1]);
+    if (pid < 0) {
+        close(sv[0]);
+        return 0;
+    }
+    return sv[0];
+}
+
 /* Starts `file` with `av` (through PATH when `search`), waits for it and
  * returns the status to end with. With `say`, when the shim did not answer
  * from the program (emm/agent.h, EMM_AGENT_READY_VAR), one line names it
  * as `shown` and says why. */
 static int run_program(const char *file, char **av, bool search, const char *shown,
-                       const struct program_file *pf, bool say)
+                       const struct program_file *pf, bool say, int session)
 {
     int ready[2], failed[2];
     if (pipe2(ready, O_CLOEXEC) != 0)
@@ -482,8 +516,12 @@ static int run_program(const char *file, char **av, bool search, const char *sho
     if (pid == 0) {
         /* The write end stays open in the program for the shim; the other
          * pipe closes at exec, or carries exec's error. */
-        char v[64];
+        char v[64], sv[64];
         snprintf(v, sizeof v, "%d:%ld", ready[1], (long)getpid());
+        snprintf(sv, sizeof sv, "%d:%ld", session, (long)getpid());
+        if (session && (fcntl(session, F_SETFD, 0) != 0 ||
+                        setenv(EMM_AGENT_SESSION_VAR, sv, 1) != 0))
+            close(session); /* the shim starts a session itself */
         if (fcntl(ready[1], F_SETFD, 0) == 0 && setenv(EMM_AGENT_READY_VAR, v, 1) == 0) {
             if (search)
                 execvp(file, av);
@@ -498,6 +536,8 @@ static int run_program(const char *file, char **av, bool search, const char *sho
     int e = errno;
     close(ready[1]);
     close(failed[1]);
+    if (session)
+        close(session);
     if (pid < 0) {
         close(ready[0]);
         close(failed[0]);
@@ -596,7 +636,7 @@ int emm_cmd_run(int argc, char **argv)
      * samples), as the shim will start it. */
     if (emm_config_from_env(&cfg, get_env, (long)getpid(), ro.given, &err) != EMM_OK)
         return cli_bad_value("run", &err);
-    emm_session_config sc = {&cfg, cfg.capture, argv[i], 0, {1, NULL, NULL}, NULL, NULL, 0, 0};
+    emm_session_config sc = {&cfg, cfg.capture, argv[i], 0, {1, NULL, NULL}, NULL, NULL, 0, 0, 0};
     emm_session *probe;
     if (emm_session_new(&sc, &probe, &err) != EMM_OK)
         return cli_bad_value("run", &err);
@@ -634,7 +674,11 @@ int emm_cmd_run(int argc, char **argv)
 
     int bad = 0;
     bool under_valgrind = vgdir != NULL;
+    char server[PATH_MAX + 32] = "";
     if (vgdir) {
+        /* The shim finds emm-session beside its preload, the tool's. */
+        if (!cfg.list_sites)
+            snprintf(server, sizeof server, "%s/emm-session", vgdir);
         bad |= setenv("VALGRIND_LIB", vgdir, 1);
         /* Under auto the shim picks the valgrind capture itself (it runs
          * under emm's tool), and the summary says it was auto's pick. */
@@ -673,7 +717,7 @@ int emm_cmd_run(int argc, char **argv)
     }
     bool say = cfg.log >= 1 && found;
     if (!under_valgrind)
-        return run_program(argv[i], argv + i, true, argv[i], &pf, say);
+        return run_program(argv[i], argv + i, true, argv[i], &pf, say, 0);
     /* valgrind --tool=emm -q --trace-children=yes PROGRAM ARGS...: exec'd
      * programs are captured too, as LD_PRELOAD carries the shim for the
      * other backends; not the session's own process, which runs natively
@@ -695,7 +739,9 @@ int emm_cmd_run(int argc, char **argv)
     vargv[np] = skip;
     for (size_t k = 0; k < na; k++)
         vargv[np + 1 + k] = argv[i + (int)k];
-    rc = run_program(launcher, vargv, false, argv[i], &pf, say);
+    /* Started last, with the environment the program gets. */
+    int session = server[0] ? start_session(server) : 0;
+    rc = run_program(launcher, vargv, false, argv[i], &pf, say, session);
     free(vargv);
     return rc;
 }

@@ -75,7 +75,7 @@ typedef struct emm_agent_config {
 
 /* ---- the process tree ---------------------------------------------------- */
 
-/* Two variables of emm run's and the shim's own, not settings (the
+/* Three variables of emm run's and the shim's own, not settings (the
  * configuration table holds those): each is set and taken out of the
  * environment by emm and never read from the user.
  *
@@ -90,6 +90,13 @@ typedef struct emm_agent_config {
  * says nothing unless it tagged an array. */
 #define EMM_AGENT_READY_VAR "EMM_RUN_READY"
 #define EMM_AGENT_ROOT_VAR "EMM_SHIM_ROOT"
+/* EMM_AGENT_SESSION_VAR, "FD:PID": emm run started emm-session for the
+ * valgrind capture with FD, in process PID (the program), a socket to it,
+ * while Valgrind was starting. The agent of that process takes it over
+ * instead of starting one (emm_agent_config.server); any other process
+ * drops the variable, and none of them passes the socket on to what it
+ * executes. */
+#define EMM_AGENT_SESSION_VAR "EMM_RUN_SESSION"
 
 /* Programs the shim never enters, by the start of their name
  * (llvm-symbolizer-14 is llvm-symbolizer): symbolizers, which a sanitizer

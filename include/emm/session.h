@@ -76,6 +76,9 @@ typedef struct emm_session_config {
                                * 1u << emm_array_kind (0: none known): a window that filled
                                * before an array of each was tagged goes on, for a bounded
                                * while, until one is (docs/profile.md "Arrays tagged late") */
+    int server_sock;          /* with server: a socket (above 2) to an emm-session emm run
+                               * already started for this process, which the handle takes
+                               * over; 0: the handle starts one */
 } emm_session_config;
 
 /* One captured access, as the capture backends record it: the address, the

@@ -56,7 +56,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     emm_config cfg;
     emm_config_init(&cfg);
     emm_session_config sc = {&cfg, EMM_CAPTURE_VALGRIND, "fuzz", 0, {1, NULL, NULL}, NULL, NULL,
-                             0, 0};
+                             0, 0, 0};
     unsigned char *payload, *start;
     size_t npayload;
     if (!wire_start_encode(&sc, 4242, &payload, &npayload))

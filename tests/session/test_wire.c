@@ -28,7 +28,7 @@ static void start(void)
             EMM_OK);
     CHECK(strcmp(c.report, "r-%-7.json") == 0);
     emm_session_config sc = {&c, EMM_CAPTURE_VALGRIND, "prog", 1, {0, NULL, NULL}, NULL, NULL, 0,
-                             1u << EMM_ARRAY_TRIANGLES};
+                             1u << EMM_ARRAY_TRIANGLES, 0};
     unsigned char *b;
     size_t n;
     REQUIRE(wire_start_encode(&sc, 7, &b, &n));

@@ -2,6 +2,8 @@
 # (emm-session, beside the tool): the program's stdout and exit status are
 # its own, and it answers as the session inside the program does, which is
 # what runs when emm-session is not there (here: a VALGRIND_LIB without it).
+# emm run starts it while Valgrind starts and the shim takes it over;
+# under valgrind --tool=emm alone the shim starts it.
 #   sh valgrind_session.sh SHIM WORKDIR EMM PROGRAM MESH
 . "$(dirname "$0")/lib.sh"
 unset EMM_STRATEGY
@@ -17,9 +19,18 @@ env -u LD_PRELOAD "$@" > "$WORK/native.out"; native_rc=$?
   > "$WORK/own.out" 2> "$WORK/own.err"; rc=$?
 [ $rc = $native_rc ] || { cat "$WORK/own.err" >&2; fail "exit status $rc, $native_rc natively"; }
 cmp -s "$WORK/native.out" "$WORK/own.out" || { cat "$WORK/own.err" >&2; fail "stdout differs"; }
-grep -q 'the session runs natively in its own process, .*/emm-session' "$WORK/own.err" ||
-  { cat "$WORK/own.err" >&2; fail "the session did not run in its own process"; }
+grep -q 'the session runs natively in its own process, .*/emm-session (started by emm run)' "$WORK/own.err" ||
+  { cat "$WORK/own.err" >&2; fail "the session emm run started was not taken over"; }
 grep -q '^emm: answer: ' "$WORK/own.err" || { cat "$WORK/own.err" >&2; fail "no answer"; }
+
+# Valgrind alone: the shim starts it, with the same answer.
+EMM_LOG=2 EMM_CAPTURE=valgrind VALGRIND_LIB="$TOOLDIR" valgrind --tool=emm -q "$@"   > "$WORK/alone.out" 2> "$WORK/alone.err"; rc=$?
+[ $rc = $native_rc ] || { cat "$WORK/alone.err" >&2; fail "exit status $rc under valgrind alone"; }
+cmp -s "$WORK/native.out" "$WORK/alone.out" || fail "stdout differs under valgrind alone"
+grep -q 'the session runs natively in its own process, .*/emm-session$' "$WORK/alone.err" ||
+  { cat "$WORK/alone.err" >&2; fail "the shim did not start the session itself"; }
+[ "$(grep '^emm: answer: ' "$WORK/alone.err")" = "$(grep '^emm: answer: ' "$WORK/own.err")" ] ||
+  fail "another answer when the shim starts the session"
 
 # In the program: the tool's directory without emm-session.
 mkdir -p "$WORK/lib" || fail "mkdir"
