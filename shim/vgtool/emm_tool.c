@@ -218,6 +218,63 @@ static void more_windows(void)
     VG_(discard_translations_safely)((Addr)0x1000, ~(SizeT)0x1000, "emm.windows");
 }
 
+/* ---- the code's classes ------------------------------------------------- */
+
+enum code_class {
+    CODE_PROGRAM, /* the program's own: instrumented, counted, a place to drain */
+    CODE_SYSTEM,  /* the C library, the C++ runtime, the loader: instrumented, counted */
+    CODE_EMM      /* emm's own libraries and Valgrind's preload: left alone */
+};
+
+static Bool has_prefix(const HChar *s, const HChar *p)
+{
+    return VG_(strncmp)(s, p, VG_(strlen)(p)) == 0;
+}
+
+/* The class of the code of the object at `path`. */
+static enum code_class classify_object(const HChar *path)
+{
+    static const HChar *const emm[] = {"libemm.so", "libemmshim.so", "vgpreload_"};
+    static const HChar *const sys[] = {"libc.so",      "ld-linux",   "libpthread", "libdl.so",
+                                       "librt.so",     "libstdc++",  "libgcc_s",   "libm.so",
+                                       "libunwind",    "libzstd",    "libdw",      "libelf"};
+    const HChar *base = VG_(strrchr)(path, '/');
+    base = base ? base + 1 : path;
+    for (UInt i = 0; i < sizeof emm / sizeof *emm; i++)
+        if (has_prefix(base, emm[i]))
+            return CODE_EMM;
+    for (UInt i = 0; i < sizeof sys / sizeof *sys; i++)
+        if (has_prefix(base, sys[i]))
+            return CODE_SYSTEM;
+    return CODE_PROGRAM;
+}
+
+static enum code_class classify(Addr a)
+{
+    const HChar *name;
+    if (!VG_(get_objname)(VG_(current_DiEpoch)(), a, &name))
+        return CODE_SYSTEM; /* no object known (the vDSO, generated code): not a place to drain */
+    return classify_object(name);
+}
+
+/* Translates the program's code again: only there does the instrumentation
+ * test need_drain (instrument()), which code translated before the drain
+ * function was known lacks. The C library's and the loader's translations,
+ * which the shim's start-up used and goes on using, stay: translating them
+ * again cost the start of every run some 10 ms more. */
+static void retranslate_program(void)
+{
+    for (const DebugInfo *di = VG_(next_DebugInfo)(NULL); di; di = VG_(next_DebugInfo)(di)) {
+        Addr lo = VG_(DebugInfo_get_text_avma)(di);
+        SizeT len = VG_(DebugInfo_get_text_size)(di);
+        const HChar *path = VG_(DebugInfo_get_filename)(di);
+        if (len && path && classify_object(path) == CODE_PROGRAM)
+            VG_(discard_translations_safely)(lo, len, "emm.channel");
+    }
+}
+
+/* ---- the client's requests --------------------------------------------- */
+
 static Bool client_request(ThreadId tid, UWord *arg, UWord *ret)
 {
     (void)tid;
@@ -235,9 +292,7 @@ static Bool client_request(ThreadId tid, UWord *arg, UWord *ret)
         high_water = cap - cap / 4;
         drain_entry = (Addr)chan->drain;
         n = 0;
-        /* Code translated before the drain function was known has no test
-         * of need_drain: translate it again. */
-        VG_(discard_translations_safely)((Addr)0x1000, ~(SizeT)0x1000, "emm.channel");
+        retranslate_program();
         *ret = 1;
         break;
     case EMM_VG_RANGES:
@@ -278,37 +333,6 @@ static Bool client_request(ThreadId tid, UWord *arg, UWord *ret)
 }
 
 /* ---- instrumentation ---------------------------------------------------- */
-
-enum code_class {
-    CODE_PROGRAM, /* the program's own: instrumented, counted, a place to drain */
-    CODE_SYSTEM,  /* the C library, the C++ runtime, the loader: instrumented, counted */
-    CODE_EMM      /* emm's own libraries and Valgrind's preload: left alone */
-};
-
-static Bool has_prefix(const HChar *s, const HChar *p)
-{
-    return VG_(strncmp)(s, p, VG_(strlen)(p)) == 0;
-}
-
-static enum code_class classify(Addr a)
-{
-    static const HChar *const emm[] = {"libemm.so", "libemmshim.so", "vgpreload_"};
-    static const HChar *const sys[] = {"libc.so",      "ld-linux",   "libpthread", "libdl.so",
-                                       "librt.so",     "libstdc++",  "libgcc_s",   "libm.so",
-                                       "libunwind",    "libzstd",    "libdw",      "libelf"};
-    const HChar *name;
-    if (!VG_(get_objname)(VG_(current_DiEpoch)(), a, &name))
-        return CODE_SYSTEM; /* no object known (the vDSO, generated code): not a place to drain */
-    const HChar *base = VG_(strrchr)(name, '/');
-    base = base ? base + 1 : name;
-    for (UInt i = 0; i < sizeof emm / sizeof *emm; i++)
-        if (has_prefix(base, emm[i]))
-            return CODE_EMM;
-    for (UInt i = 0; i < sizeof sys / sizeof *sys; i++)
-        if (has_prefix(base, sys[i]))
-            return CODE_SYSTEM;
-    return CODE_PROGRAM;
-}
 
 static IRExpr *u64(ULong v)
 {
