@@ -18,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
+#include <unistd.h>
 
 #include "emm/session.h"
 #include "error.h"
@@ -35,6 +36,7 @@ struct message {
 
 struct server {
     int fd;
+    int done;            /* closed once the finish has answered (-1: none) */
     emm_session *s;
     emm_config cfg;
     char *strings;       /* the config's source names, owned */
@@ -289,16 +291,21 @@ static bool serve_one(struct server *v, const struct message *m, bool *quiet)
         }
         emm_status st = emm_session_finish_ended(s, say ? stderr : NULL, ended[0] ? ended : NULL,
                                                  &e);
-        return reply_status(v, st, &e);
+        bool ok = reply_status(v, st, &e);
+        /* Every output is written (and the program has its answer). */
+        if (v->done >= 0)
+            close(v->done);
+        v->done = -1;
+        return ok;
     }
     default:
         return false;
     }
 }
 
-emm_status emm_server_serve(int fd, emm_error *err)
+emm_status emm_server_serve(int fd, int done, emm_error *err)
 {
-    struct server v = {.fd = fd};
+    struct server v = {.fd = fd, .done = done};
     pthread_t th;
     signal(SIGPIPE, SIG_IGN);
     emm_config_init(&v.cfg);

@@ -364,6 +364,14 @@ static const char *why_not_loaded(const struct program_file *pf, int status)
     return "the loader did not preload libemmshim.so into it";
 }
 
+/* The valgrind capture's emm-session as emm run started it (start_session):
+ * the program's end of its socket (0: none), the read end of the pipe it
+ * closes once its outputs are written (-1: none), its pid. */
+struct started_session {
+    int sock, done;
+    pid_t pid;
+};
+
 /* Whether process `name` (a number) is a child of this process named
  * emm-session that has not ended. */
 static bool is_session_child(const char *name)
@@ -381,10 +389,10 @@ static bool is_session_child(const char *name)
     return yes;
 }
 
-/* A child of this process named emm-session that has not ended, or 0: from
- * the kernel's list of this (single-threaded) process's children, or, where
- * it has none, from every process in /proc. */
-static pid_t session_child(void)
+/* A child of this process named emm-session that has not ended, other than
+ * `skip`, or 0: from the kernel's list of this (single-threaded) process's
+ * children, or, where it has none, from every process in /proc. */
+static pid_t session_child(pid_t skip)
 {
     char path[64], pid[24];
     snprintf(path, sizeof path, "/proc/self/task/%ld/children", (long)getpid());
@@ -392,7 +400,7 @@ static pid_t session_child(void)
     if (f) {
         pid_t found = 0;
         while (!found && fscanf(f, "%23s", pid) == 1)
-            if (is_session_child(pid))
+            if (atol(pid) != (long)skip && is_session_child(pid))
                 found = (pid_t)atol(pid);
         fclose(f);
         return found;
@@ -401,7 +409,8 @@ static pid_t session_child(void)
     DIR *d = opendir("/proc");
     struct dirent *e;
     while (d && !found && (e = readdir(d)) != NULL)
-        if (e->d_name[0] >= '1' && e->d_name[0] <= '9' && is_session_child(e->d_name))
+        if (e->d_name[0] >= '1' && e->d_name[0] <= '9' && atol(e->d_name) != (long)skip &&
+            is_session_child(e->d_name))
             found = (pid_t)atol(e->d_name);
     if (d)
         closedir(d);
@@ -441,16 +450,28 @@ static void wait_end(pid_t pid, long ms)
  * most 60 s in all, so that the report is there and the summary printed
  * when it returns; each is waited for until it ends, not polled (a session
  * that ends a few milliseconds after the program, freeing its memory, once
- * cost a 50 ms sleep). Any other orphan that has ended is reaped on the
- * way; one that runs on is left. */
-static void wait_sessions(void)
+ * cost a 50 ms sleep). The one emm run started says when its outputs are
+ * written (started->done): it is not waited for past that, nor while it
+ * frees its memory and ends (10 to 25 ms after a 100,000-face run). Any
+ * other orphan that has ended is reaped on the way; one that runs on is
+ * left. */
+static void wait_sessions(const struct started_session *started)
 {
     struct timespec start, now;
     clock_gettime(CLOCK_MONOTONIC, &start);
+    pid_t skip = 0;
+    if (started && started->done >= 0) {
+        struct pollfd p = {.fd = started->done, .events = POLLIN};
+        char byte;
+        while ((poll(&p, 1, 60000) < 0 && errno == EINTR) ||
+               (p.revents && read(started->done, &byte, 1) > 0)) {
+        }
+        skip = p.revents ? started->pid : 0;
+    }
     for (;;) {
         while (waitpid(-1, NULL, WNOHANG) > 0) {
         }
-        pid_t s = session_child();
+        pid_t s = session_child(skip);
         if (!s)
             return;
         clock_gettime(CLOCK_MONOTONIC, &now);
@@ -466,15 +487,23 @@ static void wait_sessions(void)
  * Valgrind starts: in the program, under Valgrind, its two forks and the
  * session's own start came before the program's first instruction (about
  * 60 ms). Its stdin and stdout are /dev/null, its stderr emm run's (the
- * program's); without LD_PRELOAD. Returns the program's end of its socket
- * (EMM_AGENT_SESSION_VAR), or 0 when it could not start: the shim then
- * starts one itself. A program that never takes it over closes it by
- * ending, and the session ends without a word. */
-static int start_session(const char *path)
+ * program's); without LD_PRELOAD; fd 3 its end of a socket, fd 4 the write
+ * end of a pipe it closes once its outputs are written. Returns the
+ * program's end of the socket (EMM_AGENT_SESSION_VAR), the pipe's read end
+ * and its pid; sock 0 when it could not start: the shim then starts one
+ * itself. A program that never takes it over closes it by ending, and the
+ * session ends without a word. */
+static struct started_session start_session(const char *path)
 {
-    int sv[2];
+    struct started_session r = {0, -1, 0};
+    int sv[2], dp[2];
     if (access(path, X_OK) != 0 || socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
-        return 0;
+        return r;
+    if (pipe2(dp, O_CLOEXEC) != 0) {
+        close(sv[0]);
+        close(sv[1]);
+        return r;
+    }
     pid_t pid = fork();
     if (pid == 0) {
         int devnull = open("/dev/null", O_RDWR | O_CLOEXEC);
@@ -483,16 +512,20 @@ static int start_session(const char *path)
             dup2(devnull, 1);
         }
         unsetenv("LD_PRELOAD");
-        if (sv[1] == 3 ? fcntl(3, F_SETFD, 0) == 0 : dup2(sv[1], 3) == 3)
-            execl(path, path, "3", (char *)NULL);
+        /* Out of 3 and 4's way first: dup2 then leaves them open at exec. */
+        int sock = fcntl(sv[1], F_DUPFD_CLOEXEC, 10), done = fcntl(dp[1], F_DUPFD_CLOEXEC, 10);
+        if (sock >= 0 && done >= 0 && dup2(sock, 3) == 3 && dup2(done, 4) == 4)
+            execl(path, path, "3", "4", (char *)NULL);
         _exit(127);
     }
     close(sv[1]);
+    close(dp[1]);
     if (pid < 0) {
         close(sv[0]);
-        return 0;
+        close(dp[0]);
+        return r;
     }
-    return sv[0];
+    return (struct started_session){sv[0], dp[0], pid};
 }
 
 /* Starts `file` with `av` (through PATH when `search`), waits for it and
@@ -500,8 +533,10 @@ static int start_session(const char *path)
  * from the program (emm/agent.h, EMM_AGENT_READY_VAR), one line names it
  * as `shown` and says why. */
 static int run_program(const char *file, char **av, bool search, const char *shown,
-                       const struct program_file *pf, bool say, int session)
+                       const struct program_file *pf, bool say,
+                       const struct started_session *started)
 {
+    int session = started ? started->sock : 0;
     int ready[2], failed[2];
     if (pipe2(ready, O_CLOEXEC) != 0)
         goto no_pipe;
@@ -558,7 +593,9 @@ static int run_program(const char *file, char **av, bool search, const char *sho
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
     program_pid = 0;
-    wait_sessions();
+    wait_sessions(started);
+    if (started && started->done >= 0)
+        close(started->done);
     char byte;
     bool answered = fcntl(ready[0], F_SETFL, O_NONBLOCK) == 0 && read(ready[0], &byte, 1) == 1;
     close(ready[0]);
@@ -717,7 +754,7 @@ int emm_cmd_run(int argc, char **argv)
     }
     bool say = cfg.log >= 1 && found;
     if (!under_valgrind)
-        return run_program(argv[i], argv + i, true, argv[i], &pf, say, 0);
+        return run_program(argv[i], argv + i, true, argv[i], &pf, say, NULL);
     /* valgrind --tool=emm -q --trace-children=yes PROGRAM ARGS...: exec'd
      * programs are captured too, as LD_PRELOAD carries the shim for the
      * other backends; not the session's own process, which runs natively
@@ -740,8 +777,10 @@ int emm_cmd_run(int argc, char **argv)
     for (size_t k = 0; k < na; k++)
         vargv[np + 1 + k] = argv[i + (int)k];
     /* Started last, with the environment the program gets. */
-    int session = server[0] ? start_session(server) : 0;
-    rc = run_program(launcher, vargv, false, argv[i], &pf, say, session);
+    struct started_session started = {0, -1, 0};
+    if (server[0])
+        started = start_session(server);
+    rc = run_program(launcher, vargv, false, argv[i], &pf, say, &started);
     free(vargv);
     return rc;
 }

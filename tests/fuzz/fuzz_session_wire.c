@@ -73,7 +73,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (pthread_create(&w, NULL, writer, &f) != 0 || pthread_create(&d, NULL, drain, &sv[0]) != 0)
         abort();
     emm_error err;
-    emm_status st = emm_server_serve(sv[1], &err);
+    emm_status st = emm_server_serve(sv[1], -1, &err);
     fuzz_check_error(st, &err);
     close(sv[1]); /* the drain sees the end */
     pthread_join(w, NULL);
