@@ -178,15 +178,20 @@ static emm_status status_call(proxy *r, uint32_t op, const void *a, size_t alen,
     return EMM_OK;
 }
 
-/* Starts `path` with one end of a socket pair as its fd 3, stdin and stdout
- * on /dev/null, stderr the program's, without LD_PRELOAD (the shim has no
- * business in it). Its parent is not the program: a program that waits for
- * any child, or counts them, never meets it. */
-static emm_status spawn(const char *path, int *fd, emm_error *err)
+emm_status session_server_start(const char *path, bool detach, int *sock, int *done, pid_t *pid,
+                                emm_error *err)
 {
-    int sv[2];
+    int sv[2], dp[2] = {-1, -1};
     if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
         return emm_fail(err, EMM_ERR_IO, "session server: socketpair: %s", strerror(errno));
+    if (done && pipe2(dp, O_CLOEXEC) != 0) {
+        int e = errno;
+        close(sv[0]);
+        close(sv[1]);
+        return emm_fail(err, EMM_ERR_IO, "session server: pipe: %s", strerror(e));
+    }
+    /* Everything the child needs is made before the fork: it may be the
+     * child of a threaded program, where only async-signal-safe calls are. */
     extern char **environ;
     size_t n = 0;
     for (char **e = environ; e && *e; e++)
@@ -195,6 +200,10 @@ static emm_status spawn(const char *path, int *fd, emm_error *err)
     if (!env) {
         close(sv[0]);
         close(sv[1]);
+        if (done) {
+            close(dp[0]);
+            close(dp[1]);
+        }
         return emm_fail(err, EMM_ERR_NOMEM, "session server: out of memory");
     }
     size_t k = 0;
@@ -202,33 +211,44 @@ static emm_status spawn(const char *path, int *fd, emm_error *err)
         if (strncmp(*e, "LD_PRELOAD=", 11) != 0)
             env[k++] = *e;
     env[k] = NULL;
-    char *argv[] = {(char *)path, (char *)"3", NULL};
+    char *argv[] = {(char *)path, (char *)"3", done ? (char *)"4" : NULL, NULL};
     int devnull = open("/dev/null", O_RDWR | O_CLOEXEC);
-    pid_t mid = fork();
-    if (mid == 0) {
-        if (fork() == 0) {
-            if (devnull >= 0) {
-                dup2(devnull, 0);
-                dup2(devnull, 1);
-            }
-            if (dup2(sv[1], 3) == 3)
-                execve(path, argv, env);
-            _exit(127);
+    pid_t child = fork();
+    if (child == 0 && (!detach || fork() == 0)) {
+        if (devnull >= 0) {
+            dup2(devnull, 0);
+            dup2(devnull, 1);
         }
-        _exit(0);
+        /* Out of 3 and 4's way first: dup2 then leaves them open at exec
+         * (onto itself it would leave the close-on-exec flag). */
+        int s3 = fcntl(sv[1], F_DUPFD_CLOEXEC, 10), s4 = done ? fcntl(dp[1], F_DUPFD_CLOEXEC, 10) : 0;
+        if (s3 >= 0 && s4 >= 0 && dup2(s3, 3) == 3 && (!done || dup2(s4, 4) == 4))
+            execve(path, argv, env);
+        _exit(127);
     }
+    if (child == 0)
+        _exit(0); /* the detached server's first parent */
     int e = errno;
     if (devnull >= 0)
         close(devnull);
     free(env);
     close(sv[1]);
-    if (mid < 0) {
+    if (done)
+        close(dp[1]);
+    if (child < 0) {
         close(sv[0]);
+        if (done)
+            close(dp[0]);
         return emm_fail(err, EMM_ERR_IO, "session server: fork: %s", strerror(e));
     }
-    while (waitpid(mid, NULL, 0) < 0 && errno == EINTR) {
-    }
-    *fd = sv[0];
+    if (detach)
+        while (waitpid(child, NULL, 0) < 0 && errno == EINTR) {
+        }
+    *sock = sv[0];
+    if (done)
+        *done = dp[0];
+    if (pid)
+        *pid = detach ? 0 : child;
     return EMM_OK;
 }
 
@@ -419,7 +439,7 @@ emm_status session_proxy_new(const emm_session_config *sc, emm_session **out, em
     emm_status st = EMM_OK;
     if (sc->server_sock > 2)
         r->fd = sc->server_sock;
-    else if ((st = spawn(sc->server, &r->fd, err)) != EMM_OK)
+    else if ((st = session_server_start(sc->server, true, &r->fd, NULL, NULL, err)) != EMM_OK)
         goto fail;
     unsigned char *msg;
     size_t bytes;

@@ -10,6 +10,9 @@
 #ifndef EMM_RUNTIME_SESSION_TRANSPORT_H
 #define EMM_RUNTIME_SESSION_TRANSPORT_H
 
+#include <stdbool.h>
+#include <sys/types.h>
+
 #include "emm/session.h"
 
 /* The calls of include/emm/session.h, each with its contract there. */
@@ -37,5 +40,16 @@ struct emm_session {
 emm_status session_engine_new(const emm_session_config *sc, emm_session **out, emm_error *err);
 /* A proxy for the engine in the process sc->server starts (session_proxy.c). */
 emm_status session_proxy_new(const emm_session_config *sc, emm_session **out, emm_error *err);
+/* Starts emm-session at `path` (session_proxy.c): without LD_PRELOAD (the
+ * shim has no business in it), stdin and stdout on /dev/null, stderr the
+ * caller's, fd 3 its end of a new socket, whose other end goes to *sock;
+ * with `done`, fd 4 the write end of a new pipe, which it closes once its
+ * outputs are written and whose read end goes to *done. `detach`: started
+ * through a second fork, so that a program that waits for any child, or
+ * counts them, never meets it; else the caller's child, *pid (pid may be
+ * NULL). Fit for a forked child of a threaded program: nothing but
+ * async-signal-safe calls after the fork. */
+emm_status session_server_start(const char *path, bool detach, int *sock, int *done, pid_t *pid,
+                                emm_error *err);
 
 #endif

@@ -45,6 +45,7 @@
 #include "emm/agent.h"
 #include "emm/config.h"
 #include "emm/session.h"
+#include "session_transport.h"
 
 #define SHIM_NAME "libemmshim.so"
 #define HOOKS_NAME "libemmhooks.so"
@@ -442,6 +443,22 @@ static void wait_end(pid_t pid, long ms)
     }
 }
 
+/* Whether every writer of pipe `fd` closed it within ms milliseconds. */
+static bool wait_closed(int fd, int ms)
+{
+    struct pollfd p = {.fd = fd, .events = POLLIN};
+    char byte;
+    for (;;) {
+        int r = poll(&p, 1, ms);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0)
+            return false;
+        if (read(fd, &byte, 1) <= 0)
+            return true;
+    }
+}
+
 /* The valgrind capture's session processes (emm-session) that outlive the
  * program — it closed their socket with its other descriptors, or died,
  * before finishing with them, or they are still ending — write its report
@@ -460,14 +477,8 @@ static void wait_sessions(const struct started_session *started)
     struct timespec start, now;
     clock_gettime(CLOCK_MONOTONIC, &start);
     pid_t skip = 0;
-    if (started && started->done >= 0) {
-        struct pollfd p = {.fd = started->done, .events = POLLIN};
-        char byte;
-        while ((poll(&p, 1, 60000) < 0 && errno == EINTR) ||
-               (p.revents && read(started->done, &byte, 1) > 0)) {
-        }
-        skip = p.revents ? started->pid : 0;
-    }
+    if (started && started->done >= 0 && wait_closed(started->done, 60000))
+        skip = started->pid;
     for (;;) {
         while (waitpid(-1, NULL, WNOHANG) > 0) {
         }
@@ -486,46 +497,18 @@ static void wait_sessions(const struct started_session *started)
 /* Starts emm-session at `path` for the valgrind capture's program, while
  * Valgrind starts: in the program, under Valgrind, its two forks and the
  * session's own start came before the program's first instruction (about
- * 60 ms). Its stdin and stdout are /dev/null, its stderr emm run's (the
- * program's); without LD_PRELOAD; fd 3 its end of a socket, fd 4 the write
- * end of a pipe it closes once its outputs are written. Returns the
- * program's end of the socket (EMM_AGENT_SESSION_VAR), the pipe's read end
- * and its pid; sock 0 when it could not start: the shim then starts one
- * itself. A program that never takes it over closes it by ending, and the
- * session ends without a word. */
+ * 60 ms). Its child, with the pipe it closes once its outputs are written
+ * (session_server_start). sock 0 when it could not start: the shim then
+ * starts one itself. A program that never takes the socket over
+ * (EMM_AGENT_SESSION_VAR) closes it by ending, and the session ends
+ * without a word. */
 static struct started_session start_session(const char *path)
 {
     struct started_session r = {0, -1, 0};
-    int sv[2], dp[2];
-    if (access(path, X_OK) != 0 || socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
-        return r;
-    if (pipe2(dp, O_CLOEXEC) != 0) {
-        close(sv[0]);
-        close(sv[1]);
-        return r;
-    }
-    pid_t pid = fork();
-    if (pid == 0) {
-        int devnull = open("/dev/null", O_RDWR | O_CLOEXEC);
-        if (devnull >= 0) {
-            dup2(devnull, 0);
-            dup2(devnull, 1);
-        }
-        unsetenv("LD_PRELOAD");
-        /* Out of 3 and 4's way first: dup2 then leaves them open at exec. */
-        int sock = fcntl(sv[1], F_DUPFD_CLOEXEC, 10), done = fcntl(dp[1], F_DUPFD_CLOEXEC, 10);
-        if (sock >= 0 && done >= 0 && dup2(sock, 3) == 3 && dup2(done, 4) == 4)
-            execl(path, path, "3", "4", (char *)NULL);
-        _exit(127);
-    }
-    close(sv[1]);
-    close(dp[1]);
-    if (pid < 0) {
-        close(sv[0]);
-        close(dp[0]);
-        return r;
-    }
-    return (struct started_session){sv[0], dp[0], pid};
+    emm_error err;
+    if (access(path, X_OK) == 0) /* r is left as it is when the start fails */
+        session_server_start(path, false, &r.sock, &r.done, &r.pid, &err);
+    return r;
 }
 
 /* Starts `file` with `av` (through PATH when `search`), waits for it and
