@@ -694,9 +694,15 @@ static const char *how_predicted(const session *s)
     case FROM_CHECKED:
 #define NEIGHBOURS "the costs of the runs measured on this machine nearest the window, " \
                    "weighed with the window"
+#define LONG " and the pattern's long run over this mesh"
+#define LEAD ", and the leading sweep's own cycles"
         if (!(s->has_wd && s->wd.neighbours))
             return "the table's pattern simulated over this mesh on this machine";
-        return s->wd.lead_records ? NEIGHBOURS ", and the leading sweep's own cycles" : NEIGHBOURS;
+        if (s->wd.synth_visits)
+            return s->wd.lead_records ? NEIGHBOURS LONG LEAD : NEIGHBOURS LONG;
+        return s->wd.lead_records ? NEIGHBOURS LEAD : NEIGHBOURS;
+#undef LEAD
+#undef LONG
 #undef NEIGHBOURS
     default:
         return "the nearest sample's strategy";

@@ -616,11 +616,12 @@ static emm_status run_bounded(emm_runner *run, const emm_strategy *s, const size
 
 /* The sweep; partial NULL: every strategy over every record; else a
  * bounded sweep of the offered strategies (run_bounded), *partial set to
- * its flags. */
+ * its flags. only (NULL: all): the sweep's strategies to simulate, a flag
+ * each; the others stay ran = 0. */
 static emm_status sweep_run(const emm_machine *m, const emm_trace_info *info,
                             const emm_trace_record *recs, size_t n, const emm_threads *threads,
-                            emm_model_share *share, bool offered_only, uint8_t **partial,
-                            emm_sweep **out, emm_error *err)
+                            emm_model_share *share, bool offered_only, const uint8_t *only,
+                            uint8_t **partial, emm_sweep **out, emm_error *err)
 {
     *out = NULL;
     /* A mesh with depth brings the layouts in space into the sweep. */
@@ -649,7 +650,7 @@ static emm_status sweep_run(const emm_machine *m, const emm_trace_info *info,
      * offered ones are asked for (they stay ran = 0). */
     for (size_t i = 0; i < count; i++) {
         model_of[i] = SIZE_MAX;
-        if (!offered_only || emm_machine_offers(m, &s[i])) {
+        if ((!offered_only || emm_machine_offers(m, &s[i])) && (!only || only[i])) {
             model_of[i] = nrun;
             ran[nrun++] = s[i];
         }
@@ -704,7 +705,7 @@ emm_status sweep_records_shared(const emm_machine *m, const emm_trace_info *info
                                 const emm_threads *threads, emm_model_share *share,
                                 bool offered_only, emm_sweep **out, emm_error *err)
 {
-    return sweep_run(m, info, recs, n, threads, share, offered_only, NULL, out, err);
+    return sweep_run(m, info, recs, n, threads, share, offered_only, NULL, NULL, out, err);
 }
 
 emm_status sweep_records_bounded(const emm_machine *m, const emm_trace_info *info,
@@ -713,7 +714,7 @@ emm_status sweep_records_bounded(const emm_machine *m, const emm_trace_info *inf
                                  emm_sweep **out, uint8_t **partial, emm_error *err)
 {
     *partial = NULL;
-    return sweep_run(m, info, recs, n, threads, share, true, partial, out, err);
+    return sweep_run(m, info, recs, n, threads, share, true, NULL, partial, out, err);
 }
 
 void emm_sweep_free(emm_sweep *sw)
@@ -852,7 +853,7 @@ static emm_status synth_options(const emm_mesh *mesh, const struct synth_arrays 
  * options), the mesh, the arrays and, for a sweep, the machine — not on
  * the window, once its start is known — so a session's decisions (the
  * window's, then each phase's) compute each once. */
-enum cached_kind { CACHED_FEATURES, CACHED_SWEEP };
+enum cached_kind { CACHED_FEATURES, CACHED_SWEEP, CACHED_SOME };
 
 typedef struct cached {
     enum cached_kind kind;
@@ -1324,6 +1325,83 @@ int check_bounds_hold(const emm_machine *m, const emm_sweep *S, const uint8_t *p
     return 1;
 }
 
+/* The long run of the traversal `recipe` over the mesh (synth_sweep's) for
+ * the sweep's strategies flagged in want (count flags) only: *S has their
+ * results (ran set; another strategy may have run too). The cache keeps
+ * what was simulated, and a later decision over the same trace (a phase's)
+ * simulates only what it lacks. *S is the cache's, or the caller's to free
+ * when *owned; NULL when the traversal cannot be made here (the records
+ * name no start for it) or nothing could be simulated. *visits_out gets
+ * its length, EMM_DECIDE_LONG_VISITS or the mesh's triangles. Errors are
+ * out of memory only. */
+static emm_status long_run_some(decide_cache *c, const emm_machine *m, const emm_trace_info *info,
+                                const emm_mesh *mesh, const struct synth_arrays *arrays,
+                                const char *recipe, const emm_trace_record *recs, size_t n,
+                                const uint8_t *want, size_t count, const char *name,
+                                const emm_threads *threads, emm_model_share *share,
+                                emm_sweep **S, bool *owned, uint64_t *visits_out, emm_error *err)
+{
+    *S = NULL;
+    *owned = false;
+    uint64_t visits = EMM_DECIDE_LONG_VISITS;
+    if (info->geometry.nt < visits)
+        visits = info->geometry.nt;
+    *visits_out = visits;
+    emm_synth_options so;
+    emm_error e;
+    emm_status st = synth_options(mesh, arrays, recipe, recs, n, visits, &so, &e);
+    if (st == EMM_ERR_INVALID)
+        return EMM_OK;
+    if (st != EMM_OK)
+        return emm_fail(err, st, "%s", e.message);
+    cached *x = cache_find(c, CACHED_SOME, &so, 0, m, arrays);
+    uint8_t *lack = calloc(count ? count : 1, 1);
+    if (!lack)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+    size_t nlack = 0;
+    for (size_t i = 0; i < count; i++)
+        if (want[i] && !(x && x->sw && x->sw->count == count && x->sw->ran[i]))
+            lack[i] = 1, nlack++;
+    if (nlack == 0) {
+        free(lack);
+        *S = x->sw;
+        return EMM_OK;
+    }
+    emm_trace_record *syn = NULL;
+    size_t ns = 0;
+    emm_sweep *got = NULL;
+    st = emm_synth_records(mesh, &so, arrays, name, &syn, &ns, err);
+    if (st == EMM_OK) {
+        emm_status sst = sweep_run(m, info, syn, ns, threads, share, true, lack, NULL, &got, &e);
+        if (sst == EMM_ERR_NOMEM)
+            st = emm_fail(err, sst, "%s", e.message);
+    }
+    free(syn);
+    free(lack);
+    if (st != EMM_OK || !got || got->count != count) {
+        emm_sweep_free(got);
+        return st;
+    }
+    if (x && x->sw && x->sw->count == count) {
+        for (size_t i = 0; i < count; i++)
+            if (got->ran[i]) {
+                x->sw->result[i] = got->result[i];
+                x->sw->ran[i] = 1;
+            }
+        emm_sweep_free(got);
+        *S = x->sw;
+    } else if (x || (x = cache_add(c, CACHED_SOME, &so, 0, m, arrays))) {
+        emm_sweep_free(x->sw);
+        x->st = EMM_OK;
+        x->sw = got;
+        *S = got;
+    } else {
+        *S = got;
+        *owned = true;
+    }
+    return EMM_OK;
+}
+
 /* The table's pattern, checked on this mesh and this window (docs/profile.md
  * "The decision"): the nearest sample's canonical traversal (its recipe,
  * or its class's for a sample from a program) is synthesised over the
@@ -1562,12 +1640,73 @@ static emm_status price_lead(const emm_machine *m, const emm_trace_info *info,
     return EMM_OK;
 }
 
+/* The EMM_DECIDE_LONG_SHORTLIST best of the neighbours' scores (val, count
+ * of the sweep; infinite: no candidate) times the long run of the checked
+ * pattern over this mesh over its best among them, to the power
+ * EMM_DECIDE_LONG_WEIGHT; the rest are no candidates any more, nor a
+ * shortlisted strategy the long run could not simulate. Left as they were
+ * when the pattern cannot be made here. *vmin gets the least score,
+ * *weighed the long run's triangle visits (0: it did not weigh). Errors
+ * are out of memory only. */
+static emm_status weigh_long_run(decide_cache *cache, const emm_machine *m,
+                                 const emm_trace_info *info, const emm_mesh *mesh,
+                                 const struct synth_arrays *arrays, const char *recipe,
+                                 const emm_trace_record *recs, size_t n, size_t count,
+                                 const char *name, const emm_threads *threads,
+                                 emm_model_share *share, double *val, double *vmin,
+                                 size_t *weighed, emm_error *err)
+{
+    *weighed = 0;
+    if (!mesh || !recipe)
+        return EMM_OK;
+    uint8_t *want = calloc(count ? count : 1, 1);
+    if (!want)
+        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+    /* The shortlist: the least scores, ties to the sweep's order. */
+    for (size_t picked = 0; picked < EMM_DECIDE_LONG_SHORTLIST; picked++) {
+        size_t best = SIZE_MAX;
+        for (size_t i = 0; i < count; i++)
+            if (!want[i] && isfinite(val[i]) && (best == SIZE_MAX || val[i] < val[best]))
+                best = i;
+        if (best == SIZE_MAX)
+            break;
+        want[best] = 1;
+    }
+    emm_sweep *S = NULL;
+    bool owned = false;
+    uint64_t visits = 0;
+    emm_status st = long_run_some(cache, m, info, mesh, arrays, recipe, recs, n, want, count, name,
+                                  threads, share, &S, &owned, &visits, err);
+    double sb = INFINITY;
+    for (size_t i = 0; S && i < count; i++)
+        if (want[i] && S->ran[i] && (double)S->result[i].total < sb)
+            sb = (double)S->result[i].total;
+    if (st == EMM_OK && sb > 0 && isfinite(sb)) {
+        *weighed = (size_t)visits;
+        *vmin = INFINITY;
+        for (size_t i = 0; i < count; i++) {
+            if (want[i] && S->ran[i])
+                val[i] *= pow((double)S->result[i].total / sb, EMM_DECIDE_LONG_WEIGHT);
+            else
+                val[i] = INFINITY;
+            if (val[i] < *vmin)
+                *vmin = val[i];
+        }
+    }
+    if (owned)
+        emm_sweep_free(S);
+    free(want);
+    return st;
+}
+
 static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
-                                  const emm_trace_info *info, const emm_trace_record *recs,
+                                  const emm_trace_info *info, const emm_mesh *mesh,
+                                  const struct synth_arrays *arrays, const emm_trace_record *recs,
                                   size_t n, size_t accesses, const emm_trace_record *lead,
                                   size_t nlead, const size_t near[EMM_DECIDE_NEIGHBOURS],
                                   const double dist[EMM_DECIDE_NEIGHBOURS], size_t k,
-                                  const emm_threads *threads, emm_model_share *share,
+                                  const char *name, const emm_threads *threads,
+                                  emm_model_share *share, decide_cache *cache,
                                   emm_window_decision *out, emm_error *err)
 {
     if (k == 0)
@@ -1642,6 +1781,11 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
         if (val[i] < vmin)
             vmin = val[i];
     }
+    size_t long_visits = 0;
+    if (isfinite(vmin) &&
+        (st = weigh_long_run(cache, m, info, mesh, arrays, check_recipe(out), recs, n, W->count,
+                             name, threads, share, val, &vmin, &long_visits, err)) != EMM_OK)
+        goto done;
     if (lead && nlead > 0 && isfinite(vmin) && accesses > 0 &&
         (st = price_lead(m, info, lead, nlead, accesses, threads, share, W->count, wb, vmin,
                          val, &nled, err)) != EMM_OK)
@@ -1666,6 +1810,7 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
         out->neighbours = k;
         out->neighbour_distance = dist[k - 1];
         out->lead_records = nled;
+        out->synth_visits = long_visits;
         set_runner_up(out, second == SIZE_MAX ? NULL : &W->result[second], score2 / score - 1);
     }
 done:
@@ -1758,9 +1903,9 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
                     k = 0;
             }
             if (st == EMM_OK && k > 0) {
-                st = neighbour_costs(t, m, info, recs, n, accesses, opt ? opt->lead : NULL,
-                                     opt ? opt->nlead : 0, near, dist, k, threads, share, out,
-                                     err);
+                st = neighbour_costs(t, m, info, mesh, &arrays, recs, n, accesses,
+                                     opt ? opt->lead : NULL, opt ? opt->nlead : 0, near, dist, k,
+                                     name, threads, share, cache, out, err);
                 if (out->neighbours)
                     out->how = EMM_DECIDED_CHECKED;
             }

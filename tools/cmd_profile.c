@@ -260,6 +260,10 @@ static int profile(void *p)
         printf("measured:  the %zu nearest runs measured on this machine (within %.3f), their "
                "costs\n           with the window's, %zu strategies\n",
                w.neighbours, w.neighbour_distance, w.candidates);
+        if (w.synth_visits)
+            printf("           and %s over this mesh (%zu visits) for the %d best\n",
+                   strcmp(w.table.synth, "-") != 0 ? w.table.synth : w.table.pattern,
+                   w.synth_visits, EMM_DECIDE_LONG_SHORTLIST);
         if (w.lead_records)
             printf("           and the leading sweep's %zu records, the run's too\n",
                    w.lead_records);

@@ -54,7 +54,7 @@ extern "C" {
  * median 1.79 times the 24th, geometric mean) ... */
 #define EMM_DECIDE_UNLISTED 1.8
 /* ... times the window's cold cycles over its best, to this power, ... */
-#define EMM_DECIDE_WINDOW_WEIGHT 0.75
+#define EMM_DECIDE_WINDOW_WEIGHT 1.0
 /* ... the worse of that ratio on the machine's local store and on the
  * store shifted right by this many bits (half of it): a cold window leaves
  * the store part empty where the run fills it, so on the whole store alone
@@ -70,6 +70,20 @@ extern "C" {
  * 186 records a triangle after their sweep; 4 to 16 gave the same cases
  * over 30 %), ... */
 #define EMM_DECIDE_REST_PER_TRIANGLE 8
+/* ... and, for the this many best scores, times the checked pattern's
+ * long run over the program's mesh (the check's traversal at full length,
+ * simulated for those strategies only) over the best of them, to the power
+ * EMM_DECIDE_LONG_WEIGHT: the neighbours' runs were made on other meshes,
+ * the window is the run's cold start, and the long run is this mesh's —
+ * a flood fill's front, once it wraps round a torus, outgrows the store
+ * that its window's front fitted. */
+#define EMM_DECIDE_LONG_SHORTLIST 16
+#define EMM_DECIDE_LONG_WEIGHT 0.5
+/* The long run is this many triangle visits at most (the mesh's triangles
+ * when fewer): on make predict and decision_quality 262,144, 65,536 and
+ * 32,768 give the same answers, 16,384 other ones; each halving of it took
+ * the smoothing run's decision about 3 % less time. */
+#define EMM_DECIDE_LONG_VISITS 32768
 /* The leading sweep is priced on its first this many records, scaled to its
  * length: an index-order pass costs about the same per record throughout,
  * and sweeping a 400,000-face mesh's whole pass (400,896 records) made the
@@ -253,7 +267,9 @@ typedef struct emm_window_decision {
     int tie;                 /* runner_margin <= EMM_DECIDE_TIE_MARGIN on the window (the
                                 whole run's cycles, when simulated, decide: emm_decide_is_tie) */
     size_t candidates;       /* strategies simulated on the window (CHECKED, WINDOW) */
-    size_t synth_visits;     /* triangle visits of the synthetic run (CHECKED) */
+    size_t synth_visits;     /* triangle visits of the synthetic run (CHECKED: the
+                                check's, or the pattern's long run that weighed the
+                                neighbours' scores; 0 when none did) */
     /* The classes checked on this mesh, as many as lie within the margin
      * (nclasses 0, classes NULL: the nearest sample's class stood alone),
      * in the table's order of their first sample. The decision owns them:

@@ -153,6 +153,31 @@ else
     echo "costs: $BIN/predict_traversals.sancov not built (no clang): not checked"
 fi
 
+# The neighbours' best scores are weighed with the checked pattern's run over
+# the program's own mesh. A breadth-first flood fill over a 30,000-face torus:
+# its front, once it wraps round the tube, outgrows the store for 8-triangle
+# cells, which the neighbours (runs on other meshes) and the cold window
+# rank first (1.50 times the run's best); the region traversal made over
+# the torus ranks the run's best first. The prediction must be within 3 %
+# of the fewest cycles of emm replay --all (the cache aside: no candidate).
+if [ -x "$BIN/predict_traversals.sancov" ]; then
+    "$EMM" mesh gen --surface torus --faces 30000 --seed 45 -o torus30k.off >/dev/null &&
+        record flood30k.emmt torus30k.off "$BIN/predict_traversals.sancov" flood || exit 1
+    check long-run 0 "$EMM" profile flood30k.emmt --finalists 0
+    has long-run out.txt "^measured: *the 16 nearest runs measured on this machine"
+    has long-run out.txt "^ *and region.* over this mesh ([0-9]* visits) for the 16 best"
+    predicted=$(sed -n 's/^strategy: *//p' out.txt)
+    check long-run-all 0 "$EMM" replay flood30k.emmt --all
+    best=$(awk '$1 ~ /^[0-9]+$/ && $2 !~ /^cache/ { print $3; exit }' out.txt)
+    mine=$(awk -v s="$predicted" '$1 ~ /^[0-9]+$/ && $2 == s { print $3; exit }' out.txt)
+    if [ -z "$best" ] || [ -z "$mine" ] || [ $((mine * 100)) -gt $((best * 103)) ]; then
+        echo "FAIL long-run: predicted $predicted ($mine cycles), the run's best $best cycles"
+        fail=1
+    fi
+else
+    echo "long-run: $BIN/predict_traversals.sancov not built (no clang): not checked"
+fi
+
 # A window near a canonical sample is that pattern only when the pattern,
 # made on the program's own mesh, resembles the window too. Region growing
 # (a one-ring from every vertex) over a 30,000-face mesh lies 0.33 from a
