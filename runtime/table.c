@@ -1355,16 +1355,17 @@ static emm_status long_run_some(decide_cache *c, const emm_machine *m, const emm
     if (st != EMM_OK)
         return emm_fail(err, st, "%s", e.message);
     cached *x = cache_find(c, CACHED_SOME, &so, 0, m, arrays);
+    bool kept = x && x->sw && x->sw->count == count; /* what an earlier decision simulated */
     uint8_t *lack = calloc(count ? count : 1, 1);
     if (!lack)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
     size_t nlack = 0;
     for (size_t i = 0; i < count; i++)
-        if (want[i] && !(x && x->sw && x->sw->count == count && x->sw->ran[i]))
+        if (want[i] && !(kept && x->sw->ran[i]))
             lack[i] = 1, nlack++;
     if (nlack == 0) {
         free(lack);
-        *S = x->sw;
+        *S = kept ? x->sw : NULL;
         return EMM_OK;
     }
     emm_trace_record *syn = NULL;
@@ -1382,7 +1383,7 @@ static emm_status long_run_some(decide_cache *c, const emm_machine *m, const emm
         emm_sweep_free(got);
         return st;
     }
-    if (x && x->sw && x->sw->count == count) {
+    if (kept) {
         for (size_t i = 0; i < count; i++)
             if (got->ran[i]) {
                 x->sw->result[i] = got->result[i];
@@ -1657,8 +1658,6 @@ static emm_status weigh_long_run(decide_cache *cache, const emm_machine *m,
                                  size_t *weighed, emm_error *err)
 {
     *weighed = 0;
-    if (!mesh || !recipe)
-        return EMM_OK;
     uint8_t *want = calloc(count ? count : 1, 1);
     if (!want)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
