@@ -1641,7 +1641,22 @@ static emm_status price_lead(const emm_machine *m, const emm_trace_info *info,
     return EMM_OK;
 }
 
-/* The EMM_DECIDE_LONG_SHORTLIST best of the neighbours' scores (val, count
+/* Flags in want[0..count) the EMM_DECIDE_SHORTLIST least finite scores of
+ * val, ties to the sweep's order. */
+static void shortlist(const double *val, size_t count, uint8_t *want)
+{
+    for (size_t picked = 0; picked < EMM_DECIDE_SHORTLIST; picked++) {
+        size_t best = SIZE_MAX;
+        for (size_t i = 0; i < count; i++)
+            if (!want[i] && isfinite(val[i]) && (best == SIZE_MAX || val[i] < val[best]))
+                best = i;
+        if (best == SIZE_MAX)
+            break;
+        want[best] = 1;
+    }
+}
+
+/* The EMM_DECIDE_SHORTLIST best of the neighbours' scores (val, count
  * of the sweep; infinite: no candidate) times the long run of the checked
  * pattern over this mesh over its best among them, to the power
  * EMM_DECIDE_LONG_WEIGHT; the rest are no candidates any more, nor a
@@ -1661,16 +1676,7 @@ static emm_status weigh_long_run(decide_cache *cache, const emm_machine *m,
     uint8_t *want = calloc(count ? count : 1, 1);
     if (!want)
         return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
-    /* The shortlist: the least scores, ties to the sweep's order. */
-    for (size_t picked = 0; picked < EMM_DECIDE_LONG_SHORTLIST; picked++) {
-        size_t best = SIZE_MAX;
-        for (size_t i = 0; i < count; i++)
-            if (!want[i] && isfinite(val[i]) && (best == SIZE_MAX || val[i] < val[best]))
-                best = i;
-        if (best == SIZE_MAX)
-            break;
-        want[best] = 1;
-    }
+    shortlist(val, count, want);
     emm_sweep *S = NULL;
     bool owned = false;
     uint64_t visits = 0;
@@ -1716,47 +1722,28 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
     if (sweep_records_shared(m, info, recs, n, threads, share, true, &own, &e) != EMM_OK)
         return e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
     const emm_sweep *W = own;
-    /* The window again on a smaller local store (EMM_DECIDE_WINDOW_STORE_SHIFT),
-     * as full as the run will keep it; its strategies are the same sweep's,
-     * index for index. Without it (a store too small to halve), the
-     * window's own sweep stands. */
-    emm_sweep *small = NULL;
-    emm_machine *ms = NULL;
-    char bytes[32];
-    snprintf(bytes, sizeof bytes, "%llu",
-             (unsigned long long)(emm_machine_get(m, "local.bytes") >>
-                                  EMM_DECIDE_WINDOW_STORE_SHIFT));
-    if (emm_machine_clone(m, &ms, &e) == EMM_OK &&
-        emm_machine_set_key(ms, "local.bytes", bytes, "decision", &e) == EMM_OK &&
-        emm_machine_validate(ms, &e) == EMM_OK &&
-        sweep_records_shared(ms, info, recs, n, threads, share, true, &small, &e) != EMM_OK &&
-        e.status == EMM_ERR_NOMEM) {
-        emm_machine_free(ms);
-        emm_sweep_free(own);
-        return emm_fail(err, e.status, "%s", e.message);
-    }
-    emm_machine_free(ms);
-    const emm_sweep *Ws = small && small->count == W->count ? small : W;
-    double wb = INFINITY, wsb = INFINITY;
+    double wb = INFINITY;
     for (size_t i = 0; i < W->count; i++)
-        if (W->ran[i] && emm_machine_offers(m, &W->result[i].strategy)) {
-            if ((double)W->result[i].total < wb)
-                wb = (double)W->result[i].total;
-            if (Ws->ran[i] && (double)Ws->result[i].total < wsb)
-                wsb = (double)Ws->result[i].total;
-        }
+        if (W->ran[i] && emm_machine_offers(m, &W->result[i].strategy) &&
+            (double)W->result[i].total < wb)
+            wb = (double)W->result[i].total;
     size_t scored = 0, nled = 0;
     double *val = malloc((W->count ? W->count : 1) * sizeof *val), vmin = INFINITY;
+    double *nbm = malloc((W->count ? W->count : 1) * sizeof *nbm);
+    uint8_t *want = calloc(W->count ? W->count : 1, 1);
+    emm_sweep *small = NULL;
     emm_status st = EMM_OK;
-    if (!val) {
+    if (!val || !nbm || !want) {
         st = emm_fail(err, EMM_ERR_NOMEM, "out of memory for the neighbours' costs");
         goto done;
     }
+    /* Each strategy's score on the whole store: the neighbours' costs times
+     * the window's. */
     for (size_t i = 0; i < W->count; i++)
         val[i] = INFINITY;
-    for (size_t i = 0; i < W->count && wb > 0 && isfinite(wb) && wsb > 0 && isfinite(wsb); i++) {
+    for (size_t i = 0; i < W->count && wb > 0 && isfinite(wb); i++) {
         const emm_strategy *s = &W->result[i].strategy;
-        if (!W->ran[i] || !Ws->ran[i] || !emm_machine_offers(m, s))
+        if (!W->ran[i] || !emm_machine_offers(m, s))
             continue;
         double logsum = 0;
         size_t listed = 0;
@@ -1774,11 +1761,43 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
         if (listed == 0)
             continue;
         scored++;
-        /* The window's cost, the worse of the whole store and the smaller. */
+        nbm[i] = exp(logsum / (double)k);
+        val[i] = nbm[i] * pow((double)W->result[i].total / wb, EMM_DECIDE_WINDOW_WEIGHT);
+    }
+    /* The shortlist, again on a smaller local store
+     * (EMM_DECIDE_WINDOW_STORE_SHIFT), as full as the run will keep it: its
+     * window's cost is the worse of the two ratios, each to its best among
+     * the shortlist; the rest are no candidates. Without that store (one
+     * too small to halve), the window's own sweep stands. */
+    shortlist(val, W->count, want);
+    emm_machine *ms = NULL;
+    char bytes[32];
+    snprintf(bytes, sizeof bytes, "%llu",
+             (unsigned long long)(emm_machine_get(m, "local.bytes") >>
+                                  EMM_DECIDE_WINDOW_STORE_SHIFT));
+    if (scored > 0 && emm_machine_clone(m, &ms, &e) == EMM_OK &&
+        emm_machine_set_key(ms, "local.bytes", bytes, "decision", &e) == EMM_OK &&
+        emm_machine_validate(ms, &e) == EMM_OK &&
+        sweep_run(ms, info, recs, n, threads, share, true, want, NULL, &small, &e) != EMM_OK &&
+        e.status == EMM_ERR_NOMEM) {
+        emm_machine_free(ms);
+        st = emm_fail(err, e.status, "%s", e.message);
+        goto done;
+    }
+    emm_machine_free(ms);
+    const emm_sweep *Ws = small && small->count == W->count ? small : W;
+    double wsb = INFINITY;
+    for (size_t i = 0; i < W->count; i++)
+        if (want[i] && Ws->ran[i])
+            wsb = fmin(wsb, (double)Ws->result[i].total);
+    for (size_t i = 0; i < W->count; i++) {
+        if (!want[i] || !Ws->ran[i] || !(wsb > 0 && isfinite(wsb))) {
+            val[i] = INFINITY;
+            continue;
+        }
         double wr = fmax((double)W->result[i].total / wb, (double)Ws->result[i].total / wsb);
-        val[i] = exp(logsum / (double)k) * pow(wr, EMM_DECIDE_WINDOW_WEIGHT);
-        if (val[i] < vmin)
-            vmin = val[i];
+        val[i] = nbm[i] * pow(wr, EMM_DECIDE_WINDOW_WEIGHT);
+        vmin = fmin(vmin, val[i]);
     }
     size_t long_visits = 0;
     if (isfinite(vmin) &&
@@ -1814,6 +1833,8 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
     }
 done:
     free(val);
+    free(nbm);
+    free(want);
     emm_sweep_free(small);
     emm_sweep_free(own);
     return st;

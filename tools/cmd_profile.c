@@ -263,7 +263,7 @@ static int profile(void *p)
         if (w.synth_visits)
             printf("           and %s over this mesh (%zu visits) for the %d best\n",
                    strcmp(w.table.synth, "-") != 0 ? w.table.synth : w.table.pattern,
-                   w.synth_visits, EMM_DECIDE_LONG_SHORTLIST);
+                   w.synth_visits, EMM_DECIDE_SHORTLIST);
         if (w.lead_records)
             printf("           and the leading sweep's %zu records, the run's too\n",
                    w.lead_records);

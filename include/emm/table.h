@@ -55,12 +55,18 @@ extern "C" {
 #define EMM_DECIDE_UNLISTED 1.8
 /* ... times the window's cold cycles over its best, to this power, ... */
 #define EMM_DECIDE_WINDOW_WEIGHT 1.0
-/* ... the worse of that ratio on the machine's local store and on the
- * store shifted right by this many bits (half of it): a cold window leaves
- * the store part empty where the run fills it, so on the whole store alone
- * it ranks large cells too well (make predict: the window's own best was
- * 35.8 % off the run's best on average on the whole store, 22.0 % on half
- * of it, 28.9 % on a quarter); a strategy must be cheap on both, ... */
+/* ... and this many least scores are the only candidates from there on:
+ * their window is swept again on the store shifted right by
+ * EMM_DECIDE_WINDOW_STORE_SHIFT bits, and each is weighed with the long run
+ * below, ... */
+#define EMM_DECIDE_SHORTLIST 16
+/* ... the window's ratio becoming the worse of that on the machine's local
+ * store and that on the store shifted right by this many bits (half of
+ * it), over the shortlist's best there: a cold window leaves the store
+ * part empty where the run fills it, so on the whole store alone it ranks
+ * large cells too well (make predict: the window's own best was 35.8 % off
+ * the run's best on average on the whole store, 22.0 % on half of it,
+ * 28.9 % on a quarter); a strategy must be cheap on both, ... */
 #define EMM_DECIDE_WINDOW_STORE_SHIFT 1
 /* ... plus, when the window follows a leading sweep (an index-order pass
  * over the mesh, which the profile leaves out and the run pays too), that
@@ -70,14 +76,13 @@ extern "C" {
  * 186 records a triangle after their sweep; 4 to 16 gave the same cases
  * over 30 %), ... */
 #define EMM_DECIDE_REST_PER_TRIANGLE 8
-/* ... and, for the this many best scores, times the checked pattern's
- * long run over the program's mesh (the check's traversal at full length,
- * simulated for those strategies only) over the best of them, to the power
+/* ... and, for the shortlist, times the checked pattern's long run over
+ * the program's mesh (the check's traversal at full length, simulated for
+ * those strategies only) over the best of them, to the power
  * EMM_DECIDE_LONG_WEIGHT: the neighbours' runs were made on other meshes,
  * the window is the run's cold start, and the long run is this mesh's —
  * a flood fill's front, once it wraps round a torus, outgrows the store
  * that its window's front fitted. */
-#define EMM_DECIDE_LONG_SHORTLIST 16
 #define EMM_DECIDE_LONG_WEIGHT 0.5
 /* The long run is this many triangle visits at most (the mesh's triangles
  * when fewer): on make predict and decision_quality 262,144, 65,536 and
