@@ -201,6 +201,18 @@ static void touching(oc_build *b, uint32_t i, int faces_only)
     oc_node n = o->nodes[i];
     int64_t side = (int64_t)1 << n.depth;
     b->ntmp = 0;
+    /* i's ancestors, anc[e] at depth e: a neighbour's box shares the path
+     * from the root down to the deepest node that holds both, so each
+     * descent below starts there instead of at the root. */
+    uint32_t anc[MAXD + 1];
+    anc[0] = 0;
+    for (uint32_t e = 0; e < n.depth; e++) {
+        unsigned bit = n.depth - 1 - e;
+        uint32_t k = 0;
+        for (int a = 0; a < 3; a++)
+            k |= ((n.i[a] >> bit) & 1u) << a;
+        anc[e + 1] = (uint32_t)o->nodes[anc[e]].child + k;
+    }
     for (int dz = -1; dz <= 1; dz++)
         for (int dy = -1; dy <= 1; dy++)
             for (int dx = -1; dx <= 1; dx++) {
@@ -215,9 +227,15 @@ static void touching(oc_build *b, uint32_t i, int faces_only)
                 }
                 if (!inside)
                     continue;
-                /* Descend to the node of i's size at p, or the leaf above it. */
-                uint32_t j = 0;
-                for (uint32_t e = 0; e < n.depth && o->nodes[j].child >= 0; e++) {
+                /* Descend to the node of i's size at p, or the leaf above
+                 * it, from the deepest ancestor of i that holds p: the
+                 * levels above where the coordinates first differ. */
+                uint64_t diff = 0;
+                for (int a = 0; a < 3; a++)
+                    diff |= (uint64_t)p[a] ^ n.i[a];
+                uint32_t low = 64u - (uint32_t)__builtin_clzll(diff);
+                uint32_t j = anc[n.depth - low];
+                for (uint32_t e = n.depth - low; e < n.depth && o->nodes[j].child >= 0; e++) {
                     unsigned bit = n.depth - 1 - e;
                     uint32_t k = 0;
                     for (int a = 0; a < 3; a++)

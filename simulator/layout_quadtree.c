@@ -210,6 +210,16 @@ static void touching(qt_build *b, uint32_t i)
     qt_node n = q->nodes[i];
     int64_t side = (int64_t)1 << n.depth;
     b->ntmp = 0;
+    /* i's ancestors, anc[d] at depth d: a neighbour's square shares the
+     * path from the root down to the deepest node that holds both, so
+     * each descent below starts there instead of at the root. */
+    uint32_t anc[MAXD + 1];
+    anc[0] = 0;
+    for (uint32_t d = 0; d < n.depth; d++) {
+        unsigned bit = n.depth - 1 - d;
+        uint32_t k = ((n.ix >> bit) & 1u) | (((n.iy >> bit) & 1u) << 1);
+        anc[d + 1] = (uint32_t)q->nodes[anc[d]].child + k;
+    }
     for (int dy = -1; dy <= 1; dy++)
         for (int dx = -1; dx <= 1; dx++) {
             if (dx == 0 && dy == 0)
@@ -217,9 +227,13 @@ static void touching(qt_build *b, uint32_t i)
             int64_t x = (int64_t)n.ix + dx, y = (int64_t)n.iy + dy;
             if (x < 0 || y < 0 || x >= side || y >= side)
                 continue;
-            /* Descend to the node of i's size at (x, y), or the leaf above it. */
-            uint32_t j = 0;
-            for (uint32_t d = 0; d < n.depth && q->nodes[j].child >= 0; d++) {
+            /* Descend to the node of i's size at (x, y), or the leaf above
+             * it, from the deepest ancestor of i that holds (x, y): the
+             * levels above where the coordinates first differ. */
+            uint64_t diff = ((uint64_t)x ^ n.ix) | ((uint64_t)y ^ n.iy);
+            uint32_t low = 64u - (uint32_t)__builtin_clzll(diff);
+            uint32_t j = anc[n.depth - low];
+            for (uint32_t d = n.depth - low; d < n.depth && q->nodes[j].child >= 0; d++) {
                 unsigned bit = n.depth - 1 - d;
                 uint32_t k = (uint32_t)(((x >> bit) & 1) | (((y >> bit) & 1) << 1));
                 j = (uint32_t)q->nodes[j].child + k;
