@@ -1656,27 +1656,22 @@ static void shortlist(const double *val, size_t count, uint8_t *want)
     }
 }
 
-/* The EMM_DECIDE_SHORTLIST best of the neighbours' scores (val, count
- * of the sweep; infinite: no candidate) times the long run of the checked
- * pattern over this mesh over its best among them, to the power
- * EMM_DECIDE_LONG_WEIGHT; the rest are no candidates any more, nor a
- * shortlisted strategy the long run could not simulate. Left as they were
- * when the pattern cannot be made here. *vmin gets the least score,
- * *weighed the long run's triangle visits (0: it did not weigh). Errors
- * are out of memory only. */
+/* The shortlisted scores (want, count flags of the sweep; val, infinite
+ * for the others) times the long run of the checked pattern over this
+ * mesh over its best among them, to the power EMM_DECIDE_LONG_WEIGHT; a
+ * shortlisted strategy the long run could not simulate is no candidate any
+ * more. Left as they were when the pattern cannot be made here. *vmin gets
+ * the least score, *weighed the long run's triangle visits (0: it did not
+ * weigh). Errors are out of memory only. */
 static emm_status weigh_long_run(decide_cache *cache, const emm_machine *m,
                                  const emm_trace_info *info, const emm_mesh *mesh,
                                  const struct synth_arrays *arrays, const char *recipe,
-                                 const emm_trace_record *recs, size_t n, size_t count,
-                                 const char *name, const emm_threads *threads,
+                                 const emm_trace_record *recs, size_t n, const uint8_t *want,
+                                 size_t count, const char *name, const emm_threads *threads,
                                  emm_model_share *share, double *val, double *vmin,
                                  size_t *weighed, emm_error *err)
 {
     *weighed = 0;
-    uint8_t *want = calloc(count ? count : 1, 1);
-    if (!want)
-        return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
-    shortlist(val, count, want);
     emm_sweep *S = NULL;
     bool owned = false;
     uint64_t visits = 0;
@@ -1700,7 +1695,6 @@ static emm_status weigh_long_run(decide_cache *cache, const emm_machine *m,
     }
     if (owned)
         emm_sweep_free(S);
-    free(want);
     return st;
 }
 
@@ -1793,6 +1787,7 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
     for (size_t i = 0; i < W->count; i++) {
         if (!want[i] || !Ws->ran[i] || !(wsb > 0 && isfinite(wsb))) {
             val[i] = INFINITY;
+            want[i] = 0;
             continue;
         }
         double wr = fmax((double)W->result[i].total / wb, (double)Ws->result[i].total / wsb);
@@ -1801,8 +1796,9 @@ static emm_status neighbour_costs(const emm_table *t, const emm_machine *m,
     }
     size_t long_visits = 0;
     if (isfinite(vmin) &&
-        (st = weigh_long_run(cache, m, info, mesh, arrays, check_recipe(out), recs, n, W->count,
-                             name, threads, share, val, &vmin, &long_visits, err)) != EMM_OK)
+        (st = weigh_long_run(cache, m, info, mesh, arrays, check_recipe(out), recs, n, want,
+                             W->count, name, threads, share, val, &vmin, &long_visits, err)) !=
+            EMM_OK)
         goto done;
     if (lead && nlead > 0 && isfinite(vmin) && accesses > 0 &&
         (st = price_lead(m, info, lead, nlead, accesses, threads, share, W->count, wb, vmin,
