@@ -697,7 +697,9 @@ static const char *how_predicted(const session *s)
 #define LONG " and the pattern's long run over this mesh"
 #define LEAD ", and the leading sweep's own cycles"
         if (!(s->has_wd && s->wd.neighbours))
-            return "the table's pattern simulated over this mesh on this machine";
+            return s->has_wd && s->wd.lead_records
+                       ? "the table's pattern simulated over this mesh on this machine" LEAD
+                       : "the table's pattern simulated over this mesh on this machine";
         if (s->wd.synth_visits)
             return s->wd.lead_records ? NEIGHBOURS LONG LEAD : NEIGHBOURS LONG;
         return s->wd.lead_records ? NEIGHBOURS LEAD : NEIGHBOURS;

@@ -1272,18 +1272,87 @@ static emm_status near_class(const emm_table *t, const emm_mesh *mesh, const emm
     return st;
 }
 
+/* The leading sweep lead[0..nlead), which the run pays too: its cycles
+ * under each of the window's count strategies into cyc (its first
+ * EMM_DECIDE_LEAD_SAMPLE records swept cold, scaled to its length;
+ * INFINITY where a strategy could not run it), and into *rest the rest of
+ * the run, priced at the window's best cycles wb scaled from the window's
+ * `accesses` to EMM_DECIDE_REST_PER_TRIANGLE element accesses a triangle.
+ * Returns 1 when priced, 0 when the sweep could not be made, -1 out of
+ * memory (err set). */
+static int lead_cycles(const emm_machine *m, const emm_trace_info *info,
+                       const emm_trace_record *lead, size_t nlead, size_t accesses,
+                       const emm_threads *threads, emm_model_share *share, size_t count,
+                       double wb, double *cyc, double *rest, emm_error *err)
+{
+    emm_sweep *L = NULL;
+    emm_error e;
+    size_t nl = nlead < EMM_DECIDE_LEAD_SAMPLE ? nlead : EMM_DECIDE_LEAD_SAMPLE;
+    if (sweep_records_shared(m, info, lead, nl, threads, share, true, &L, &e) != EMM_OK) {
+        if (e.status != EMM_ERR_NOMEM)
+            return 0;
+        emm_fail(err, e.status, "%s", e.message);
+        return -1;
+    }
+    int priced = L->count == count;
+    if (priced) {
+        *rest = wb * EMM_DECIDE_REST_PER_TRIANGLE * (double)info->geometry.nt / (double)accesses;
+        for (size_t i = 0; i < count; i++)
+            cyc[i] = L->ran[i] ? (double)L->result[i].total * ((double)nlead / (double)nl)
+                               : INFINITY;
+    }
+    emm_sweep_free(L);
+    return priced;
+}
+
+/* The neighbours' scores val[0..count), least vmin, become cycles with
+ * the leading sweep (lead_cycles): each strategy's sweep cycles plus its
+ * score over vmin times the rest of the run. A strategy the sweep could
+ * not simulate is no candidate. *priced: nlead when it was priced, 0 when
+ * the sweep could not be made (the scores stand). Errors are out of
+ * memory only. */
+static emm_status price_lead(const emm_machine *m, const emm_trace_info *info,
+                             const emm_trace_record *lead, size_t nlead, size_t accesses,
+                             const emm_threads *threads, emm_model_share *share, size_t count,
+                             double wb, double vmin, double *val, size_t *priced,
+                             emm_error *err)
+{
+    *priced = 0;
+    double *cyc = malloc((count ? count : 1) * sizeof *cyc), rest = 0;
+    if (!cyc)
+        return emm_fail(err, EMM_ERR_NOMEM, "out of memory");
+    int r = lead_cycles(m, info, lead, nlead, accesses, threads, share, count, wb, cyc, &rest,
+                        err);
+    if (r > 0) {
+        for (size_t i = 0; i < count; i++)
+            val[i] = isfinite(val[i]) ? cyc[i] + val[i] / vmin * rest : INFINITY;
+        *priced = nlead;
+    }
+    free(cyc);
+    return r < 0 ? EMM_ERR_NOMEM : EMM_OK;
+}
+
+/* The pattern check's score of strategy i: S/S_best, W breaking ties; with
+ * a leading sweep (lp not NULL), the sweep's own cycles under i plus that
+ * score times the rest of the run (lead_price). */
+static double checked_score(const emm_sweep *S, const emm_sweep *W, size_t i,
+                            const struct lead_price *lp)
+{
+    double v = (double)S->result[i].total / (double)S->result[S->best].total +
+               1e-6 * ((double)W->result[i].total / (double)W->result[W->best].total);
+    return lp ? lp->cycles[i] + v * lp->rest : v;
+}
+
 /* The pattern check's ranking (check_pattern): the candidates (ran in both
- * sweeps, offered), and the least and second least score S/S_best, W
- * breaking ties. */
+ * sweeps, offered), and the least and second least checked_score. */
 struct ranking {
     size_t pick, second, both;
     double score, score2;
 };
 
 static void rank_checked(const emm_machine *m, const emm_sweep *S, const emm_sweep *W,
-                         struct ranking *r)
+                         const struct lead_price *lp, struct ranking *r)
 {
-    double sb = (double)S->result[S->best].total, wb = (double)W->result[W->best].total;
     r->pick = r->second = SIZE_MAX;
     r->both = 0;
     r->score = r->score2 = INFINITY;
@@ -1291,7 +1360,7 @@ static void rank_checked(const emm_machine *m, const emm_sweep *S, const emm_swe
         if (!S->ran[i] || !W->ran[i] || !emm_machine_offers(m, &S->result[i].strategy))
             continue;
         r->both++;
-        double v = (double)S->result[i].total / sb + 1e-6 * ((double)W->result[i].total / wb);
+        double v = checked_score(S, W, i, lp);
         if (v < r->score) {
             r->score2 = r->score;
             r->second = r->pick;
@@ -1305,20 +1374,20 @@ static void rank_checked(const emm_machine *m, const emm_sweep *S, const emm_swe
 }
 
 int check_bounds_hold(const emm_machine *m, const emm_sweep *S, const uint8_t *partial,
-                      const emm_sweep *W, size_t pick, size_t second, double score2)
+                      const emm_sweep *W, const struct lead_price *lp, size_t pick, size_t second,
+                      double score2)
 {
     if (!partial)
         return 1;
     if ((pick != SIZE_MAX && partial[pick]) || (second != SIZE_MAX && partial[second]) ||
         partial[S->best] || partial[S->cache])
         return 0;
-    double sb = (double)S->result[S->best].total, wb = (double)W->result[W->best].total;
     for (size_t i = 0; i < S->count; i++) {
         if (!partial[i] || !S->ran[i] || !W->ran[i] ||
             !emm_machine_offers(m, &S->result[i].strategy))
             continue;
         /* S_i is a lower bound: so is the score made of it. */
-        double v = (double)S->result[i].total / sb + 1e-6 * ((double)W->result[i].total / wb);
+        double v = checked_score(S, W, i, lp);
         if (!(v > score2))
             return 0;
     }
@@ -1413,7 +1482,9 @@ static emm_status long_run_some(decide_cache *c, const emm_machine *m, const emm
  * as (S/S_best)·(W/W_best), doubled the regret on traces not in the table:
  * a window is too short to see cells reused) — unless, on a machine with a
  * cache, the long run says it loses to the cache and it is not at least
- * 1/EMM_DECIDE_CACHE_MARGIN times better than the cache over both.
+ * 1/EMM_DECIDE_CACHE_MARGIN times better than the cache over both. When
+ * the window follows a leading sweep (lead[0..nlead)), the run pays it too:
+ * the score becomes cycles (checked_score with lead_cycles' price).
  * S is swept bounded (sweep_records_bounded); when a strategy it stopped
  * early could have ranked first or second, S is swept again in full, so
  * the outcome is the full sweep's.
@@ -1421,7 +1492,8 @@ static emm_status long_run_some(decide_cache *c, const emm_machine *m, const emm
  * errors are out of memory only. */
 static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info,
                                 const emm_mesh *mesh, const struct synth_arrays *arrays,
-                                const emm_trace_record *recs, size_t n, const char *name,
+                                const emm_trace_record *recs, size_t n, size_t accesses,
+                                const emm_trace_record *lead, size_t nlead, const char *name,
                                 const emm_threads *threads, emm_model_share *share,
                                 decide_cache *cache, uint64_t visits, emm_window_decision *out,
                                 emm_error *err)
@@ -1440,6 +1512,10 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
     bool own_S = false;
     emm_error e;
     struct ranking r;
+    /* The leading sweep, when the window follows one, is the run's too. */
+    double *lcyc = NULL;
+    struct lead_price lp = {0}, *lpp = NULL;
+    size_t priced = 0;
     for (int exact = 0; exact < 2; exact++) {
         if (own_S) {
             emm_sweep_free(S);
@@ -1458,8 +1534,25 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
             st = e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
             goto done;
         }
-        rank_checked(m, S, W, &r);
-        if (check_bounds_hold(m, S, partial, W, r.pick, r.second, r.score2))
+        if (lead && nlead > 0 && accesses > 0 && !lcyc) {
+            if (!(lcyc = malloc(W->count * sizeof *lcyc))) {
+                st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
+                goto done;
+            }
+            int pr = lead_cycles(m, info, lead, nlead, accesses, threads, share, W->count,
+                                 (double)W->result[W->best].total, lcyc, &lp.rest, err);
+            if (pr < 0) {
+                st = EMM_ERR_NOMEM;
+                goto done;
+            }
+            if (pr > 0) {
+                lp.cycles = lcyc;
+                lpp = &lp;
+                priced = nlead;
+            }
+        }
+        rank_checked(m, S, W, lpp, &r);
+        if (check_bounds_hold(m, S, partial, W, lpp, r.pick, r.second, r.score2))
             break;
     }
     size_t pick = r.pick, second = r.second;
@@ -1476,7 +1569,8 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
             second = pick;
             score2 = score;
             pick = c;
-            score = (double)S->result[c].total / sb * ((double)W->result[c].total / wb);
+            score = lpp ? checked_score(S, W, c, lpp)
+                        : (double)S->result[c].total / sb * ((double)W->result[c].total / wb);
         }
     }
     if (pick != SIZE_MAX) {
@@ -1485,6 +1579,7 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
         out->cycles = W->result[pick].total;
         out->candidates = both;
         out->synth_visits = (size_t)visits;
+        out->lead_records = priced;
         set_runner_up(out, second == SIZE_MAX ? NULL : &W->result[second], score2 / score - 1);
     }
 done:
@@ -1492,6 +1587,7 @@ done:
         emm_sweep_free(S);
         free(partial);
     }
+    free(lcyc);
     emm_sweep_free(W);
     return st;
 }
@@ -1604,41 +1700,6 @@ static size_t pick_neighbours(const emm_table *t, const emm_machine *m,
     free(c);
     *canonical_out = canonical;
     return k;
-}
-
-/* The leading sweep lead[0..nlead) is the run's too (neighbour_costs): the
- * scores val[0..count) of the window's sweep, least vmin, become cycles —
- * the sweep's own under each strategy (its first EMM_DECIDE_LEAD_SAMPLE
- * records swept cold, scaled to its length) plus the score over vmin times
- * the rest of the run, priced at the window's best cycles wb scaled from
- * the window's `accesses` to EMM_DECIDE_REST_PER_TRIANGLE element accesses a
- * triangle. A strategy the sweep could not simulate is no candidate.
- * *priced: nlead when it was priced, 0 when the sweep could not be made
- * (the scores stand). Errors are out of memory only. */
-static emm_status price_lead(const emm_machine *m, const emm_trace_info *info,
-                             const emm_trace_record *lead, size_t nlead, size_t accesses,
-                             const emm_threads *threads, emm_model_share *share, size_t count,
-                             double wb, double vmin, double *val, size_t *priced,
-                             emm_error *err)
-{
-    *priced = 0;
-    emm_sweep *L = NULL;
-    emm_error e;
-    size_t nl = nlead < EMM_DECIDE_LEAD_SAMPLE ? nlead : EMM_DECIDE_LEAD_SAMPLE;
-    if (sweep_records_shared(m, info, lead, nl, threads, share, true, &L, &e) != EMM_OK)
-        return e.status == EMM_ERR_NOMEM ? emm_fail(err, e.status, "%s", e.message) : EMM_OK;
-    if (L->count == count) {
-        double rest = wb * EMM_DECIDE_REST_PER_TRIANGLE * (double)info->geometry.nt /
-                      (double)accesses;
-        for (size_t i = 0; i < count; i++)
-            val[i] = L->ran[i] && isfinite(val[i])
-                         ? (double)L->result[i].total * ((double)nlead / (double)nl) +
-                               val[i] / vmin * rest
-                         : INFINITY;
-        *priced = nlead;
-    }
-    emm_sweep_free(L);
-    return EMM_OK;
 }
 
 /* Flags in want[0..count) the EMM_DECIDE_SHORTLIST least finite scores of
@@ -1926,7 +1987,9 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
                     out->how = EMM_DECIDED_CHECKED;
             }
             if (st == EMM_OK && !out->neighbours)
-                st = check_pattern(m, info, mesh, &arrays, recs, n, name, threads, share, cache,
+                st = check_pattern(m, info, mesh, &arrays, recs, n, accesses,
+                                   opt ? opt->lead : NULL, opt ? opt->nlead : 0, name, threads,
+                                   share, cache,
                                    opt ? opt->synth_visits : 0, out, err);
         }
         if (own_mesh)

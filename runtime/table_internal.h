@@ -39,12 +39,24 @@ emm_status sweep_records_bounded(const emm_machine *m, const emm_trace_info *inf
                                  const emm_threads *threads, emm_model_share *share,
                                  emm_sweep **out, uint8_t **partial, emm_error *err);
 
+/* A leading sweep's price (the window follows an index-order pass the
+ * run pays too): each strategy's cycles over the sweep (indexed as the
+ * window's sweep; INFINITY where it could not run) and the rest of the run
+ * in cycles, priced at the window's best: a strategy's score, a ratio to
+ * the best, times rest, plus its sweep's cycles. */
+struct lead_price {
+    const double *cycles;
+    double rest;
+};
+
 /* Whether the pattern check's pick and second (check_pattern's ranking of
- * S and W) stand on a bounded S: none of them, S's best or the cache was
- * stopped early, and every strategy that was scores (on its lower bound)
- * above score2. partial NULL: all exact, so they stand. */
+ * S and W, priced with lp when it is not NULL) stand on a bounded S: none
+ * of them, S's best or the cache was stopped early, and every strategy that
+ * was scores (on its lower bound) above score2. partial NULL: all exact, so
+ * they stand. */
 int check_bounds_hold(const emm_machine *m, const emm_sweep *S, const uint8_t *partial,
-                      const emm_sweep *W, size_t pick, size_t second, double score2);
+                      const emm_sweep *W, const struct lead_price *lp, size_t pick,
+                      size_t second, double score2);
 
 /* What a session's decisions over one trace share (runtime/table.c): the
  * geometry as a mesh, and each canonical traversal's profile and sweep,

@@ -267,9 +267,13 @@ static int profile(void *p)
         if (w.lead_records)
             printf("           and the leading sweep's %zu records, the run's too\n",
                    w.lead_records);
-    } else if (w.how == EMM_DECIDED_CHECKED)
+    } else if (w.how == EMM_DECIDED_CHECKED) {
         printf("checked:   %s over this mesh (%zu visits) and the window, %zu strategies\n",
                w.table.synth, w.synth_visits, w.candidates);
+        if (w.lead_records)
+            printf("           and the leading sweep's %zu records, the run's too\n",
+                   w.lead_records);
+    }
     if (!(finalists > 0 && m))
         printf("strategy:  %s\n", strat);
     if (finalists > 0 && m) {

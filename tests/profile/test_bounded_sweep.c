@@ -71,17 +71,17 @@ static size_t one(const emm_machine *mc, const emm_mesh *mesh, emm_pattern patte
      * strategy's lower bound scores below score2 (a W that makes the
      * second's score a whole S_best larger). */
     double sb = (double)b->result[b->best].total;
-    CHECK(check_bounds_hold(mc, b, partial, full, ba, bb,
+    CHECK(check_bounds_hold(mc, b, partial, full, NULL, ba, bb,
                             (double)b->result[bb].total / sb + 1e-6 * ((double)full->result[bb].total /
                                                                        (double)full->result[full->best].total)));
-    CHECK(check_bounds_hold(mc, b, NULL, full, ba, bb, 0));
+    CHECK(check_bounds_hold(mc, b, NULL, full, NULL, ba, bb, 0));
     if (stopped) {
         size_t s = 0;
         while (!partial[s])
             s++;
-        CHECK(!check_bounds_hold(mc, b, partial, full, s, bb, INFINITY));
-        CHECK(!check_bounds_hold(mc, b, partial, full, ba, s, INFINITY));
-        CHECK(!check_bounds_hold(mc, b, partial, full, ba, bb, INFINITY));
+        CHECK(!check_bounds_hold(mc, b, partial, full, NULL, s, bb, INFINITY));
+        CHECK(!check_bounds_hold(mc, b, partial, full, NULL, ba, s, INFINITY));
+        CHECK(!check_bounds_hold(mc, b, partial, full, NULL, ba, bb, INFINITY));
     }
     printf("%s: %zu records, %zu strategies, %zu stopped early; fewest %llu, second %llu\n", what,
            t.n, b->simulated, stopped, (unsigned long long)full->result[fa].total,
