@@ -62,17 +62,20 @@ emm_status emm_synth_recipe_parse(const char *recipe, emm_synth_options *o, emm_
     o->pattern = p;
     o->length = 0;
     o->corner_seed = 0;
+    o->rings = 0;
     if (!at)
         return EMM_OK;
     uint64_t n;
     if (p == EMM_PATTERN_REGION && strcmp(at + 1, "corner") == 0)
         o->corner_seed = 1;
+    else if (p == EMM_PATTERN_REGION && strcmp(at + 1, "ring") == 0)
+        o->rings = 1;
     else if (p == EMM_PATTERN_CURVE && emm_parse_u64(at + 1, &n) && n > 0)
         o->length = n;
     else
         return emm_fail(err, EMM_ERR_INVALID,
-                        "recipe '%s': after '@' comes 'corner' (region) or a curve length "
-                        "(curve)",
+                        "recipe '%s': after '@' comes 'corner' or 'ring' (region) or a curve "
+                        "length (curve)",
                         recipe);
     return EMM_OK;
 }
@@ -302,6 +305,67 @@ static size_t order_region(const struct synth *s, uint32_t seed, uint32_t *order
     return tail;
 }
 
+/* Breadth-first growth over vertices from `seed`'s corners: each vertex
+ * visits its one-ring, every incident triangle in turn (so a triangle is
+ * visited once a corner), and enqueues their corners; then the lowest
+ * unreached vertex of each further component. At most cap visits, their
+ * count in *n; false without memory. */
+static bool order_ring(const struct synth *s, uint32_t seed, uint32_t *order, size_t cap,
+                       size_t *n_out)
+{
+    size_t nv = s->nv, nt = s->nt, n = 0;
+    bool ok = false;
+    uint32_t *start = calloc(nv + 1, sizeof *start), *inc = malloc(3 * nt * sizeof *inc);
+    uint32_t *queue = malloc((nv ? nv : 1) * sizeof *queue), *fill = NULL;
+    unsigned char *seen = calloc(nv ? nv : 1, 1);
+    if (!start || !inc || !queue || !seen)
+        goto done;
+    for (size_t t = 0; t < nt; t++)
+        for (int i = 0; i < 3; i++)
+            start[emm_mesh_triangle(s->m, (uint32_t)t)->v[i] + 1]++;
+    for (size_t v = 0; v < nv; v++)
+        start[v + 1] += start[v];
+    if (!(fill = malloc((nv ? nv : 1) * sizeof *fill)))
+        goto done;
+    memcpy(fill, start, nv * sizeof *fill);
+    for (size_t t = 0; t < nt; t++)
+        for (int i = 0; i < 3; i++)
+            inc[fill[emm_mesh_triangle(s->m, (uint32_t)t)->v[i]]++] = (uint32_t)t;
+    size_t head = 0, tail = 0, next = 0;
+    const emm_triangle *st = emm_mesh_triangle(s->m, seed);
+    for (int i = 0; i < 3; i++)
+        if (!seen[st->v[i]])
+            seen[st->v[i]] = 1, queue[tail++] = (uint32_t)st->v[i];
+    while (n < cap) {
+        if (head == tail) {
+            while (next < nv && (seen[next] || start[next] == start[next + 1]))
+                next++;
+            if (next >= nv)
+                break;
+            seen[next] = 1;
+            queue[tail++] = (uint32_t)next;
+        }
+        uint32_t v = queue[head++];
+        for (uint32_t k = start[v]; k < start[v + 1] && n < cap; k++) {
+            uint32_t t = inc[k];
+            order[n++] = t;
+            const emm_triangle *tr = emm_mesh_triangle(s->m, t);
+            for (int i = 0; i < 3; i++)
+                if (!seen[tr->v[i]])
+                    seen[tr->v[i]] = 1, queue[tail++] = (uint32_t)tr->v[i];
+        }
+    }
+    *n_out = n;
+    ok = true;
+done:
+    free(start);
+    free(inc);
+    free(queue);
+    free(fill);
+    free(seen);
+    return ok;
+}
+
 /* One straight walk: from the centroid of `t` in direction (dx, dy), crossing
  * into the edge neighbour of the edge the ray leaves through, until the
  * boundary or `max` triangles. Appends the visited triangles to out. */
@@ -500,6 +564,8 @@ static emm_status synth_order(const emm_mesh *m, const emm_synth_options *opt, c
     uint64_t rng = opt->seed;
     emm_status st = EMM_OK;
     uint64_t visits = opt->visits ? opt->visits : s.nt;
+    if (opt->pattern == EMM_PATTERN_REGION && opt->rings && !opt->visits)
+        visits = 3 * (uint64_t)s.nt;
     size_t order_cap = (size_t)(visits > s.nt ? visits : s.nt);
 
     if (s.nt == 0)
@@ -558,7 +624,13 @@ static emm_status synth_order(const emm_mesh *m, const emm_synth_options *opt, c
         }
         if (opt->has_start && opt->start < s.nt)
             seed = opt->start;
-        n = order_region(&s, seed, order);
+        if (!opt->rings)
+            n = order_region(&s, seed, order);
+        else if (!order_ring(&s, seed, order, order_cap, &n)) {
+            st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for a %zu-vertex mesh", name,
+                          s.nv);
+            goto done;
+        }
         break;
     }
     case EMM_PATTERN_CURVE:

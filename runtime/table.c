@@ -843,7 +843,10 @@ static emm_status synth_options(const emm_mesh *mesh, const struct synth_arrays 
             so->has_start = 1;
             so->start = (uint32_t)recs[i].element;
         }
-    so->visits = visits;
+    /* At most the whole traversal: a triangle a visit, or one a corner for
+     * a growth over vertices' one-rings. */
+    uint64_t whole = (so->rings ? 3 : 1) * (uint64_t)emm_mesh_triangle_count(mesh);
+    so->visits = visits < whole ? visits : whole;
     return EMM_OK;
 }
 
@@ -906,7 +909,8 @@ static decide_cache *cache_for(decide_cache *c, const emm_trace_info *info)
 static bool same_options(const emm_synth_options *a, const emm_synth_options *b)
 {
     return a->pattern == b->pattern && a->seed == b->seed && a->visits == b->visits &&
-           a->length == b->length && a->corner_seed == b->corner_seed && a->work == b->work &&
+           a->length == b->length && a->corner_seed == b->corner_seed && a->rings == b->rings &&
+           a->work == b->work &&
            a->has_start == b->has_start && a->start == b->start;
 }
 
@@ -1094,10 +1098,9 @@ static emm_status made_distance(decide_cache *cache, const emm_mesh *mesh,
                                 const double f[EMM_FEATURES], size_t accesses, const char *name,
                                 const emm_threads *threads, double *d, emm_error *e)
 {
-    uint64_t visits = accesses < info->geometry.nt ? accesses : info->geometry.nt;
     emm_synth_options so;
     double g[EMM_FEATURES];
-    emm_status st = synth_options(mesh, arrays, recipe, recs, n, visits, &so, e);
+    emm_status st = synth_options(mesh, arrays, recipe, recs, n, accesses, &so, e);
     if (st == EMM_OK)
         st = synth_features(cache, mesh, info, arrays, &so, accesses, name, threads, g, e);
     if (st == EMM_OK)
@@ -1412,17 +1415,14 @@ static emm_status long_run_some(decide_cache *c, const emm_machine *m, const emm
 {
     *S = NULL;
     *owned = false;
-    uint64_t visits = EMM_DECIDE_LONG_VISITS;
-    if (info->geometry.nt < visits)
-        visits = info->geometry.nt;
-    *visits_out = visits;
     emm_synth_options so;
     emm_error e;
-    emm_status st = synth_options(mesh, arrays, recipe, recs, n, visits, &so, &e);
+    emm_status st = synth_options(mesh, arrays, recipe, recs, n, EMM_DECIDE_LONG_VISITS, &so, &e);
     if (st == EMM_ERR_INVALID)
         return EMM_OK;
     if (st != EMM_OK)
         return emm_fail(err, st, "%s", e.message);
+    *visits_out = so.visits;
     cached *x = cache_find(c, CACHED_SOME, &so, 0, m, arrays);
     bool kept = x && x->sw && x->sw->count == count; /* what an earlier decision simulated */
     uint8_t *lack = calloc(count ? count : 1, 1);
@@ -1501,12 +1501,11 @@ static emm_status check_pattern(const emm_machine *m, const emm_trace_info *info
     const char *recipe = check_recipe(out);
     if (visits == 0 || visits > EMM_DECIDE_SYNTH_VISITS)
         visits = EMM_DECIDE_SYNTH_VISITS;
-    if (info->geometry.nt < visits)
-        visits = info->geometry.nt;
     emm_synth_options so;
     emm_status st = synth_options(mesh, arrays, recipe, recs, n, visits, &so, err);
     if (st == EMM_ERR_INVALID)
         return EMM_OK;
+    visits = so.visits;
     emm_sweep *S = NULL, *W = NULL;
     uint8_t *partial = NULL;
     bool own_S = false;

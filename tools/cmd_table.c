@@ -39,7 +39,8 @@ static void usage_head(FILE *out)
             "         strategy S, or without --strategy the best of the standard sweep\n"
             "         simulated on that window; pattern CLASS (default 'user')\n"
             "  build  generate the default table: canonical patterns (random, region from a\n"
-            "         random and from a corner seed, short and long curves, scan lines,\n"
+            "         random and from a corner seed and over vertices' one-rings, short and\n"
+            "         long curves, scan lines,\n"
             "         Z-order, Gray code, Hilbert, spiral) over generated meshes, profiled\n"
             "         at windows of 4096, 16384 and 65536 element accesses, each sample's\n"
             "         strategy the best of the standard sweep simulated on the whole\n"
@@ -48,7 +49,8 @@ static void usage_head(FILE *out)
             "         two meshes and two windows, for tests. --program TRACE:CLASS:RECIPE\n"
             "         adds samples of a program's trace (EMM_TRACE / emm run --trace), named\n"
             "         prog-<file name>-wN, of pattern CLASS and synthetic recipe RECIPE (a\n"
-            "         pattern of emm trace synth, PATTERN@corner, PATTERN@N, or -), labelled\n"
+            "         pattern of emm trace synth, region@corner, region@ring, curve@N, or -),\n"
+            "         labelled\n"
             "         as the canonical ones (scripts/table.sh makes the shipped table so,\n"
             "         from the example workloads' traces on meshes the tests do not use);\n"
             "         a program's sample also carries the machine's fingerprint and its\n"
@@ -267,6 +269,7 @@ static const struct {
     {"random", "random", "random"},
     {"region", "region", "region"},
     {"region-corner", "region", "region@corner"},
+    {"region-ring", "region", "region@ring"},
     {"curve", "curve", "curve"},
     {"curve-short", "curve", "curve@24"},
     {"scanline", "scanline", "scanline"},

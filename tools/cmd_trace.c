@@ -25,7 +25,7 @@ static const char trace_usage_text[] =
     "       emm trace export --din TRACE [-o FILE] [--machine FILE] [--set KEY=VALUE]...\n"
     "       emm trace import --din FILE -o TRACE [--bytes N] [--compress]\n"
     "       emm trace synth --mesh FILE --pattern P -o TRACE [--seed S] [--visits N]\n"
-    "                       [--length L] [--corner] [--work W] [--compress]\n"
+    "                       [--length L] [--corner] [--ring] [--work W] [--compress]\n"
     "\n"
     "Describe, export, import and synthesise access traces (the files EMM_TRACE\n"
     "writes).\n"
@@ -393,7 +393,7 @@ static int trace_import(int argc, char **argv)
 static void synth_usage(FILE *out, const opts *o)
 {
     fputs("usage: emm trace synth --mesh FILE --pattern P -o TRACE [--seed S] [--visits N]\n"
-          "                       [--length L] [--corner] [--work W] [--compress]\n"
+          "                       [--length L] [--corner] [--ring] [--work W] [--compress]\n"
           "\n"
           "Writes the trace of a canonical traversal over a mesh (thesis §5, Table 5.1):\n"
           "each triangle visit reads the triangle's record (vertex indices and\n"
@@ -443,14 +443,19 @@ static int trace_synth(int argc, char **argv)
          .help = "seed of region's start, curves' starts and directions and random's order"},
         {.name = "--visits", .metavar = "N", .kind = OPT_U64, .dst = &opt.visits, .min = 1,
          .help = "stop after N triangle visits (default: every triangle once; curve: as many "
-                 "visits as triangles). Only curve visits a triangle more than once, so the other "
-                 "patterns stop at the triangle count"},
+                 "visits as triangles; region --ring: 3 a triangle). Only curve and region --ring "
+                 "visit a triangle more than once, so the other patterns stop at the triangle "
+                 "count"},
         {.name = "--length", .metavar = "L", .kind = OPT_U64, .dst = &opt.length,
          .help = "curve: triangles per walk before a new walk starts (default 0: walk to the "
                  "boundary)"},
         {.name = "--corner", .kind = OPT_FLAG, .dst = &opt.corner_seed,
          .help = "region: start at the corner triangle (lowest x + y centroid) instead of one "
                  "drawn from the seed"},
+        {.name = "--ring", .kind = OPT_FLAG, .dst = &opt.rings,
+         .help = "region: grow over vertices, each vertex visiting the triangles of its one-ring "
+                 "(a triangle once a corner: 3 visits a triangle; recipe region@ring), as a "
+                 "program that conquers vertices does"},
         {.name = "--work", .metavar = "W", .kind = OPT_U64, .dst = &work, .max = UINT32_MAX,
          .show_default = true, .help = "work recorded before each access, charged at compute.per_work cycles a unit "
                  "(by default 0: not charged; docs/machine.md \"Compute\")"},

@@ -42,6 +42,11 @@ typedef struct emm_synth_options {
     /* region: start in the corner of the bounding box (the lowest x + y
      * centroid) instead of a triangle chosen by the seed. */
     int corner_seed;
+    /* region: grow over vertices instead, a vertex's visit visiting each
+     * triangle of its one-ring (so a triangle once a corner: 3 visits a
+     * triangle over the whole mesh, 3 × nt by default), as a program that
+     * conquers vertices does (recipe region@ring). */
+    int rings;
     /* Work recorded before each record (its work field), charged at
      * compute.per_work cycles a unit (0 by default: docs/machine.md). */
     uint32_t work;

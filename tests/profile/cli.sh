@@ -20,6 +20,17 @@ record() { # record TRACE MESH PROGRAM [ARG]: PROGRAM [ARG] MESH under emm run's
     trace=$1 mesh=$2; shift 2
     "$EMM" run --quiet --capture sancov --trace "$trace" -- "$@" "$mesh" >/dev/null
 }
+near_best() { # near_best NAME TRACE PERCENT: out.txt's strategy within PERCENT % of the
+    # fewest cycles of emm replay --all over TRACE (the cache aside: no candidate)
+    predicted=$(sed -n 's/^strategy: *//p' out.txt)
+    check "$1-all" 0 "$EMM" replay "$2" --all
+    best=$(awk '$1 ~ /^[0-9]+$/ && $2 !~ /^cache/ { print $3; exit }' out.txt)
+    mine=$(awk -v s="$predicted" '$1 ~ /^[0-9]+$/ && $2 == s { print $3; exit }' out.txt)
+    if [ -z "$best" ] || [ -z "$mine" ] || [ $((mine * 100)) -gt $((best * (100 + $3))) ]; then
+        echo "FAIL $1: predicted $predicted ($mine cycles), the run's best $best cycles"
+        fail=1
+    fi
+}
 
 "$MAKE" grid grid.emmt && "$MAKE" walk walk.emmt && "$MAKE" raw raw.emmt || exit 1
 unset EMM_TABLE
@@ -166,30 +177,26 @@ if [ -x "$BIN/predict_traversals.sancov" ]; then
     check long-run 0 "$EMM" profile flood30k.emmt --finalists 0
     has long-run out.txt "^measured: *the 16 nearest runs measured on this machine"
     has long-run out.txt "^ *and region.* over this mesh ([0-9]* visits) for the 16 best"
-    predicted=$(sed -n 's/^strategy: *//p' out.txt)
-    check long-run-all 0 "$EMM" replay flood30k.emmt --all
-    best=$(awk '$1 ~ /^[0-9]+$/ && $2 !~ /^cache/ { print $3; exit }' out.txt)
-    mine=$(awk -v s="$predicted" '$1 ~ /^[0-9]+$/ && $2 == s { print $3; exit }' out.txt)
-    if [ -z "$best" ] || [ -z "$mine" ] || [ $((mine * 100)) -gt $((best * 103)) ]; then
-        echo "FAIL long-run: predicted $predicted ($mine cycles), the run's best $best cycles"
-        fail=1
-    fi
+    near_best long-run flood30k.emmt 3
 else
     echo "long-run: $BIN/predict_traversals.sancov not built (no clang): not checked"
 fi
 
 # A window near a canonical sample is that pattern only when the pattern,
 # made on the program's own mesh, resembles the window too. Region growing
-# (a one-ring from every vertex) over a 30,000-face mesh lies 0.33 from a
-# spiral sample, but the class checked, made over this mesh, lies 0.46 from
-# the window: the runs measured on this machine decide, not the check
-# (whose long run chose 128-triangle cells, 37 % slower than the run's best).
+# (a one-ring from every vertex) over a 30,000-face mesh once lay 0.33 from
+# a spiral sample while the spiral, made over this mesh, lay 0.46 from the
+# window: the runs measured on this machine decided, not the check (whose
+# long run chose 128-triangle cells, 37 % slower than the run's best). The
+# table now holds the region grown over one-rings, which the window lies
+# nearest and which, made over this mesh, resembles it: the check decides
+# with that traversal, and predicts the run's best.
 if [ -x "$BIN/region_growing.sancov" ]; then
     "$EMM" mesh gen --faces 30000 --seed 42 --density uniform -o grow30k.off >/dev/null &&
         record grow30k.emmt grow30k.off "$BIN/region_growing.sancov" || exit 1
     check check-unlike 0 "$EMM" profile grow30k.emmt --finalists 0
-    has check-unlike out.txt "^measured: *the 16 nearest runs measured on this machine"
-    if grep -q "^checked:" out.txt; then echo "FAIL check-unlike: decided by the check"; fail=1; fi
+    has check-unlike out.txt "^checked: *region@ring over this mesh"
+    near_best check-unlike grow30k.emmt 5
 else
     echo "check-unlike: $BIN/region_growing.sancov not built (no clang): not checked"
 fi

@@ -105,8 +105,12 @@ static void test_parse(void)
     CHECK(load_text(good, &err, &n) == EMM_OK && n == 1);
     snprintf(good, sizeof good, "%.*s curve@24 %s", (int)(dash - text), text, dash + 3);
     CHECK(load_text(good, &err, &n) == EMM_OK && n == 1);
+    snprintf(good, sizeof good, "%.*s region@ring %s", (int)(dash - text), text, dash + 3);
+    CHECK(load_text(good, &err, &n) == EMM_OK && n == 1);
     snprintf(good, sizeof good, "%.*s spiral@corner %s", (int)(dash - text), text, dash + 3);
     expect_error(good, "table_test.txt:2: synth 'spiral@corner'");
+    snprintf(good, sizeof good, "%.*s curve@ring %s", (int)(dash - text), text, dash + 3);
+    expect_error(good, "table_test.txt:2: synth 'curve@ring'");
     snprintf(good, sizeof good, "%.*s warp %s", (int)(dash - text), text, dash + 3);
     expect_error(good, "table_test.txt:2: synth 'warp': pattern 'warp' is unknown");
     /* The machine column: '-' or a fingerprint of 16 hex digits; then the

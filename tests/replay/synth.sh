@@ -45,9 +45,19 @@ done
 expect 0 "$EMM" trace synth --mesh "$M" --pattern curve --visits 5000 --length 25 -o "$W/long.emmt"
 has '20000 records'
 expect 0 "$EMM" trace info --verify "$W/long.emmt"; has 'verify: *ok'
-# Options that change the file: --corner, --work, --compress.
+# Options that change the file: --corner, --ring, --work, --compress.
 expect 0 "$EMM" trace synth --mesh "$M" --pattern region --corner --visits 300 -o "$W/corner.emmt"
 cmp -s "$W/region.emmt" "$W/corner.emmt" && no "--corner changed nothing"
+# Growth over vertices' one-rings: every triangle once a corner, 3 visits
+# a triangle by default; the same seed, the same file.
+expect 0 "$EMM" trace synth --mesh "$M" --pattern region --ring -o "$W/ring.emmt"
+has "wrote $W/ring.emmt: 12000 records (pattern region)"
+expect 0 "$EMM" trace info --verify "$W/ring.emmt"; has 'verify: *ok'
+expect 0 "$EMM" trace synth --mesh "$M" --pattern region --ring -o "$W/ring.again.emmt"
+cmp -s "$W/ring.emmt" "$W/ring.again.emmt" || no "--ring: the same seed gave different files"
+expect 0 "$EMM" trace synth --mesh "$M" --pattern region --ring --visits 300 -o "$W/ring300.emmt"
+has '1200 records'
+cmp -s "$W/region.emmt" "$W/ring300.emmt" && no "--ring changed nothing"
 expect 0 "$EMM" trace synth --mesh "$M" --pattern zorder --work 7 --compress -o "$W/z.emmt"
 expect 0 "$EMM" trace info --verify "$W/z.emmt"; has 'compressed:  yes'; has 'verify: *ok'
 # A synthetic trace replays under every strategy.
