@@ -1964,15 +1964,18 @@ static emm_status decide(const emm_table *t, const emm_machine *m, const emm_tra
             if (st == EMM_OK && names_traversal(out) &&
                 (k = pick_neighbours(t, m, info, f, near, dist, &canonical)) == SIZE_MAX)
                 st = emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory", name);
-            /* A window near a canonical sample is that pattern's (the check
-             * predicts those traversals nearly exactly) when the pattern,
-             * made on this mesh, lies as near it — or when another class's
-             * does (near_class): the samples were made on other meshes, and
-             * a window no pattern resembles here is another program's. */
-            if (st == EMM_OK && k > 0 && canonical <= EMM_DECIDE_CANONICAL_NEAR) {
+            /* A window is a canonical pattern's (the check predicts those
+             * traversals nearly exactly) when the checked pattern, made on
+             * this mesh, lies within EMM_DECIDE_CANONICAL_NEAR of it,
+             * however far the table's samples of it (made on other meshes
+             * and windows) lie — or, when a sample lies that near, when
+             * another class's traversal made here does (near_class). A
+             * window no pattern resembles here is another program's. */
+            if (st == EMM_OK && k > 0) {
                 st = check_distance_of(mesh, info, &arrays, recs, n, f, accesses, name, threads,
                                        cache, out, &check_distance, err);
-                if (st == EMM_OK && !(check_distance <= EMM_DECIDE_CANONICAL_NEAR))
+                if (st == EMM_OK && !(check_distance <= EMM_DECIDE_CANONICAL_NEAR) &&
+                    canonical <= EMM_DECIDE_CANONICAL_NEAR)
                     st = near_class(t, mesh, info, &arrays, recs, n, f, accesses, name, threads,
                                     cache, out, &check_distance, err);
                 if (check_distance <= EMM_DECIDE_CANONICAL_NEAR)

@@ -98,14 +98,15 @@ extern "C" {
 /* ... when the nearest of them lies within this factor of the nearest
  * sample without costs (a canonical pattern's). */
 #define EMM_DECIDE_NEIGHBOUR_GATE 2.5
-/* A window this near a sample without costs (a canonical pattern's) is that
- * pattern — when the pattern's traversal, made on the program's own mesh,
- * lies this near the window too: the check decides, not the neighbours. */
+/* A window is a canonical pattern's when the checked pattern's traversal,
+ * made on the program's own mesh, lies this near it (however far the
+ * table's samples of it lie): the check decides, not the neighbours. */
 #define EMM_DECIDE_CANONICAL_NEAR 0.35
-/* When the checked class's traversal does not lie that near, the other
- * canonical classes whose nearest sample lies within this many times the
- * nearest canonical sample's distance are made on the mesh too, and the
- * nearest of them within EMM_DECIDE_CANONICAL_NEAR is checked instead. */
+/* When the checked class's traversal does not lie that near but a sample
+ * without costs does, the other canonical classes whose nearest sample lies
+ * within this many times the nearest canonical sample's distance are made
+ * on the mesh too, and the nearest of them within EMM_DECIDE_CANONICAL_NEAR
+ * is checked instead. */
 #define EMM_DECIDE_NEAR_CLASS_REACH 2.0
 /* A profile whose nearest sample is farther than this (Euclidean, in
  * feature space) is novel. See docs/profile.md for how it was chosen. */
