@@ -696,13 +696,13 @@ static const char *how_predicted(const session *s)
                    "weighed with the window"
 #define LONG " and the pattern's long run over this mesh"
 #define LEAD ", and the leading sweep's own cycles"
+#define CHECK "the table's pattern simulated over this mesh on this machine"
         if (!(s->has_wd && s->wd.neighbours))
-            return s->has_wd && s->wd.lead_records
-                       ? "the table's pattern simulated over this mesh on this machine" LEAD
-                       : "the table's pattern simulated over this mesh on this machine";
+            return s->has_wd && s->wd.lead_records ? CHECK LEAD : CHECK;
         if (s->wd.synth_visits)
             return s->wd.lead_records ? NEIGHBOURS LONG LEAD : NEIGHBOURS LONG;
         return s->wd.lead_records ? NEIGHBOURS LEAD : NEIGHBOURS;
+#undef CHECK
 #undef LEAD
 #undef LONG
 #undef NEIGHBOURS
