@@ -165,7 +165,9 @@ int main(int argc, char **argv)
                 emm_trace_record *recs;
                 size_t n;
                 emm_window_decision d;
-                if (emm_profile_trace_window(r, windows[w], path, &recs, &n, &err) != EMM_OK)
+                size_t length; /* the window as asked for: the contest's unit */
+                if (emm_profile_trace_window_fill(r, windows[w], emm_machine_get(m, "local.bytes"),
+                                                  path, &recs, &n, &length, &err) != EMM_OK)
                     die(patterns[p].name, &err);
                 /* The window's leading index-order sweep, which the profile
                  * leaves out: the contest counts its windows after it. */
@@ -211,9 +213,10 @@ int main(int argc, char **argv)
                 double vs_cache = (double)c / (double)cache - 1;
                 /* The run's contest over the whole trace from this
                  * window's prediction, the halvings at 2, 4, 8, ... of its
-                 * records past the leading sweep, as the session counts. */
+                 * records past the leading sweep (up to its length, before
+                 * it read on), as the session counts. */
                 emm_contest_result cr;
-                if (emm_contest_trace(path, m, &d.strategy, lead, n > lead ? n - lead : 1,
+                if (emm_contest_trace(path, m, &d.strategy, lead, length > lead ? length - lead : 1,
                                       finalists, NULL, &cr, &err) != EMM_OK)
                     die(patterns[p].name, &err);
                 char cwin[96];

@@ -314,7 +314,8 @@ int main(int argc, char **argv)
         emm_trace_record *recs = NULL;
         size_t n = 0;
         if (emm_trace_reader_open(trace, &r, &err) != EMM_OK ||
-            emm_profile_trace_window(r, window, trace, &recs, &n, &err) != EMM_OK)
+            emm_profile_trace_window_fill(r, window, emm_machine_get(m, "local.bytes"), trace,
+                                          &recs, &n, NULL, &err) != EMM_OK)
             die(trace, err.message);
         emm_window_decision d;
         emm_decide_options dopt = {0};

@@ -339,7 +339,8 @@ static const struct row rows[EMM_CONFIG_COUNT] = {
     [EMM_CONFIG_PROFILE] = {{"EMM_PROFILE", "--profile", "N",
         "a count of accesses (16384, 16K) or of iterations (5it), at least 1", "16384",
         "the profiling window: element reads from the program's first read of the mesh (writes "
-        "neither open nor fill it), or emm_iteration() calls with 'it'", {{0}}},
+        "neither open nor fill it; for a mesh larger than the local store it reads on, to 1.5 N "
+        "at most, until its records fill the store), or emm_iteration() calls with 'it'", {{0}}},
         parse_window},
     [EMM_CONFIG_STRATEGY] = {{"EMM_STRATEGY", "--strategy", "S",
         "a strategy: direct, cache[@LAYOUT] or LAYOUT+FETCH[@CELL]", "(decide)",

@@ -18,6 +18,7 @@
 #include "geom.h"
 #include "lead_sweep.h"
 #include "pool.h"
+#include "window_fill.h"
 
 /* ---- exact ------------------------------------------------------------ */
 
@@ -639,6 +640,9 @@ struct emm_profiler {
     size_t sweep_records; /* of them, the leading sweep's */
     double first[EMM_MAX_DIMS]; /* the sweep's first position, given back if it stays alone */
     size_t first_record;
+    uint32_t first_array;        /* and its element */
+    uint64_t first_element;
+    window_fill fill;            /* reading on until the window fills the store */
 };
 
 emm_status emm_profiler_new(const emm_trace_info *info, uint64_t window, uint32_t dims,
@@ -693,12 +697,28 @@ uint32_t emm_profiler_dims(const emm_profiler *p)
     return p->dims;
 }
 
-static bool profiler_push(emm_profiler *p, const double *x)
+void emm_profiler_fill(emm_profiler *p, uint64_t bytes)
+{
+    window_fill_start(&p->fill, bytes);
+    uint64_t mesh = 0;
+    for (uint32_t a = 0; a < p->info->narrays; a++)
+        if (p->info->arrays[a].kind != EMM_ARRAY_RAW)
+            mesh += p->info->arrays[a].count * p->info->arrays[a].record_size;
+    window_fill_size(&p->fill, mesh);
+}
+
+static bool profiler_full(const emm_profiler *p)
+{
+    return window_fill_done(&p->fill, p->window, p->n);
+}
+
+static bool profiler_push(emm_profiler *p, const double *x, uint32_t array, uint64_t element)
 {
     if (p->n == p->cap) {
         size_t cap = p->cap ? 2 * p->cap : 4096;
-        if (cap > p->window)
-            cap = (size_t)p->window;
+        uint64_t most = p->fill.bytes ? emm_profile_fill_most(p->window) : p->window;
+        if (cap > most)
+            cap = (size_t)most;
         double *npos = realloc(p->pos, p->dims * cap * sizeof *npos);
         if (!npos)
             return false;
@@ -708,6 +728,7 @@ static bool profiler_push(emm_profiler *p, const double *x)
     for (uint32_t k = 0; k < p->dims; k++)
         p->pos[p->dims * p->n + k] = (x[k] - p->lo[k]) * p->scale;
     p->n++;
+    window_fill_add(&p->fill, array, element, p->info->arrays[array].record_size);
     return true;
 }
 
@@ -727,7 +748,7 @@ emm_status emm_profiler_add(emm_profiler *p, const emm_trace_record *recs, size_
                             emm_error *err)
 {
     const emm_trace_geometry *g = &p->info->geometry;
-    for (size_t r = 0; r < n && p->n < p->window; r++, p->records++) {
+    for (size_t r = 0; r < n && !profiler_full(p); r++, p->records++) {
         const emm_trace_record *rec = &recs[r];
         if (rec->array >= p->info->narrays)
             return emm_fail(err, EMM_ERR_FORMAT, "%s: a record names array %u of %u", p->name,
@@ -774,17 +795,19 @@ emm_status emm_profiler_add(emm_profiler *p, const emm_trace_record *recs, size_
             if (p->sweep.elements == 1) {
                 memcpy(p->first, x, sizeof p->first);
                 p->first_record = p->records;
+                p->first_array = rec->array;
+                p->first_element = rec->element;
             }
             continue;
         }
         if (p->n == 0)
             p->sweep_records = enter == 2 ? p->first_record : p->records;
-        if (enter == 2 && !profiler_push(p, p->first))
+        if (enter == 2 && !profiler_push(p, p->first, p->first_array, p->first_element))
             return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile window",
                             p->name);
-        if (p->n >= p->window)
+        if (profiler_full(p))
             break;
-        if (!profiler_push(p, x))
+        if (!profiler_push(p, x, rec->array, rec->element))
             return emm_fail(err, EMM_ERR_NOMEM, "%s: out of memory for the profile window",
                             p->name);
     }
@@ -793,7 +816,7 @@ emm_status emm_profiler_add(emm_profiler *p, const emm_trace_record *recs, size_
 
 int emm_profiler_full(const emm_profiler *p)
 {
-    return p->n >= p->window;
+    return profiler_full(p);
 }
 
 const double *emm_profiler_positions(const emm_profiler *p, size_t *n)
@@ -805,6 +828,7 @@ const double *emm_profiler_positions(const emm_profiler *p, size_t *n)
 void emm_profiler_free(emm_profiler *p)
 {
     if (p) {
+        window_fill_free(&p->fill);
         free(p->pos);
         free(p);
     }
@@ -847,6 +871,14 @@ emm_status emm_profile_trace_positions(emm_trace_reader *r, uint64_t window, uin
 emm_status emm_profile_trace_window(emm_trace_reader *r, uint64_t window, const char *name,
                                     emm_trace_record **recs, size_t *n, emm_error *err)
 {
+    return emm_profile_trace_window_fill(r, window, 0, name, recs, n, NULL, err);
+}
+
+emm_status emm_profile_trace_window_fill(emm_trace_reader *r, uint64_t window, uint64_t fill,
+                                         const char *name, emm_trace_record **recs, size_t *n,
+                                         size_t *length, emm_error *err)
+{
+    size_t reached = 0;
     emm_profiler *p;
     *recs = NULL;
     *n = 0;
@@ -857,6 +889,7 @@ emm_status emm_profile_trace_window(emm_trace_reader *r, uint64_t window, const 
         st = emm_profiler_new(emm_trace_reader_info(r), window, EMM_PROFILE_PLANE, name, &p, err);
     if (st != EMM_OK)
         return st;
+    emm_profiler_fill(p, fill);
     enum { CHUNK = 4096 };
     emm_trace_record *buf = NULL;
     size_t len = 0, cap = 0, got;
@@ -876,13 +909,16 @@ emm_status emm_profile_trace_window(emm_trace_reader *r, uint64_t window, const 
         size_t want = CHUNK;
         size_t have;
         emm_profiler_positions(p, &have);
-        if (p->window - have < CHUNK)
+        if (have + CHUNK > p->window)
             want = 1;
         st = emm_trace_read(r, buf + len, want, &got, err);
         if (st != EMM_OK || got == 0)
             break;
         st = emm_profiler_add(p, buf + len, got, err);
         len += got;
+        emm_profiler_positions(p, &have);
+        if (!reached && have >= p->window)
+            reached = len;
     }
     emm_profiler_free(p);
     if (st != EMM_OK) {
@@ -891,6 +927,8 @@ emm_status emm_profile_trace_window(emm_trace_reader *r, uint64_t window, const 
     }
     *recs = buf;
     *n = len;
+    if (length)
+        *length = reached ? reached : len;
     return EMM_OK;
 }
 

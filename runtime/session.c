@@ -39,6 +39,7 @@
 #define SESSION_ITERATION_RECORDS (1u << 20)
 
 static const struct session_transport engine_transport;
+static void window_start(session *s);
 
 /* The start of a thread the session starts (the decision's helpers, the
  * run's model workers, the phase probes): the caller's hook, then the
@@ -97,9 +98,6 @@ emm_status session_engine_new(const emm_session_config *sc, emm_session **out, e
                       (unsigned long long)s->cfg.window_accesses);
         goto fail;
     }
-    s->wlimit = s->cfg.window_accesses
-                    ? (size_t)(s->cfg.window_accesses * SESSION_RECORDS_PER_ELEMENT + 4096)
-                    : SESSION_ITERATION_RECORDS;
     s->last = s->last2 = -1;
     s->he_slot = s->face_slot = s->vconn_slot = s->vertex_slot = -1;
 
@@ -114,6 +112,7 @@ emm_status session_engine_new(const emm_session_config *sc, emm_session **out, e
         st = emm_fail(err, st, "%s: %s", session_source(s, EMM_CONFIG_MACHINE), e.message);
         goto fail;
     }
+    window_start(s);
     /* The table decides unless a strategy is configured; then it only names
      * the nearest sample, and a missing default table is no error. */
     s->table = emm_table_new();
@@ -140,6 +139,19 @@ emm_status session_engine_new(const emm_session_config *sc, emm_session **out, e
 fail:
     engine_transport.free(&s->handle);
     return st;
+}
+
+/* The window's bounds at its start: its records (one that reads on until
+ * it fills the local store reads up to emm_profile_fill_most of its
+ * length) and the store's bytes to fill (window_fill.h). */
+static void window_start(session *s)
+{
+    uint64_t w = s->cfg.window_accesses;
+    s->wlimit = w ? (size_t)(emm_profile_fill_most(w) * SESSION_RECORDS_PER_ELEMENT + 4096)
+                  : SESSION_ITERATION_RECORDS;
+    window_fill_start(&s->wstore, w ? emm_machine_get(s->machine, "local.bytes") : 0);
+    s->wlen = 0;
+    s->wsized = false;
 }
 
 static emm_session_state public_state(const session *s)
@@ -601,6 +613,30 @@ static bool expects_more(const session *s)
     return (s->expect & ~have) != 0;
 }
 
+/* Whether the window's element reads are in: its length, read on until
+ * their records fill the local store (window_fill.h). */
+static bool window_reached(session *s)
+{
+    if (!s->cfg.window_accesses || s->welements < s->cfg.window_accesses)
+        return false;
+    if (!s->wsized) {
+        /* At its length: read on only for a mesh the store cannot hold,
+         * and not under a capture that stops at the decision (its answer
+         * covers the window, and each access it captures costs the program
+         * microseconds). */
+        uint64_t mesh = 0;
+        for (int i = 0; i < s->narrays; i++) {
+            const session_array *a = &s->arrays[i];
+            if (session_usable(a) && !emm_tag_shape_is_connectivity(a->shape) &&
+                (a->axis < 0 || a->lead == i))
+                mesh += a->count * session_trace_record_bytes(s, a);
+        }
+        window_fill_size(&s->wstore, session_window_only(s) ? 0 : mesh);
+        s->wsized = true;
+    }
+    return window_fill_done(&s->wstore, s->cfg.window_accesses, s->welements);
+}
+
 /* The window ends when its element reads (or iterations) are in; writes
  * neither open, fill nor end it. It also ends, short, at the bounds that
  * keep capture in memory and time: SESSION_WINDOW_WRITES written records,
@@ -614,7 +650,7 @@ static void window_full_check(session *s)
         return;
     uint64_t w = s->cfg.window_accesses ? s->cfg.window_accesses : EMM_PROFILE_DEFAULT_WINDOW;
     enum window_end end = WINDOW_OPEN;
-    if ((s->cfg.window_accesses && s->welements >= s->cfg.window_accesses) ||
+    if (window_reached(s) ||
         (s->cfg.window_iterations && s->iterations >= s->cfg.window_iterations))
         end = WINDOW_FULL;
     if (s->wwrites >= SESSION_WINDOW_WRITES)
@@ -627,13 +663,11 @@ static void window_full_check(session *s)
         return;
     if (end == WINDOW_FULL && s->expect && s->welements < SESSION_WAIT_WINDOWS * w &&
         expects_more(s)) {
-        s->waited = s->cfg.window_accesses && s->welements > s->cfg.window_accesses
-                        ? s->welements - s->cfg.window_accesses
-                        : 1;
+        s->waited = s->wlen && s->welements > s->wlen ? s->welements - s->wlen : 1;
         return;
     }
-    if (s->waited && s->cfg.window_accesses && s->welements > s->cfg.window_accesses)
-        s->waited = s->welements - s->cfg.window_accesses;
+    if (s->waited && s->wlen && s->welements > s->wlen)
+        s->waited = s->welements - s->wlen;
     if (s->wend == WINDOW_OPEN || s->wend == WINDOW_FULL)
         s->wend = end;
     s->phase = PHASE_DECIDE;
@@ -707,12 +741,20 @@ static void window_add(session *s, const emm_raw_access *a, size_t n)
             /* The profile starts after a leading index-order sweep (reading
              * the file, initialising per-element data), whose records are
              * still simulated: runtime/lead_sweep.h. */
-            s->welements += (uint64_t)lead_sweep_step(&s->sweep, g, r.element);
+            int step = lead_sweep_step(&s->sweep, g, r.element);
+            s->welements += (uint64_t)step;
+            if (step > 0 && !s->wfill)
+                window_fill_add(&s->wstore, g, r.element, session_trace_record_bytes(s, &s->arrays[r.array]));
             /* Where the window filled, to the record: the batch's further
-             * records join it, but the contest counts from here, as emm
-             * profile does on the trace. */
-            if (!s->wfill && s->cfg.window_accesses && s->welements >= s->cfg.window_accesses)
+             * records join it, but the decision sees it up to here, as emm
+             * profile does on the trace; the contest counts in windows of
+             * its length, where it was before it read on. */
+            if (!s->wlength && s->cfg.window_accesses && s->welements >= s->cfg.window_accesses)
+                s->wlength = s->wn;
+            if (!s->wfill && window_reached(s)) {
                 s->wfill = s->wn;
+                s->wlen = s->welements;
+            }
         }
         if (r.write || !s->sweep.over)
             s->wlimit++; /* the sweep's reads and the writes (SESSION_WINDOW_WRITES bounds
@@ -876,10 +918,8 @@ static bool window_restart(session *s)
     s->wend = WINDOW_OPEN;
     s->waited = 0;
     memset(&s->sweep, 0, sizeof s->sweep);
-    s->wskip = s->wfill = 0;
-    s->wlimit = s->cfg.window_accesses
-                    ? (size_t)(s->cfg.window_accesses * SESSION_RECORDS_PER_ELEMENT + 4096)
-                    : SESSION_ITERATION_RECORDS;
+    s->wskip = s->wfill = s->wlength = 0;
+    window_start(s);
     s->phase = PHASE_PROFILING;
     return true;
 }
@@ -973,10 +1013,15 @@ static emm_status engine_finish(emm_session *h, FILE *summary, const char *ended
     if (s->phase == PHASE_PROFILING) {
         /* The run ended before the window filled: the decision rests on
          * the reads it had (a full window waiting for an array counts as
-         * full). */
+         * full, and so does one reading on to fill the local store). */
         s->phase = PHASE_DECIDE;
+        bool reading_on = s->cfg.window_accesses && s->welements >= s->cfg.window_accesses;
+        if (reading_on && !s->wfill) {
+            s->wfill = s->wn;
+            s->wlen = s->welements;
+        }
         if (s->wend == WINDOW_OPEN)
-            s->wend = s->waited ? WINDOW_FULL : WINDOW_FINISH;
+            s->wend = s->waited || reading_on ? WINDOW_FULL : WINDOW_FINISH;
     }
     if (s->phase == PHASE_DECIDE)
         engine_decide(s, NULL);
@@ -1133,6 +1178,7 @@ static void engine_free(emm_session *h)
     emm_machine_free(s->machine);
     emm_table_free(s->table);
     free(s->window);
+    window_fill_free(&s->wstore);
     free(s->chunk);
     free(s->tarrays);
     free(s->mstrat);

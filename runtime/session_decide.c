@@ -535,6 +535,11 @@ static unsigned group_axes(const session *s, int lead)
     return n;
 }
 
+uint64_t session_trace_record_bytes(const session *s, const session_array *a)
+{
+    return a->axis >= 0 ? group_axes(s, a->lead) * a->stride : session_record_bytes(a);
+}
+
 /* Trace arrays for the live slots the geometry covers, in slot order, the
  * axis blocks of one group one trace array (its records their x, y, z
  * entries side by side); the window's records are renumbered and those of
@@ -566,8 +571,7 @@ static emm_status freeze_arrays(session *s, emm_error *err)
             shrink_to(a, s->tarrays[a->trace_index].count); /* a block grown alone */
             continue;
         }
-        uint64_t record = a->axis >= 0 ? group_axes(s, a->lead) * a->stride
-                                       : session_record_bytes(a);
+        uint64_t record = session_trace_record_bytes(s, a);
         if (a->axis >= 0)
             group_trace[a->lead] = (int32_t)s->ntarrays;
         a->trace_index = (int32_t)s->ntarrays;
@@ -586,6 +590,8 @@ static emm_status freeze_arrays(session *s, emm_error *err)
     for (size_t k = 0; k < s->wn; k++) {
         if (k == s->wfill)
             s->wunit = m;
+        if (k == s->wlength)
+            s->wstep = m;
         emm_trace_record r = s->window[k];
         const session_array *sa = &s->arrays[r.array];
         int32_t t = sa->trace_index;
@@ -608,6 +614,10 @@ static emm_status freeze_arrays(session *s, emm_error *err)
     }
     if (s->wfill == 0 || s->wfill >= s->wn)
         s->wunit = m;
+    if (s->wlength == 0 || s->wlength >= s->wn)
+        s->wstep = m;
+    if (s->wstep > s->wunit)
+        s->wstep = s->wunit;
     s->wn = m;
     return EMM_OK;
 }
@@ -623,8 +633,8 @@ static emm_status profile_window(session *s, emm_error *err)
     uint64_t window = s->sweep_profiled ? s->sweep.elements : s->welements;
     /* A window that went on waiting for an array is profiled over its
      * length: the reads after it are the run's. */
-    if (s->waited && s->cfg.window_accesses && window > s->cfg.window_accesses)
-        window = s->cfg.window_accesses;
+    if (s->waited && s->wlen && window > s->wlen)
+        window = s->wlen;
     emm_status st = emm_profiler_new(&s->info, window ? window : 1, EMM_PROFILE_PLANE,
                                      s->program, &p, err);
     if (st != EMM_OK)
@@ -851,13 +861,14 @@ static emm_status build_models(session *s, emm_error *err)
                       s->program, s->strategy_note[0] ? s->strategy_note : "none was asked for");
         goto out;
     }
-    /* The contest's unit is the window: its records past the leading sweep
-     * up to where it filled (the same counts emm profile reads off the
-     * trace). */
+    /* The contest's unit is the window as asked for: its records past the
+     * leading sweep up to where its element reads reached its length,
+     * before it read on to fill the local store (the same counts emm
+     * profile reads off the trace). */
     if (racing && s->has_chosen) {
-        size_t lead = s->wskip < s->wunit ? s->wskip : 0;
+        size_t lead = s->wskip < s->wstep ? s->wskip : 0;
         st = contest_new(s->runner, entrants, pinned, ne, lead,
-                         s->wunit > lead ? s->wunit - lead : 1, s->cfg.finalists, &s->contest,
+                         s->wstep > lead ? s->wstep - lead : 1, s->cfg.finalists, &s->contest,
                          err);
     }
     /* The window's check ranks the same candidates at the end, none

@@ -23,6 +23,7 @@
 #include "contest.h"
 #include "json.h"
 #include "lead_sweep.h"
+#include "window_fill.h"
 #include "runner.h"
 #include "session_transport.h"
 #include "share.h"
@@ -298,7 +299,15 @@ typedef struct session {
     lead_sweep sweep;    /* the leading index-order sweep */
     size_t wskip;        /* window records of that sweep (the profiler's count) */
     size_t wfill;        /* records when the window's element reads filled it (0: never) */
-    size_t wunit;        /* the same once the window is frozen: the contest's unit */
+    uint64_t wlen;       /* its element reads then: its length, or more when it read on
+                            until it filled the local store (0: never) */
+    window_fill wstore;  /* the bytes of the distinct records it has read */
+    bool wsized;         /* the mesh's bytes were weighed against the store's */
+    size_t wunit;        /* the same once the window is frozen: the decision's window */
+    size_t wlength;      /* records when its element reads reached its length, before it
+                            read on (0: never) */
+    size_t wstep;        /* the same once frozen: the contest's unit, as long as the
+                            window asked for whether or not it read on */
 
     /* frozen at the decision */
     emm_trace_array *tarrays;
@@ -478,6 +487,19 @@ static inline uint64_t session_record_bytes(const session_array *a)
 {
     return a->plane ? 3 * a->stride : a->stride;
 }
+
+/* Element reads the window read on for past its length, to fill the local
+ * store (window_fill.h); 0 when it did not. */
+static inline uint64_t session_read_on(const session *s)
+{
+    return s->cfg.window_accesses && s->wlen > s->cfg.window_accesses
+               ? s->wlen - s->cfg.window_accesses
+               : 0;
+}
+
+/* The bytes of a record of a's trace array: an axis block's group has its
+ * x, y, z entries side by side (session_decide.c). */
+uint64_t session_trace_record_bytes(const session *s, const session_array *a);
 
 /* One past the array's last byte: a column-major array's columns stay
  * where they are, whatever count of records is in use. */

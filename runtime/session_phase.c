@@ -267,7 +267,12 @@ void session_phases_start(session *s)
     pc_set w;
     if (pcs_of(s, s->window, proper, &w))
         pcs_join(&s->phase_pcs, &w);
-    s->probe_len = s->nD;
+    /* A probe is as long as the window asked for: the window proper may
+     * have read on to fill the local store, which a probe, taken where the
+     * run has long filled it, has no need to. */
+    s->probe_len = s->cfg.window_accesses && s->nD > s->cfg.window_accesses
+                       ? s->cfg.window_accesses
+                       : s->nD;
     s->gap = SESSION_PROBE_GAP * s->probe_len;
     /* Probes need EMM_PHASES, a table, a chosen strategy to weigh a switch
      * against, and the rest of the run (fault capture stops at the

@@ -645,6 +645,10 @@ static void report_extra(json_writer *w, void *ctx)
     json_string(w, window_end_name(s->wend));
     json_key(w, "sweep_profiled");
     json_bool(w, s->sweep_profiled);
+    json_key(w, "read_on");
+    json_u64(w, session_read_on(s));
+    json_key(w, "store_filled");
+    json_bool(w, window_fill_filled(&s->wstore));
     json_key(w, "waited");
     json_u64(w, s->waited);
     json_key(w, "restarts");
@@ -925,6 +929,18 @@ static void print_window_lines(const session *s, FILE *out)
     else if (ended)
         fprintf(out, "emm:   %s after %s of the window's %s %s: the answer rests on them\n", ended,
                 num, num2, unit);
+    if (session_read_on(s)) {
+        emm_grouped(s->wlen, num3);
+        if (window_fill_filled(&s->wstore))
+            fprintf(out, "emm:   the window read on past its %s %s to %s, until the records it "
+                         "read filled the local store (%s bytes)\n",
+                    num2, unit, num3, emm_grouped(s->wstore.bytes, bound));
+        else
+            fprintf(out, "emm:   the window read on past its %s %s to %s (%.3g times its length) "
+                         "to fill the local store (%s bytes); its records filled %.0f %% of it\n",
+                    num2, unit, num3, EMM_PROFILE_FILL_REACH, emm_grouped(s->wstore.bytes, bound),
+                    100.0 * (double)s->wstore.touched / (double)s->wstore.bytes);
+    }
     if (s->waited)
         fprintf(out, "emm:   the window filled before an array of every kind the tag rules name "
                      "was tagged, and went on %s more element reads waiting for one\n",

@@ -206,7 +206,11 @@ static int profile(void *p)
     rc = EMM_EXIT_FAIL;
     emm_table *t = NULL;
     const emm_trace_info *info = emm_trace_reader_info(r);
-    if (emm_profile_trace_window(r, window, trace, &recs, &n, &err) != EMM_OK ||
+    /* The window as the session's on this machine: it reads on until it
+     * fills the local store (docs/profile.md "The window"). */
+    size_t length = 0; /* the records of the window as asked for: the contest's unit */
+    if (emm_profile_trace_window_fill(r, window, emm_machine_get(m, "local.bytes"), trace, &recs,
+                                      &n, &length, &err) != EMM_OK ||
         window_profile(info, recs, n, trace, &D, &nD, &exact, &skip, &err) != EMM_OK) {
         rc = cli_fail(&err);
         goto done;
@@ -245,7 +249,14 @@ static int profile(void *p)
     char strat[96];
     emm_strategy_format(&w.strategy, strat, sizeof strat);
     printf("trace:     %s\n", trace);
-    printf("window:    %zu element accesses (%s method)\n", w.accesses, exact ? "exact" : "fast");
+    if (w.accesses > window)
+        /* It read on to fill the local store (docs/profile.md "The window"). */
+        printf("window:    %zu element accesses (%s method): read on past the %llu asked for,\n"
+               "           to fill the local store (%llu bytes)\n",
+               w.accesses, exact ? "exact" : "fast", (unsigned long long)window,
+               (unsigned long long)emm_machine_get(m, "local.bytes"));
+    else
+        printf("window:    %zu element accesses (%s method)\n", w.accesses, exact ? "exact" : "fast");
     if (w.has_table) {
         printf("pattern:   %s\n", w.table.pattern);
         printf("nearest:   %s (distance %.4f)\n", w.table.nearest, w.table.distance);
@@ -280,8 +291,8 @@ static int profile(void *p)
         /* The run's contest over the whole trace, as emm run holds it when
          * it sees the whole run: the same answer on the trace it wrote. */
         emm_contest_result cr;
-        if (emm_contest_trace(trace, m, &w.strategy, skip, n > skip ? n - skip : 1, finalists,
-                              NULL, &cr, &err) != EMM_OK) {
+        if (emm_contest_trace(trace, m, &w.strategy, skip, length > skip ? length - skip : 1,
+                              finalists, NULL, &cr, &err) != EMM_OK) {
             rc = cli_fail(&err);
             goto done;
         }
@@ -294,7 +305,8 @@ static int profile(void *p)
                    "           sweep's %zu, then finalists more than 25%% behind the leader, so\n"
                    "           far and since the last check, stopped: %zu ran to the end,\n"
                    "           %zu were dropped (not measured to the end)\n",
-                   cr.entrants, (unsigned long long)cr.accesses, n - skip, skip, cr.finalists,
+                   cr.entrants, (unsigned long long)cr.accesses,
+                   length > skip ? length - skip : 1, skip, cr.finalists,
                    cr.entrants - cr.finalists);
         else
             printf("contest:   %zu candidates over the whole trace (%llu records), every one run\n"
@@ -423,8 +435,9 @@ int emm_cmd_profile(int argc, char **argv)
     opts_row rows[] = {
         {.name = "--window", .metavar = "N", .kind = OPT_U64, .dst = &a.window,
          .min = EMM_PROFILE_MIN, .show_default = true,
-         .help = "element accesses to profile; up to " EXACT_MAX_TEXT " use the exact method, "
-                 "longer windows the fast one"},
+         .help = "element accesses to profile, read on to 1.5 N at most for a mesh larger than "
+                 "the machine's local store, until their records fill it (as emm run's window); "
+                 "up to " EXACT_MAX_TEXT " use the exact method, longer windows the fast one"},
         {.name = "--table", .metavar = "FILE", .kind = OPT_TEXT, .dst = &a.table,
          .help = "a user table added to the default one (default: $EMM_TABLE)"},
         {.name = "--threshold", .metavar = "X", .kind = OPT_POSITIVE, .dst = &a.threshold,

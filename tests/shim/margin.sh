@@ -16,9 +16,12 @@ EMM=$1 PROG=$2
 MESH=$WORK/m.obj
 "$EMM" mesh gen --faces 40000 --seed 5 -o "$MESH" > /dev/null || fail "cannot generate $MESH"
 env -u LD_PRELOAD "$PROG" "$MESH" > "$WORK/native.out" || fail "the native run failed"
-# Two finalists (the default is one): halving reaches them by 16 windows, so
-# the margin's checks come before the run ends.
-"$EMM" run --capture sancov --no-phases --finalists 2 --report "$WORK/r.json" \
+# Two finalists (the default is one): halving reaches four by 32 windows,
+# and the margin's checks come before the run ends. The window is short
+# (its 8,192 element reads read on to 12,288 to fill the local store, which
+# the mesh outgrows), so the run is over 40 windows long; at the default
+# window, read on to 24,576, it ends before 32.
+"$EMM" run --capture sancov --no-phases --finalists 2 --profile 8192 --report "$WORK/r.json" \
   --trace "$WORK/run.emmt" -- "$PROG" "$MESH" > "$WORK/emm.out" 2> "$WORK/emm.err" ||
   { cat "$WORK/emm.err" >&2; fail "emm run failed"; }
 cmp -s "$WORK/native.out" "$WORK/emm.out" || fail "stdout differs under emm run"
