@@ -20,8 +20,8 @@
 static const char *const CMD = "profile";
 
 /* --help's numbers that are no option's default. */
-#define EXACT_MAX_TEXT "65536"
-_Static_assert(EMM_PROFILE_EXACT_MAX == 65536u, "EXACT_MAX_TEXT is EMM_PROFILE_EXACT_MAX");
+#define EXACT_MAX_TEXT "16384"
+_Static_assert(EMM_PROFILE_EXACT_MAX == 16384u, "EXACT_MAX_TEXT is EMM_PROFILE_EXACT_MAX");
 
 static void usage(FILE *out, const opts *o)
 {
