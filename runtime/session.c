@@ -744,7 +744,8 @@ static void window_add(session *s, const emm_raw_access *a, size_t n)
             int step = lead_sweep_step(&s->sweep, g, r.element);
             s->welements += (uint64_t)step;
             if (step > 0 && !s->wfill)
-                window_fill_add(&s->wstore, g, r.element, session_trace_record_bytes(s, &s->arrays[r.array]));
+                window_fill_add(&s->wstore, g, r.element,
+                                session_trace_record_bytes(s, &s->arrays[r.array]));
             /* Where the window filled, to the record: the batch's further
              * records join it, but the decision sees it up to here, as emm
              * profile does on the trace; the contest counts in windows of
