@@ -616,8 +616,6 @@ static emm_status freeze_arrays(session *s, emm_error *err)
         s->wunit = m;
     if (s->wlength == 0 || s->wlength >= s->wn)
         s->wstep = m;
-    if (s->wstep > s->wunit)
-        s->wstep = s->wunit;
     s->wn = m;
     return EMM_OK;
 }
